@@ -1,0 +1,1 @@
+"""Contact kinematics, hierarchical search, force laws and solvers (issue 6)."""

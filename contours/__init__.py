@@ -1,0 +1,1 @@
+"""C²-continuous NURBS neutral contours created by abstract factories (issue 5)."""
