@@ -1,0 +1,110 @@
+"""The body data a flexible body is built from (thesis Sec. 4.2.1, report Sec. 2).
+
+A :class:`BodyData` holds, in SI units, exactly what the thesis's four text files
+hold plus what the HDF5 body file adds. It is fixed for a run and never mutated
+by the multibody code.
+
+Conventions
+-----------
+* ``u0``: undeformed node positions ū0 in the body frame, shape (N, 3) [m].
+* ``phi``: mode shapes Φ, shape (3N, n_f), row ``3*i + k`` is node i, direction k
+  (the layout of thesis Listing 4.2, 0-based). Clamped nodes have zero rows.
+  Produced by :mod:`preprocess.modes` mass-normalized: Φᵀ M Φ = I with the lumped M,
+  so Φ has units kg^-1/2.
+* ``masses``: lumped node masses m_j, shape (N,) [kg] (thesis Listing 4.3).
+* ``stiffness``: the unconstrained stiffness matrix K, scipy CSR, shape (3N, 3N)
+  [N/m], same DOF numbering as ``phi`` (thesis Listings 4.4-4.5).
+* ``eigenvalues``: ω² of the modes [rad²/s²], shape (n_f,), or None when unknown
+  (text files do not store them; see :meth:`BodyData.modal_eigenvalues`).
+* ``node_groups``: name -> sorted 0-based node indices (int64 arrays).
+* ``surface_triangles``: surface faces, shape (T, 3) for linear or (T, 6) for
+  quadratic meshes (corners first, then mid-edge nodes), 0-based; or None.
+* ``material``: dict with ``density`` [kg/m³], ``young`` [Pa], ``poisson`` [-], or {}.
+* ``params``: the preprocessing parameters (JSON-serializable dict), or {}.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+
+
+@dataclass
+class BodyData:
+    """Preprocessed data of one flexible body, in SI units (see module docstring)."""
+
+    u0: np.ndarray
+    phi: np.ndarray
+    masses: np.ndarray
+    stiffness: sp.csr_matrix
+    eigenvalues: np.ndarray | None = None
+    node_groups: dict = field(default_factory=dict)
+    surface_triangles: np.ndarray | None = None
+    material: dict = field(default_factory=dict)
+    params: dict = field(default_factory=dict)
+
+    @property
+    def n_nodes(self) -> int:
+        """Number of nodes N."""
+        return self.u0.shape[0]
+
+    @property
+    def n_modes(self) -> int:
+        """Number of mode shapes n_f."""
+        return self.phi.shape[1]
+
+    @property
+    def total_mass(self) -> float:
+        """Total mass Σ m_j [kg]."""
+        return float(self.masses.sum())
+
+    @property
+    def center_of_mass(self) -> np.ndarray:
+        """Centre of mass c = Σ m_j ū0_j / Σ m_j in the body frame, shape (3,) [m]."""
+        return self.masses @ self.u0 / self.masses.sum()
+
+    @property
+    def surface_nodes(self) -> np.ndarray:
+        """Sorted indices of the nodes on the surface triangles (empty if unknown)."""
+        if self.surface_triangles is None:
+            return np.zeros(0, dtype=np.int64)
+        return np.unique(self.surface_triangles)
+
+    def modal_eigenvalues(self) -> np.ndarray:
+        """ω² of each mode [rad²/s²].
+
+        The stored eigenvalues if present, otherwise the Rayleigh quotients
+        ω_i² = φ_iᵀ K φ_i / φ_iᵀ M φ_i with the lumped M (exact for eigenvectors).
+        """
+        if self.eigenvalues is not None:
+            return np.asarray(self.eigenvalues, dtype=float)
+        m3 = np.repeat(self.masses, 3)
+        num = np.einsum("ij,ij->j", self.phi, self.stiffness @ self.phi)
+        den = np.einsum("ij,i,ij->j", self.phi, m3, self.phi)
+        return num / den
+
+    def frequencies(self) -> tuple[np.ndarray, np.ndarray]:
+        """Eigenfrequencies (ω [rad/s], f [Hz]) of the modes."""
+        omega = np.sqrt(np.clip(self.modal_eigenvalues(), 0.0, None))
+        return omega, omega / (2 * np.pi)
+
+    def summary(self) -> str:
+        """A human-readable summary: nodes, surface nodes, modes, mass, centre of mass, frequencies."""
+        omega, hz = self.frequencies()
+        c = self.center_of_mass
+        lines = [
+            f"nodes:          {self.n_nodes}",
+            f"surface nodes:  {len(self.surface_nodes) if self.surface_triangles is not None else 'unknown'}",
+            f"modes:          {self.n_modes}",
+            f"total mass:     {self.total_mass:.6g} kg",
+            f"centre of mass: ({c[0]:.6g}, {c[1]:.6g}, {c[2]:.6g}) m",
+        ]
+        if self.node_groups:
+            lines.append("node groups:    " + ", ".join(
+                f"{k} ({len(v)})" for k, v in sorted(self.node_groups.items())))
+        lines.append(" mode   omega [rad/s]        f [Hz]")
+        for i, (w, f) in enumerate(zip(omega, hz), start=1):
+            lines.append(f"{i:5d} {w:15.6g} {f:13.6g}")
+        return "\n".join(lines)
