@@ -1,0 +1,143 @@
+"""The ``ffrmbs`` command line.
+
+Subcommands
+-----------
+``preprocess``  mesh -> FE model -> modes -> body files (thesis Sec. 4.2.1 text files and body.h5)
+``info``        summary of a body (text-file directory or HDF5 file)
+``validate``    validation cases: error against run time (see ../DESIGN.md)
+``run``         the main job on the embedded default scene
+
+Errors the user can cause (:class:`ffrmbs.errors.FfrmbsError`) are printed as one
+line ``ffrmbs: error: …`` and exit with status 2, without a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+
+from ffrmbs import __version__
+from ffrmbs.errors import FfrmbsError
+
+#: the embedded default body: the report's steel beam (report Sec. 5.1, Table 1), clamped at z = 0
+DEFAULT_BEAM = dict(spec="box:1,1,5", mesh_size=0.5, order=2, density=8000.0, young=200e9,
+                    poisson=0.0, clamp="z0", modes=10)
+
+
+def _log(msg):
+    print(msg, file=sys.stderr, flush=True)
+
+
+def _stage(label, fn, *args, **kwargs):
+    """Run one long step, telling the user what happens and how long it took."""
+    _log(f"{label} ...")
+    t0 = time.perf_counter()
+    out = fn(*args, **kwargs)
+    _log(f"{label}: done in {time.perf_counter() - t0:.2f} s")
+    return out
+
+
+def frequency_table(body) -> str:
+    omega, hz = body.frequencies()
+    rows = [" mode   omega [rad/s]        f [Hz]"]
+    rows += [f"{i:5d} {w:15.6g} {f:13.6g}" for i, (w, f) in enumerate(zip(omega, hz), start=1)]
+    return "\n".join(rows)
+
+
+def _preprocess(spec, modes, clamp, units, density, young, poisson, order, mesh_size, out):
+    from preprocess.bodyfiles import write_body
+    from preprocess.pipeline import Material, build_body, mesh_source, mesh_statistics
+
+    mesh = _stage(f"meshing {spec}", mesh_source, spec, order, mesh_size)
+    print(mesh_statistics(mesh))
+    params = dict(input=spec, mesh_size=mesh_size)
+    body = build_body(mesh, Material(density, young, poisson), modes, clamp=clamp,
+                      units=units, params=params, log=_log)
+    if out is not None:
+        _stage(f"writing body files to {out}", write_body, out, body)
+    print(frequency_table(body))
+    return body
+
+
+def cmd_preprocess(args):
+    _preprocess(args.input, args.modes, None if args.free else args.clamp, args.units,
+                args.density, args.young, args.poisson, args.order, args.mesh_size, args.out)
+
+
+def cmd_info(args):
+    from preprocess.bodyfiles import read_body
+
+    print(read_body(args.path, units=args.units).summary())
+
+
+def cmd_validate(args):
+    from validation import run_validation
+
+    run_validation(args.out, quick=args.quick, only=args.only or None, progress=_log)
+    print(f"wrote {args.out}/results.json, {args.out}/report.md and one plot per case")
+
+
+def cmd_run(args):
+    """Main job. Until contact scenes exist (issue 6): preprocess the embedded default beam."""
+    d = DEFAULT_BEAM
+    print(f"default scene: the report's {d['spec'][4:].replace(',', ' x ')} m steel beam, "
+          f"clamped at z = 0, tet10, mesh size {d['mesh_size']} m")
+    _preprocess(d["spec"], d["modes"], d["clamp"], "si", d["density"], d["young"], d["poisson"],
+                d["order"], d["mesh_size"], args.out)
+
+
+def build_parser():
+    p = argparse.ArgumentParser(prog="ffrmbs", description=__doc__.split("\n")[0])
+    p.add_argument("--version", action="version", version=f"ffrmbs {__version__}")
+    sub = p.add_subparsers(dest="command", required=True)
+
+    pre = sub.add_parser("preprocess", help="mesh -> FE model -> modes -> body files")
+    pre.add_argument("input", help="mesh file (.geo, .msh, .inp) or built-in geometry: "
+                                   "box:LX,LY,LZ or stepped-beam")
+    pre.add_argument("--modes", type=int, required=True, help="number of elastic modes")
+    bc = pre.add_mutually_exclusive_group(required=True)
+    bc.add_argument("--clamp", metavar="GROUP", help="clamp this node group (e.g. z0)")
+    bc.add_argument("--free", action="store_true", help="free-free modes, rigid-body modes removed")
+    pre.add_argument("--units", choices=("si", "si-mm"), default="si",
+                     help="units of the input geometry and material (written files are SI)")
+    pre.add_argument("--density", type=float, required=True, help="kg/m^3 (t/mm^3 for si-mm)")
+    pre.add_argument("--young", type=float, required=True, help="Pa (N/mm^2 for si-mm)")
+    pre.add_argument("--poisson", type=float, required=True)
+    pre.add_argument("--order", type=int, choices=(1, 2), default=2, help="tet4 (1) or tet10 (2)")
+    pre.add_argument("--mesh-size", type=float, help="maximum element size, input units")
+    pre.add_argument("--out", required=True, help="output directory")
+    pre.set_defaults(func=cmd_preprocess)
+
+    info = sub.add_parser("info", help="summary of a body file or directory")
+    info.add_argument("path")
+    info.add_argument("--units", choices=("si", "si-mm"), default="si", help="units of text files")
+    info.set_defaults(func=cmd_info)
+
+    val = sub.add_parser("validate", help="run the validation cases")
+    val.add_argument("--quick", action="store_true", help="coarse sweeps (minutes)")
+    val.add_argument("--only", action="append", metavar="NAME", help="run only this case (repeatable)")
+    val.add_argument("--out", required=True, help="output directory")
+    val.set_defaults(func=cmd_validate)
+
+    run = sub.add_parser("run", help="run the main job on the embedded default scene")
+    run.add_argument("--out", default=None, help="also write the body files here")
+    run.set_defaults(func=cmd_run)
+    return p
+
+
+def main(argv=None):
+    args = build_parser().parse_args(argv)
+    try:
+        args.func(args)
+    except FfrmbsError as exc:
+        print(f"ffrmbs: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("ffrmbs: interrupted", file=sys.stderr)
+        return 130
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,1 @@
+"""Preprocessing: mesh -> FE model -> mode shapes -> body files."""
