@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ffrmbs.errors import InputFileError, ModelError
+from ffrmbs.errors import InputFileError
 
 #: mid-edge node k (local index 4 + k) sits on edge TET10_EDGES[k]
 TET10_EDGES = np.array([(0, 1), (1, 2), (0, 2), (0, 3), (1, 3), (2, 3)])
@@ -84,12 +84,13 @@ class Mesh:
         return Mesh(self.points * factor, self.tets, dict(self.node_groups), self.source)
 
     def group(self, name: str) -> np.ndarray:
-        """Node indices of group ``name``; ModelError naming the known groups if absent."""
+        """Node indices of group ``name``; InputFileError naming the known groups if absent."""
         try:
             return self.node_groups[name]
         except KeyError:
             known = ", ".join(sorted(self.node_groups)) or "none"
-            raise ModelError(f"unknown node group {name!r} in {self.source}; known groups: {known}") from None
+            raise InputFileError(self.source, None,
+                                 f"unknown node group {name!r}; known groups: {known}") from None
 
     def surface_triangles(self) -> np.ndarray:
         """Outward surface faces: faces that belong to exactly one element.

@@ -1,0 +1,9 @@
+"""Validation: cases that report error against run time (DESIGN.md, "Validation protocol").
+
+``run_validation(out_dir)`` runs the cases registered in ``validation/cases/__init__.py``
+and writes ``results.json``, ``report.md`` and one work-precision PNG per case.
+"""
+
+from validation.harness import CASES, CaseResult, available_cases, make_row, run_validation, timed
+
+__all__ = ["CASES", "CaseResult", "available_cases", "make_row", "run_validation", "timed"]

@@ -1,0 +1,413 @@
+"""The validation harness: run cases, write results.json, report.md and work-precision plots.
+
+Protocol (DESIGN.md, "Validation protocol"). A case is a module ``validation/cases/<name>.py``
+listed in ``CASE_MODULES`` of ``validation/cases/__init__.py``; it defines
+
+- ``NAME: str`` -- equal to its module name ``<name>``,
+- ``DESCRIPTION: str`` -- one line,
+- ``run(quick: bool) -> CaseResult``.
+
+Each row of a result is a dict ``{case, code, config, cpu_s, error, error_kind, reference}``
+(build it with :func:`make_row`): ``code`` is ``"ffrmbs"`` or a peer's name, ``config`` the
+swept parameters, ``cpu_s`` CPU seconds, ``error`` a float (relative unless ``error_kind``
+says otherwise; NaN when the row has no error), ``reference`` what the error is measured
+against. Extra keys are kept in results.json and shown as extra table columns.
+"""
+
+from __future__ import annotations
+
+import datetime
+import importlib
+import json
+import math
+import numbers
+import os
+import platform
+import re
+import tempfile
+import time
+import traceback
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
+from ffrmbs.errors import FfrmbsError, ModelError
+
+ROW_KEYS = ("case", "code", "config", "cpu_s", "error", "error_kind", "reference")
+DEFAULT_PLOT_GROUPS = ("code", "error_kind", "reference")
+_MARKERS = "osD^v<>pPX*h"
+
+
+@dataclass
+class CaseResult:
+    """What a case's ``run(quick)`` returns.
+
+    rows : list of dict
+        The rows, see :func:`make_row`.
+    skipped : list of str
+        One line per part not run and why, e.g. ``"akantu: skipped: akantu not installed"``.
+    notes : list of str
+        Markdown paragraphs printed under the case's table (e.g. extra comparison tables).
+    plot_groups : sequence of str or None
+        Keys whose values define one marker series of the work-precision plot; a key is
+        looked up in the row, then in its ``config``. None: ``DEFAULT_PLOT_GROUPS``,
+        i.e. one series per (code, error_kind, reference).
+    """
+
+    rows: list = field(default_factory=list)
+    skipped: list = field(default_factory=list)
+    notes: list = field(default_factory=list)
+    plot_groups: tuple | list | None = None
+
+
+def make_row(case, config, cpu_s, error, error_kind, reference, code="ffrmbs", **extra):
+    """One result row: ``{case, code, config, cpu_s, error, error_kind, reference, **extra}``.
+
+    ``cpu_s`` [s] and ``error`` are stored as floats (``error=None`` becomes NaN: a row
+    without an error); ``config`` is copied into a plain dict. Extra keywords (e.g.
+    ``value=203.0``) are kept in results.json and shown as extra columns of the report table.
+    """
+    row = {"case": case, "code": code, "config": dict(config), "cpu_s": float(cpu_s),
+           "error": math.nan if error is None else float(error),
+           "error_kind": error_kind, "reference": reference}
+    row.update(extra)
+    return row
+
+
+def timed(fn, *args, **kw):
+    """Call ``fn(*args, **kw)``; return ``(result, cpu_s)``.
+
+    ``cpu_s`` [s] is the CPU time of this process (``time.process_time``: user + system,
+    summed over all its threads, so a multi-threaded BLAS counts every core it uses;
+    sleeping and waiting are not counted).
+    """
+    start = time.process_time()
+    result = fn(*args, **kw)
+    return result, time.process_time() - start
+
+
+def _check_case_module(name, module):
+    """Raise ModelError unless ``module`` follows the case protocol under ``name``."""
+    missing = [attr for attr in ("NAME", "DESCRIPTION", "run") if not hasattr(module, attr)]
+    if missing:
+        raise ModelError(f"validation case {name!r} lacks {', '.join(missing)}")
+    if module.NAME != name:
+        raise ModelError(f"validation case {name!r} has NAME = {module.NAME!r}; they must agree")
+
+
+class _CaseRegistry(Mapping):
+    """Case name -> case module, for the names in ``validation.cases.CASE_MODULES``.
+
+    The list is read on every access and a module is imported only when asked for, so a
+    listed but missing or broken module is an error (ModelError) for that case alone.
+    """
+
+    def _names(self):
+        return list(getattr(importlib.import_module("validation.cases"), "CASE_MODULES", []))
+
+    def __iter__(self):
+        return iter(self._names())
+
+    def __len__(self):
+        return len(self._names())
+
+    def __getitem__(self, name):
+        if name not in self._names():
+            raise KeyError(name)
+        try:
+            module = importlib.import_module(f"validation.cases.{name}")
+        except ImportError as exc:
+            raise ModelError(f"validation case {name!r} is listed in validation/cases/__init__.py "
+                             f"but cannot be imported: {exc}") from exc
+        _check_case_module(name, module)
+        return module
+
+
+CASES = _CaseRegistry()
+
+
+def available_cases():
+    """Names of the registered validation cases, in the order of ``CASE_MODULES``."""
+    return list(CASES)
+
+
+@dataclass
+class _Outcome:
+    """One case's run: its result or its failure."""
+
+    name: str
+    description: str = ""
+    result: CaseResult | None = None
+    failure: str | None = None
+    traceback: str | None = None
+    cpu_s: float = math.nan
+
+
+def _check_result(result):
+    """Raise ModelError unless ``result`` is a CaseResult whose rows carry ROW_KEYS.
+
+    ``config`` must be a dict, ``cpu_s`` a real number, ``error`` a real number or None.
+    """
+    if not isinstance(result, CaseResult):
+        raise ModelError(f"run() returned {type(result).__name__}, expected CaseResult")
+    for i, row in enumerate(result.rows):
+        if not isinstance(row, dict):
+            raise ModelError(f"row {i} is a {type(row).__name__}, expected dict")
+        missing = [key for key in ROW_KEYS if key not in row]
+        if missing:
+            raise ModelError(f"row {i} lacks {', '.join(missing)}")
+        if not isinstance(row["config"], dict):
+            raise ModelError(f"row {i}: config is a {type(row['config']).__name__}, expected dict")
+        if not isinstance(row["cpu_s"], numbers.Real):
+            raise ModelError(f"row {i}: cpu_s = {row['cpu_s']!r} is not a number")
+        if not (row["error"] is None or isinstance(row["error"], numbers.Real)):
+            raise ModelError(f"row {i}: error = {row['error']!r} is neither a number nor None")
+
+
+def _run_case(registry, name, quick):
+    """Load and run one case; an exception becomes a failed outcome."""
+    outcome = _Outcome(name)
+    start = time.process_time()
+    try:
+        module = registry[name]
+        outcome.description = str(module.DESCRIPTION)
+        result = module.run(quick)
+        _check_result(result)
+        outcome.result = result
+    except Exception as exc:  # noqa: BLE001 -- a failing case must not stop the others
+        outcome.failure = f"{type(exc).__name__}: {exc}"
+        outcome.traceback = traceback.format_exc()
+    outcome.cpu_s = time.process_time() - start
+    return outcome
+
+
+def _as_registry(cases):
+    """A mapping name -> module from a mapping or from an iterable of case modules."""
+    if isinstance(cases, Mapping):
+        registry = dict(cases)
+    else:
+        registry = {module.NAME: module for module in cases}
+    for name, module in registry.items():
+        _check_case_module(name, module)
+    return registry
+
+
+def _select(registry, only):
+    """The case names to run: all, or ``only`` (a name or a list of names)."""
+    known = list(registry)
+    if only is None:
+        return known
+    wanted = [only] if isinstance(only, str) else list(only)
+    unknown = [name for name in wanted if name not in known]
+    if unknown:
+        raise ModelError(f"unknown validation case(s) {', '.join(map(repr, unknown))}; "
+                         f"known: {', '.join(known) or '(none)'}")
+    return wanted
+
+
+def _json_safe(value):
+    """``value`` with numpy types as Python types, non-finite floats as None, tuples as lists."""
+    if isinstance(value, dict):
+        return {str(k): _json_safe(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_json_safe(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return _json_safe(value.tolist())
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if value is None or isinstance(value, (bool, int, str)):
+        return value
+    return str(value)
+
+
+def _write_atomic(path, write):
+    """Write ``path`` by ``write(binary_file)`` into a temporary file, then os.replace."""
+    fd, tmp = tempfile.mkstemp(dir=os.path.dirname(os.path.abspath(path)), prefix=".tmp-")
+    try:
+        with os.fdopen(fd, "wb") as f:
+            write(f)
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+def _machine():
+    """Platform, Python and numpy versions and CPU count of this machine."""
+    return {"platform": platform.platform(), "python": platform.python_version(),
+            "numpy": np.__version__, "cpu_count": os.cpu_count()}
+
+
+def _plottable(row):
+    """True when the row's cpu time and error are finite and positive (log-log plot)."""
+    return all(v is not None and math.isfinite(v) and v > 0 for v in (row["cpu_s"], row["error"]))
+
+
+def _lookup(row, key):
+    """``row[key]``, else ``row["config"][key]``, else None."""
+    return row[key] if key in row else row["config"].get(key)
+
+
+def _plot(path, name, rows, group_keys):
+    """Log-log work-precision plot (x: CPU time, y: error) of the plottable rows to ``path``."""
+    groups = {}
+    for row in rows:
+        groups.setdefault(tuple(_lookup(row, key) for key in group_keys), []).append(row)
+    fig = Figure(figsize=(6.4, 4.8))
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    for i, (key, members) in enumerate(groups.items()):
+        ax.loglog([r["cpu_s"] for r in members], [r["error"] for r in members],
+                  linestyle="none", marker=_MARKERS[i % len(_MARKERS)],
+                  label=", ".join(str(k) for k in key))
+    kinds = {row["error_kind"] for row in rows}
+    ax.set_xlabel("CPU time [s]")
+    ax.set_ylabel(f"error ({kinds.pop()})" if len(kinds) == 1 else "error")
+    ax.set_title(f"{name}: work-precision")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize="small")
+    fig.tight_layout()
+    _write_atomic(path, lambda f: fig.savefig(f, format="png", dpi=120))
+
+
+def _cell(value):
+    """A markdown table cell: floats to 6 significant digits, NaN/None as n/a, dicts as k=v."""
+    if isinstance(value, dict):
+        text = ", ".join(f"{k}={_cell(v)}" for k, v in value.items())
+    elif isinstance(value, (float, np.floating)):
+        text = "n/a" if not math.isfinite(value) else f"{value:.6g}"
+    elif value is None:
+        text = "n/a"
+    else:
+        text = str(value)
+    return text.replace("|", "\\|").replace("\n", " ")
+
+
+def _case_report(outcome, png_name):
+    """Markdown lines of one case: heading, description, table, plot, notes, skipped."""
+    lines = [f"## {outcome.name}", ""]
+    if outcome.description:
+        lines += [outcome.description, ""]
+    if outcome.failure is not None:
+        return lines + [f"FAILED: {_cell(outcome.failure)}", ""]
+    result = outcome.result
+    rows = result.rows
+    if rows:
+        extra = list(dict.fromkeys(k for row in rows for k in row if k not in ROW_KEYS))
+        header = ["code", "config", "cpu [s]", "error", "error kind", "reference"] + extra
+        lines += ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+        for row in rows:
+            error = row["error"]
+            cells = [_cell(row["code"]), _cell(row["config"]), _cell(row["cpu_s"]),
+                     "n/a" if error is None or not math.isfinite(error) else f"{error:.3e}",
+                     _cell(row["error_kind"]), _cell(row["reference"])]
+            cells += [_cell(row.get(k, "")) for k in extra]
+            lines.append("| " + " | ".join(cells) + " |")
+        lines.append("")
+    else:
+        lines += ["No rows.", ""]
+    n_out = sum(not _plottable(row) for row in rows)
+    if png_name is not None:
+        lines += [f"![{outcome.name}: work-precision]({png_name})", ""]
+    if n_out:
+        lines += [f"{n_out} of {len(rows)} rows not plotted: error or cpu time is NaN, zero "
+                  "or negative.", ""]
+    for note in result.notes:
+        lines += [note, ""]
+    if result.skipped:
+        lines += ["Skipped:", ""] + [f"- {s}" for s in result.skipped] + [""]
+    return lines
+
+
+def _report(outcomes, pngs, quick, machine, date):
+    """The whole report.md text."""
+    lines = ["# ffrmbs validation report", "",
+             f"- date: {date}",
+             f"- mode: {'quick' if quick else 'full'}",
+             f"- machine: {machine['platform']}; Python {machine['python']}; "
+             f"numpy {machine['numpy']}; {machine['cpu_count']} CPUs",
+             "- cpu [s]: CPU time of this process (all threads), time.process_time", "",
+             "| case | rows | status |", "|---|---|---|"]
+    for o in outcomes:
+        status = "FAILED" if o.failure is not None else "ok"
+        lines.append(f"| {o.name} | {len(o.result.rows) if o.result else 0} | {status} |")
+    lines.append("")
+    for o in outcomes:
+        lines += _case_report(o, pngs.get(o.name))
+    return "\n".join(lines)
+
+
+def _results_json(outcomes, quick, machine, date):
+    """The results.json document: rows of all cases plus per-case status, skipped, notes."""
+    cases = {}
+    for o in outcomes:
+        r = o.result
+        cases[o.name] = {"description": o.description,
+                         "status": "failed" if o.failure is not None else "ok",
+                         "failure": o.failure, "traceback": o.traceback, "cpu_s": o.cpu_s,
+                         "skipped": list(r.skipped) if r else [], "notes": list(r.notes) if r else []}
+    rows = [row for o in outcomes if o.result for row in o.result.rows]
+    return _json_safe({"date": date, "quick": quick, "machine": machine, "rows": rows, "cases": cases})
+
+
+def run_validation(out_dir, quick=False, only=None, cases=None, progress=print):
+    """Run validation cases and write ``out_dir/results.json``, ``report.md``, ``<case>.png``.
+
+    Parameters
+    ----------
+    out_dir : str or os.PathLike
+        Output directory, created if missing. Files are written atomically.
+    quick : bool
+        Passed to each case's ``run``: a short sweep for smoke tests.
+    only : str or list of str or None
+        Case name(s) to run; None runs all. An unknown name raises ModelError.
+    cases : mapping name -> module, or iterable of case modules, or None
+        The cases to choose from; None: the registry :data:`CASES`.
+    progress : callable or None
+        Called with one line of text per step; None for silence.
+
+    Returns the rows of all cases. A case that raises is recorded as ``FAILED: <message>``
+    and the others still run; after writing the files, FfrmbsError names the failed cases.
+    Rows whose error or cpu time is NaN, zero or negative are left out of the plots.
+    """
+    say = progress or (lambda line: None)
+    registry = CASES if cases is None else _as_registry(cases)
+    names = _select(registry, only)
+    out_dir = os.fspath(out_dir)
+    os.makedirs(out_dir, exist_ok=True)
+    outcomes = []
+    for i, name in enumerate(names, 1):
+        say(f"[{i}/{len(names)}] {name} ...")
+        outcome = _run_case(registry, name, quick)
+        if outcome.failure is not None:
+            say(f"[{i}/{len(names)}] {name}: FAILED: {outcome.failure}")
+        else:
+            say(f"[{i}/{len(names)}] {name}: {len(outcome.result.rows)} rows, "
+                f"{outcome.cpu_s:.3g} s CPU")
+        outcomes.append(outcome)
+    pngs = {}
+    for o in outcomes:
+        plotted = [row for row in o.result.rows if _plottable(row)] if o.result else []
+        if plotted:
+            pngs[o.name] = re.sub(r"[^A-Za-z0-9_.-]", "_", o.name) + ".png"
+            _plot(os.path.join(out_dir, pngs[o.name]), o.name, plotted,
+                  o.result.plot_groups or DEFAULT_PLOT_GROUPS)
+    machine = _machine()
+    date = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+    doc = _results_json(outcomes, quick, machine, date)
+    _write_atomic(os.path.join(out_dir, "results.json"),
+                  lambda f: f.write(json.dumps(doc, indent=1, allow_nan=False).encode()))
+    report_path = os.path.join(out_dir, "report.md")
+    _write_atomic(report_path, lambda f: f.write(_report(outcomes, pngs, quick, machine, date).encode()))
+    say(f"wrote {report_path}")
+    failed = [o.name for o in outcomes if o.failure is not None]
+    if failed:
+        raise FfrmbsError(f"validation case(s) failed: {', '.join(failed)}; see {report_path}")
+    return [row for o in outcomes for row in o.result.rows]
