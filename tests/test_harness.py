@@ -102,7 +102,7 @@ def test_report_table(tmp_path, demo):
             "| Euler-Bernoulli | 203 |") in lines
     assert "| ffrmbs | modes=3 | 0.05 | n/a | rel. first frequency | Euler-Bernoulli |  |" in lines
     assert "| exudyn | mesh=coarse | 0.2 | 3.000e-02 | rel. first frequency | Euler-Bernoulli |  |" in lines
-    assert "1 of 4 rows not plotted: error or cpu time is NaN, zero or negative." in lines
+    assert "1 of 4 rows not plotted: error NaN or zero, or cpu time not positive." in lines
     assert "| 1 | 2 |" in lines
     assert "Skipped:" in lines and "- akantu: skipped: akantu not installed" in lines
     assert "![demo: work-precision](demo.png)" in lines
@@ -122,7 +122,7 @@ def test_case_without_plottable_rows(tmp_path):
     run_validation(tmp_path, cases=[fake_case("flat", run)], progress=None)
     _, report = read_outputs(tmp_path)
     assert not (tmp_path / "flat.png").exists()
-    assert "2 of 2 rows not plotted: error or cpu time is NaN, zero or negative." in report
+    assert "2 of 2 rows not plotted: error NaN or zero, or cpu time not positive." in report
 
 
 def test_failing_case(tmp_path, demo):

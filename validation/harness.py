@@ -246,8 +246,9 @@ def _machine():
 
 
 def _plottable(row):
-    """True when the row's cpu time and error are finite and positive (log-log plot)."""
-    return all(v is not None and math.isfinite(v) and v > 0 for v in (row["cpu_s"], row["error"]))
+    """True when the row's cpu time and |error| are finite and positive (log-log plot)."""
+    return all(v is not None and math.isfinite(v) and v != 0 for v in (row["cpu_s"], row["error"])) \
+        and row["cpu_s"] > 0
 
 
 def _lookup(row, key):
@@ -264,12 +265,15 @@ def _plot(path, name, rows, group_keys):
     FigureCanvasAgg(fig)
     ax = fig.add_subplot()
     for i, (key, members) in enumerate(groups.items()):
-        ax.loglog([r["cpu_s"] for r in members], [r["error"] for r in members],
+        members = [r for r in members if _plottable(r)]
+        if not members:
+            continue
+        ax.loglog([r["cpu_s"] for r in members], [abs(r["error"]) for r in members],
                   linestyle="none", marker=_MARKERS[i % len(_MARKERS)],
                   label=", ".join(str(k) for k in key))
     kinds = {row["error_kind"] for row in rows}
     ax.set_xlabel("CPU time [s]")
-    ax.set_ylabel(f"error ({kinds.pop()})" if len(kinds) == 1 else "error")
+    ax.set_ylabel(f"|error| ({kinds.pop()})" if len(kinds) == 1 else "|error|")
     ax.set_title(f"{name}: work-precision")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize="small")
@@ -317,8 +321,8 @@ def _case_report(outcome, png_name):
     if png_name is not None:
         lines += [f"![{outcome.name}: work-precision]({png_name})", ""]
     if n_out:
-        lines += [f"{n_out} of {len(rows)} rows not plotted: error or cpu time is NaN, zero "
-                  "or negative.", ""]
+        lines += [f"{n_out} of {len(rows)} rows not plotted: error NaN or zero, or cpu time "
+                  "not positive.", ""]
     for note in result.notes:
         lines += [note, ""]
     if result.skipped:
@@ -375,7 +379,7 @@ def run_validation(out_dir, quick=False, only=None, cases=None, progress=print):
 
     Returns the rows of all cases. A case that raises is recorded as ``FAILED: <message>``
     and the others still run; after writing the files, FfrmbsError names the failed cases.
-    Rows whose error or cpu time is NaN, zero or negative are left out of the plots.
+    Rows whose error is NaN or zero, or whose cpu time is not positive, are left out of the plots; signed errors are plotted as |error|.
     """
     say = progress or (lambda line: None)
     registry = CASES if cases is None else _as_registry(cases)

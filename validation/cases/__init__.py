@@ -1,0 +1,3 @@
+"""Validation cases; each module defines NAME (= module name), DESCRIPTION and run(quick)."""
+
+CASE_MODULES = ["cantilever", "complex_beam"]

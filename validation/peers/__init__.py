@@ -1,0 +1,1 @@
+"""Adapters to peer codes used as references; each is optional."""
