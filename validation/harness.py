@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from matplotlib.ticker import NullFormatter
 
 from ffrmbs.errors import FfrmbsError, ModelError
 
@@ -269,9 +270,11 @@ def _plot(path, name, rows, group_keys):
         if not members:
             continue
         ax.loglog([r["cpu_s"] for r in members], [abs(r["error"]) for r in members],
-                  linestyle="none", marker=_MARKERS[i % len(_MARKERS)],
+                  linestyle="-", linewidth=0.8, marker=_MARKERS[i % len(_MARKERS)],
                   label=", ".join(str(k) for k in key))
     kinds = {row["error_kind"] for row in rows}
+    ax.xaxis.set_minor_formatter(NullFormatter())
+    ax.yaxis.set_minor_formatter(NullFormatter())
     ax.set_xlabel("CPU time [s]")
     ax.set_ylabel(f"|error| ({kinds.pop()})" if len(kinds) == 1 else "|error|")
     ax.set_title(f"{name}: work-precision")

@@ -1,0 +1,82 @@
+"""The command line: preprocess -> files -> info, clear one-line errors, the main job."""
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from preprocess import read_body
+from preprocess.textfiles import TEXT_FILES
+
+
+def ffrmbs(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", "ffrmbs.cli", *args], capture_output=True,
+                          text=True, cwd=cwd, timeout=300)
+
+
+@pytest.fixture(scope="module")
+def preprocessed(tmp_path_factory):
+    out = tmp_path_factory.mktemp("beam")
+    res = ffrmbs("preprocess", "box:1,1,5", "--modes", "4", "--clamp", "z0", "--density", "8000",
+                 "--young", "200e9", "--poisson", "0", "--mesh-size", "0.5", "--out", str(out))
+    return out, res
+
+
+def test_preprocess_writes_body_files_and_prints_statistics(preprocessed):
+    out, res = preprocessed
+    assert res.returncode == 0, res.stderr
+    assert "579" in res.stdout and "426" in res.stdout and "254" in res.stdout  # report Table 1
+    for name in (*TEXT_FILES, "body.h5"):
+        assert (out / name).is_file()
+    body = read_body(out / "body.h5")
+    # first bending pair of the clamped report beam, Akantu's assembly gives 197.6 rad/s
+    assert body.frequencies()[0][0] == pytest.approx(197.6, rel=2e-3)
+    text = read_body(out)
+    np.testing.assert_array_equal(text.phi, body.phi)
+
+
+def test_info_reads_directory_and_hdf5(preprocessed):
+    out, _ = preprocessed
+    for path in (out, out / "body.h5"):
+        res = ffrmbs("info", str(path))
+        assert res.returncode == 0, res.stderr
+        assert "nodes:          579" in res.stdout
+        assert "total mass:     40000 kg" in res.stdout
+        assert "centre of mass: (0.5, 0.5, 2.5) m" in res.stdout
+    assert "surface nodes:  426" in ffrmbs("info", str(out / "body.h5")).stdout
+
+
+def test_bad_body_file_is_one_clear_line(preprocessed, tmp_path):
+    out, _ = preprocessed
+    for name in TEXT_FILES:
+        (tmp_path / name).write_bytes((out / name).read_bytes())
+    lines = (tmp_path / "mij.dat").read_text().splitlines()
+    lines[2] = "-1.0\t% node: 3"
+    (tmp_path / "mij.dat").write_text("\n".join(lines) + "\n")
+    res = ffrmbs("info", str(tmp_path))
+    assert res.returncode == 2
+    assert "Traceback" not in res.stderr
+    assert "mij.dat, line 3" in res.stderr and "mass" in res.stderr
+
+
+def test_preprocess_unknown_group_writes_nothing(tmp_path):
+    out = tmp_path / "out"
+    res = ffrmbs("preprocess", "box:1,1,2", "--modes", "2", "--clamp", "left", "--density", "1000",
+                 "--young", "1e9", "--poisson", "0.3", "--out", str(out))
+    assert res.returncode == 2 and "Traceback" not in res.stderr
+    assert "unknown node group 'left'" in res.stderr and "z0" in res.stderr
+    assert not out.exists() or not any(out.iterdir())
+
+
+def test_preprocess_missing_mesh_file(tmp_path):
+    res = ffrmbs("preprocess", str(tmp_path / "none.msh"), "--modes", "2", "--free", "--density", "1",
+                 "--young", "1", "--poisson", "0.3", "--out", str(tmp_path / "o"))
+    assert res.returncode == 2 and "none.msh" in res.stderr and "not found" in res.stderr
+
+
+def test_main_job_prints_the_default_beam_modes():
+    res = ffrmbs("run")
+    assert res.returncode == 0, res.stderr
+    first = next(line for line in res.stdout.splitlines() if line.strip().startswith("1 "))
+    assert float(first.split()[1]) == pytest.approx(197.6, rel=2e-3)
