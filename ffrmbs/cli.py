@@ -38,13 +38,6 @@ def _stage(label, fn, *args, **kwargs):
     return out
 
 
-def frequency_table(body) -> str:
-    omega, hz = body.frequencies()
-    rows = [" mode   omega [rad/s]        f [Hz]"]
-    rows += [f"{i:5d} {w:15.6g} {f:13.6g}" for i, (w, f) in enumerate(zip(omega, hz), start=1)]
-    return "\n".join(rows)
-
-
 def _preprocess(spec, modes, clamp, units, density, young, poisson, order, mesh_size, out):
     from preprocess.bodyfiles import write_body
     from preprocess.pipeline import Material, build_body, mesh_source, mesh_statistics
@@ -56,7 +49,7 @@ def _preprocess(spec, modes, clamp, units, density, young, poisson, order, mesh_
                       units=units, params=params, log=_log)
     if out is not None:
         _stage(f"writing body files to {out}", write_body, out, body)
-    print(frequency_table(body))
+    print(body.frequency_table())
     return body
 
 

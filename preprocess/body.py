@@ -92,7 +92,6 @@ class BodyData:
 
     def summary(self) -> str:
         """A human-readable summary: nodes, surface nodes, modes, mass, centre of mass, frequencies."""
-        omega, hz = self.frequencies()
         c = self.center_of_mass
         lines = [
             f"nodes:          {self.n_nodes}",
@@ -104,7 +103,11 @@ class BodyData:
         if self.node_groups:
             lines.append("node groups:    " + ", ".join(
                 f"{k} ({len(v)})" for k, v in sorted(self.node_groups.items())))
-        lines.append(" mode   omega [rad/s]        f [Hz]")
-        for i, (w, f) in enumerate(zip(omega, hz), start=1):
-            lines.append(f"{i:5d} {w:15.6g} {f:13.6g}")
-        return "\n".join(lines)
+        return "\n".join(lines) + "\n" + self.frequency_table()
+
+    def frequency_table(self) -> str:
+        """One line per mode: number, ω [rad/s], f [Hz]."""
+        omega, hz = self.frequencies()
+        rows = [" mode   omega [rad/s]        f [Hz]"]
+        rows += [f"{i:5d} {w:15.6g} {f:13.6g}" for i, (w, f) in enumerate(zip(omega, hz), start=1)]
+        return "\n".join(rows)

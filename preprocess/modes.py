@@ -57,14 +57,20 @@ def _eigsh(K, m, k, sigma):
     return vals[order], vecs[:, order]
 
 
+def clamped_dofs(n_dof, clamped_nodes) -> np.ndarray:
+    """Boolean mask (n_dof,) of the DOFs of ``clamped_nodes`` (DOF 3*node + direction)."""
+    fixed = np.zeros(n_dof, dtype=bool)
+    fixed[(3 * np.asarray(clamped_nodes, dtype=np.int64)[:, None] + np.arange(3)).ravel()] = True
+    return fixed
+
+
 def clamped_modes(K, masses, n_modes, clamped_nodes):
     """Lowest ``n_modes`` modes with the DOFs of ``clamped_nodes`` fixed.
 
     Returns (ω² (n,), Φ (3N, n)) with zero rows at clamped nodes and Φᵀ M Φ = I.
     """
     ndof = K.shape[0]
-    fixed = np.zeros(ndof, dtype=bool)
-    fixed[(3 * np.asarray(clamped_nodes)[:, None] + np.arange(3)).ravel()] = True
+    fixed = clamped_dofs(ndof, clamped_nodes)
     if not fixed.any():
         raise ModelError("the clamped node group is empty")
     free = ~fixed

@@ -6,14 +6,14 @@ import numpy as np
 import scipy.sparse.linalg as sla
 
 from ffrmbs.errors import ModelError
+from preprocess.modes import clamped_dofs
 
 
 def solve_static(K, forces, clamped_nodes) -> np.ndarray:
     """Static displacements (N, 3) [m] under nodal ``forces`` (N, 3) [N] with the
     DOFs of ``clamped_nodes`` fixed (report eq. 1 without inertia)."""
     forces = np.asarray(forces, dtype=float)
-    fixed = np.zeros(K.shape[0], dtype=bool)
-    fixed[(3 * np.asarray(clamped_nodes, dtype=np.int64)[:, None] + np.arange(3)).ravel()] = True
+    fixed = clamped_dofs(K.shape[0], clamped_nodes)
     if not fixed.any():
         raise ModelError("a static solution needs clamped nodes (the free body is not supported)")
     free = ~fixed

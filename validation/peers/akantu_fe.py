@@ -40,6 +40,8 @@ from pathlib import Path
 import numpy as np
 import scipy.sparse as sp
 
+from preprocess.modes import rigid_body_modes
+
 __all__ = ["available", "assemble"]
 
 _TET_TYPES = {4: ("tetra", "_tetrahedron_4"), 10: ("tetra10", "_tetrahedron_10")}
@@ -79,17 +81,6 @@ def _node_map(aka_nodes, points):
     if dist.max() > tol or len(np.unique(perm)) != len(points):
         raise RuntimeError("cannot match Akantu's nodes to the mesh's nodes by coordinates")
     return perm
-
-
-def _rigid_motions(points):
-    """The six rigid-body motions (3N, 6) in DOF order 3*node + direction."""
-    x = points - points.mean(axis=0)
-    n = len(points)
-    R = np.zeros((n, 3, 6))
-    R[:, 0, 0] = R[:, 1, 1] = R[:, 2, 2] = 1.0
-    for k, axis in enumerate(np.eye(3)):
-        R[:, :, 3 + k] = np.cross(axis, x)
-    return R.reshape(3 * n, 6)
 
 
 def assemble(points, tets, density, young, poisson):
@@ -178,7 +169,7 @@ def assemble(points, tets, density, young, poisson):
     kmax = abs(K).max()
     if abs(K - K.T).max() > 1e-12 * kmax:
         raise RuntimeError("Akantu's stiffness matrix is not symmetric")
-    R = _rigid_motions(points)
+    R = rigid_body_modes(points, np.ones(len(points)))
     if np.abs(K @ R).max() > 1e-8 * kmax * np.abs(R).max():
         raise RuntimeError("rigid-body motions are not in the null space of Akantu's K "
                            "(node or DOF numbering mismatch)")
