@@ -263,11 +263,13 @@ def _row(values) -> str:
 def write_text_files(paths: dict, body: BodyData, units: str = "si") -> None:
     """Write the four text files of ``body`` to ``paths`` (TEXT_FILES name -> path).
 
-    Values are converted from SI to ``units``; ModelError if K is not symmetric
-    (relative tolerance 1e-9), since only its lower triangle is written.
+    Values are converted from SI to ``units``; ModelError if K is zero, or not
+    symmetric (relative tolerance 1e-9), since only its lower triangle is written.
     """
     system = unit_system(units)
     k = sp.csr_matrix(body.stiffness)
+    if k.count_nonzero() == 0:
+        raise ModelError("stiffness matrix is zero; a flexible body needs its stiffness")
     if abs(k - k.T).max() > SYMMETRY_RTOL * abs(k).max():
         raise ModelError("stiffness matrix is not symmetric; "
                          "the text files store its lower triangle only")
