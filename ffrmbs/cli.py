@@ -20,9 +20,7 @@ import time
 from ffrmbs import __version__
 from ffrmbs.errors import FfrmbsError
 
-#: the embedded default body: the report's steel beam (report Sec. 5.1, Table 1), clamped at z = 0
-DEFAULT_BEAM = dict(spec="box:1,1,5", mesh_size=0.5, order=2, density=8000.0, young=200e9,
-                    poisson=0.0, clamp="z0", modes=10)
+DEFAULT_MODES = 10  # modes printed by the main job
 
 
 def _log(msg):
@@ -73,17 +71,17 @@ def cmd_validate(args):
 
 def cmd_run(args):
     """Main job. Until contact scenes exist (issue 6): preprocess the embedded default beam."""
-    from validation.cases.cantilever import references
+    from validation.cases import cantilever as beam  # the report's beam, defined once
 
-    d = DEFAULT_BEAM
-    print(f"default scene: the report's {d['spec'][4:].replace(',', ' x ')} m steel beam, "
-          f"clamped at z = 0, tet10, mesh size {d['mesh_size']} m")
+    mat, h = beam.MATERIAL, beam.REPORT_MESH_SIZE
+    print(f"default scene: the report's 1 x 1 x {beam.L:g} m steel beam, clamped at z = 0, "
+          f"tet10, mesh size {h} m")
     t0, c0 = time.perf_counter(), time.process_time()
-    body = _preprocess(d["spec"], d["modes"], d["clamp"], "si", d["density"], d["young"],
-                       d["poisson"], d["order"], d["mesh_size"], args.out)
+    body = _preprocess(f"box:1,1,{beam.L:g}", DEFAULT_MODES, "z0", "si", mat.density, mat.young,
+                       mat.poisson, 2, h, args.out)
     omega1 = body.frequencies()[0][0]
     accuracy = ", ".join(f"{(omega1 / ref - 1) * 100:+.2f} % against {name} ({ref:.2f} rad/s)"
-                         for name, (ref, _) in references().items())
+                         for name, (ref, _) in beam.references().items())
     print(f"accuracy: first bending frequency {omega1:.2f} rad/s, {accuracy}")
     print(f"cost: {time.perf_counter() - t0:.2f} s wall, {time.process_time() - c0:.2f} s CPU")
 

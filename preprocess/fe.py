@@ -115,7 +115,7 @@ def stiffness_matrix(mesh: Mesh, young, poisson) -> sp.csr_matrix:
     K = (K + K.T) * 0.5
     K.sum_duplicates()
     K.sort_indices()
-    return K.tocsr()
+    return K
 
 
 def lumped_masses(mesh: Mesh, density) -> np.ndarray:

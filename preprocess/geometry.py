@@ -134,10 +134,6 @@ def box(lx, ly, lz, mesh_size, order=2) -> Mesh:
     return _mesh_occ("box", lambda occ: occ.addBox(0, 0, 0, lx, ly, lz), mesh_size, order)
 
 
-#: the thesis's complex-beam dimensions (thesis Sec. 5.1), in mm
-COMPLEX_BEAM_MM = dict(l=95.0, h1=10.0, h2=34.2, w1=20.0, w2=9.74)
-
-
 def stepped_beam(mesh_size, order=2, l=95.0, h1=10.0, h2=34.2, w1=20.0, w2=9.74, base=10.0) -> Mesh:
     """Our reading of the thesis's complex beam (thesis Sec. 5.1, Fig. 5.1), in mm.
 

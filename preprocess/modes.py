@@ -51,7 +51,6 @@ def _mass_orthonormalize(V, m3):
 
 def _eigsh(K, m, k, sigma):
     M = sp.diags(m)
-    k = min(k, K.shape[0] - 1)
     vals, vecs = sla.eigsh(K.tocsc(), k=k, M=M.tocsc(), sigma=sigma, which="LM")
     order = np.argsort(vals)
     return vals[order], vecs[:, order]

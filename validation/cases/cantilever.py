@@ -25,6 +25,7 @@ RHO, E, NU, L, FORCE = 8000.0, 200e9, 0.0, 5.0, 500.0
 A, I = 1.0, 1.0 / 12.0
 KAPPA, G = bt.rect_shear_coefficient(NU), E / (2 * (1 + NU))
 MATERIAL = Material(RHO, E, NU)
+REPORT_MESH_SIZE = 0.5  # gives the report's mesh (report Table 1: 579 nodes, 254 tet10)
 
 
 def references():
@@ -45,9 +46,10 @@ def _frequency(h, order):
 
 def run(quick: bool) -> CaseResult:
     refs = references()
-    # h = 0.5 is the report's mesh (gmsh caps larger sizes by the 1 m cross-section)
-    sweep = [(0.5, 2), (0.35, 2), (0.25, 2)] if quick else \
-        [(0.5, 2), (0.35, 2), (0.25, 2), (0.18, 2), (0.13, 2), (0.25, 1), (0.15, 1), (0.1, 1)]
+    # start at the report's mesh: gmsh caps larger sizes by the 1 m cross-section
+    h0 = REPORT_MESH_SIZE
+    sweep = [(h0, 2), (0.35, 2), (0.25, 2)] if quick else \
+        [(h0, 2), (0.35, 2), (0.25, 2), (0.18, 2), (0.13, 2), (0.25, 1), (0.15, 1), (0.1, 1)]
     result = CaseResult()
     table = ["| mesh size [m] | order | nodes | ω1 [rad/s] | tip deflection [m] |", "|---|---|---|---|---|"]
     for h, order in sweep:
@@ -64,7 +66,7 @@ def run(quick: bool) -> CaseResult:
                                         value=omega))
             result.rows.append(make_row(NAME, config, cpu_static, tip / tip_ref - 1,
                                         "rel. tip deflection", f"{ref} ({tip_ref:.4g} m)", value=tip))
-        if (h, order) == (0.5, 2):
+        if (h, order) == (h0, 2):
             _akantu_rows(result, mesh, config, refs)
     result.notes.append("Mean y-deflection of the free face under a uniform 500 N shear traction "
                         "(consistent nodal loads).\n\n" + "\n".join(table))

@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from preprocess import Material, build_body, stepped_beam
+from preprocess.units import unit_system
 from validation import CaseResult, make_row, timed
 from validation.cases._peers import akantu_frequencies
 
@@ -48,7 +49,7 @@ def run(quick: bool) -> CaseResult:
                                         "max rel. error f1..f5", f"finest mesh (h = {finest[0]} mm)"))
         result.rows.append(make_row(NAME, config, cpu, np.abs(hz / ABAQUS_HZ - 1).max(),
                                     "max rel. error f1..f5", "ABAQUS, thesis geometry (Table 5.2)"))
-    mesh = runs[1][1].scaled(1e-3)
+    mesh = runs[1][1].scaled(unit_system("si-mm").length)
     omega, cpu = akantu_frequencies(mesh, MATERIAL_MM.to_si("si-mm"), 5, "x0")
     if omega is None:
         result.skipped.append(cpu)
