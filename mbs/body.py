@@ -1,0 +1,136 @@
+"""What every body offers the System, and frames: points with an orientation on a body.
+
+A body owns ``nq`` position coordinates q and ``nu`` velocities u (q̇ = Y(q) u, thesis
+eq. 3.1a) and supplies, at (q, u, t): the mass matrix M (nu, nu), the smooth forces
+h = Q_v − K q − D u (nu,), q̇, the exact position update q ⊕ Δu, energies and
+momenta. The System gives each body its slices of the global q and u when it is added.
+
+A :class:`Frame` is a point of a body with an orientation. On a floating-frame body its
+body-frame position is ū = ū0 + Φ q_f (thesis eq. 2.23): ``phi`` holds the point's
+mode-shape rows (3, n_f) — those of a node, or zeros for a point fixed to the body frame.
+It supplies position, velocity, orientation, angular velocity, the Jacobians J_T, J_R
+(thesis eq. 2.70, 2.72) and the velocity-product accelerations J̇_T u, J̇_R u.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+class Body:
+    """Base of all bodies: a name, sizes, initial state and the slices given by the System."""
+
+    nq: int
+    nu: int
+
+    def __init__(self, name: str):
+        self.name = name
+        self.q_slice: slice | None = None
+        self.u_slice: slice | None = None
+
+    # interface every body implements -------------------------------------------------
+    def mass_matrix(self, q, t=0.0) -> np.ndarray:
+        raise NotImplementedError
+
+    def h(self, q, u, t=0.0) -> np.ndarray:
+        raise NotImplementedError
+
+    def qdot(self, q, u) -> np.ndarray:
+        raise NotImplementedError
+
+    def increment(self, q, du) -> np.ndarray:
+        """q ⊕ Δu: the position reached from q by the velocity-space increment Δu (nu,)."""
+        raise NotImplementedError
+
+    def normalize(self, q) -> None:
+        """Project q onto its constraint manifold in place (unit quaternions)."""
+
+    def kinetic_energy(self, q, u, t=0.0) -> float:
+        return 0.5 * u @ self.mass_matrix(q, t) @ u
+
+    def elastic_energy(self, q) -> float:
+        return 0.0
+
+    def stiffness_tangent(self) -> np.ndarray | None:
+        """Constant −∂h/∂q in velocity-increment coordinates (nu, nu), or None."""
+        return None
+
+    def damping_tangent(self) -> np.ndarray | None:
+        """Constant −∂h/∂u (nu, nu), or None."""
+        return None
+
+    def com_frame(self) -> "Frame":
+        """The centre of mass as a frame: gravity acts there with the whole mass."""
+        raise NotImplementedError
+
+    def __repr__(self):
+        return f"{type(self).__name__}({self.name!r}, nq={self.nq}, nu={self.nu})"
+
+
+class Frame:
+    """A point of ``body`` with an orientation (see module docstring).
+
+    Parameters
+    ----------
+    body : Body or None
+        None for a frame fixed in the inertial frame (see :func:`ground_frame`).
+    u0 : (3,) [m]
+        Undeformed position in the body frame (inertial position for ground frames).
+    phi : (3, n_f) or None
+        Mode-shape rows of the point; None or zeros for a point fixed to the body frame.
+    orientation : (3, 3) or None
+        Constant rotation of the frame relative to the body frame (identity if None).
+    """
+
+    def __init__(self, body, u0, phi=None, orientation=None, name=None):
+        self.body = body
+        self.u0 = np.asarray(u0, dtype=float).reshape(3)
+        n_f = getattr(body, "n_modes", 0)
+        self.phi = np.zeros((3, n_f)) if phi is None else np.asarray(phi, dtype=float).reshape(3, n_f)
+        self.A_rel = np.eye(3) if orientation is None else np.asarray(orientation, dtype=float)
+        self.name = name
+
+    @property
+    def is_ground(self) -> bool:
+        return self.body is None
+
+    def position(self, q, t=0.0):
+        """Inertial position r (3,) [m]."""
+        return self.u0.copy() if self.body is None else self.body.point_position(q, self, t)
+
+    def velocity(self, q, u, t=0.0):
+        """Inertial velocity ṙ (3,) [m/s]."""
+        return np.zeros(3) if self.body is None else self.body.point_velocity(q, u, self, t)
+
+    def orientation(self, q, t=0.0):
+        """Rotation matrix of the frame (3, 3): body orientation times the constant A_rel."""
+        return self.A_rel.copy() if self.body is None else self.body.orientation(q, t) @ self.A_rel
+
+    def angular_velocity(self, q, u, t=0.0):
+        """Inertial angular velocity ω (3,) [rad/s] (points share their body's rotation)."""
+        return np.zeros(3) if self.body is None else self.body.angular_velocity(q, u, t)
+
+    def J_T(self, q, t=0.0):
+        """∂ṙ/∂u (3, nu) (thesis eq. 2.70)."""
+        return self.body.point_J_T(q, self, t)
+
+    def J_R(self, q, t=0.0):
+        """∂ω/∂u (3, nu) (thesis eq. 2.72)."""
+        return self.body.J_R(q, t)
+
+    def bias_T(self, q, u, t=0.0):
+        """J̇_T u (3,) [m/s²]: the acceleration of the point at u̇ = 0."""
+        return np.zeros(3) if self.body is None else self.body.point_bias_T(q, u, self, t)
+
+    def bias_R(self, q, u, t=0.0):
+        """J̇_R u (3,) [rad/s²]: the angular acceleration at u̇ = 0."""
+        return np.zeros(3) if self.body is None else self.body.bias_R(q, u, t)
+
+    def __repr__(self):
+        owner = "ground" if self.body is None else self.body.name
+        return f"Frame({self.name or ''!s} on {owner}, u0={self.u0.tolist()})"
+
+
+def ground_frame(position=(0.0, 0.0, 0.0), orientation=None, name="ground") -> Frame:
+    """A frame fixed in the inertial frame at ``position`` [m]."""
+    return Frame(None, position, orientation=orientation, name=name)

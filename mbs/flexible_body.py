@@ -1,0 +1,162 @@
+"""FlexibleBodyFFR: a flexible body in the floating frame of reference (thesis Sec. 2.4, 4.3).
+
+Built from the body files of :mod:`preprocess` (ū0, Φ, lumped masses, K) and a mode
+selection. The shape integrals (thesis eq. 2.53, 2.54, 2.65) are summed once; after that
+the mass matrix (eq. 2.44–2.69) and the quadratic velocity vector (eq. 2.77–2.79) cost
+O(n_f²) per evaluation, whatever the node count. Elastic forces K q (eq. 2.36) use the
+modal stiffness K_ff = Φᵀ K Φ; damping is Rayleigh, D = α M_ff + β K_ff, or modal,
+D = 2 ζ_i ω_i per mode (report Sec. 7.1).
+
+State layout (free frame, quaternion default): q = (R (3), p (4), q_f (n_f)),
+u = (Ṙ (3), ω̄ (3), q̇_f (n_f)); with ``rotation="cardan"`` q = (R, θ, q_f), u = q̇;
+with a :class:`PrescribedFrameMotion` (e.g. frame-fixed, thesis Sec. 5.1) q = q_f, u = q̇_f.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.linalg
+
+from ffrmbs.errors import ModelError
+from preprocess import BodyData, read_body
+
+from .body import Frame
+from .floating_frame import FloatingFrameBody
+from .rotations import skew
+from .shape_integrals import ShapeIntegrals
+
+
+def select_modes(n_available: int, modes) -> np.ndarray:
+    """Mode indices from ``modes``: None (all), an int n (the first n) or a list of 0-based indices."""
+    if modes is None:
+        return np.arange(n_available)
+    if isinstance(modes, (int, np.integer)):
+        if not 0 <= modes <= n_available:
+            raise ModelError(f"asked for {modes} modes, the body has {n_available}")
+        return np.arange(int(modes))
+    idx = np.asarray(modes, dtype=int).ravel()
+    if idx.size and (idx.min() < 0 or idx.max() >= n_available or len(set(idx.tolist())) != idx.size):
+        raise ModelError(f"mode list {idx.tolist()} must hold distinct indices in 0..{n_available - 1}")
+    return idx
+
+
+class FlexibleBodyFFR(FloatingFrameBody):
+    """A flexible body: rigid frame motion plus a linear combination of mode shapes.
+
+    Parameters
+    ----------
+    data : BodyData
+        The preprocessed body (SI units).
+    modes : None, int or sequence of int
+        All modes, the first n, or an explicit 0-based list.
+    frame : "free" or PrescribedFrameMotion
+    rotation : "quaternion" (default) or "cardan"
+    rayleigh : (α [1/s], β [s]) or None
+        Rayleigh damping D = α M_ff + β K_ff.
+    modal_damping : float or (n_f,) or None
+        Damping ratios ζ_i: D = M_ff Ψ diag(2 ζ_i ω_i) Ψᵀ M_ff with the modal eigenvectors Ψ.
+    name : str
+    """
+
+    def __init__(self, data: BodyData, modes=None, frame="free", rotation="quaternion",
+                 rayleigh=None, modal_damping=None, name="flexible"):
+        self.data = data
+        self.mode_indices = select_modes(data.n_modes, modes)
+        super().__init__(name, len(self.mode_indices), frame, rotation)
+        self.phi = np.ascontiguousarray(data.phi[:, self.mode_indices])
+        self.integrals = ShapeIntegrals.from_nodes(data.u0, self.phi, data.masses)
+        self.K_ff = self.phi.T @ (data.stiffness @ self.phi)
+        self.K_ff = 0.5 * (self.K_ff + self.K_ff.T)
+        self.D_ff = self._damping(rayleigh, modal_damping)
+        self._phi_nodes = self.phi.reshape(data.n_nodes, 3, self.n_modes)
+
+    @classmethod
+    def from_file(cls, path, modes=None, units="si", **kw) -> "FlexibleBodyFFR":
+        """Read the body files at ``path`` (directory or .h5, see :func:`preprocess.read_body`)."""
+        return cls(read_body(path, units), modes, **kw)
+
+    def _damping(self, rayleigh, modal_damping):
+        n = self.n_modes
+        D = np.zeros((n, n))
+        M = self.integrals.M_ff
+        if rayleigh is not None:
+            alpha, beta = rayleigh
+            D += alpha * M + beta * self.K_ff
+        if modal_damping is not None and n:
+            zeta = np.broadcast_to(np.asarray(modal_damping, dtype=float), (n,))
+            w2, psi = scipy.linalg.eigh(self.K_ff, M)
+            Mpsi = M @ psi
+            D += Mpsi @ np.diag(2.0 * zeta * np.sqrt(np.clip(w2, 0.0, None))) @ Mpsi.T
+        return D
+
+    # --- frames on the body -------------------------------------------------------------
+    def node(self, j: int, name=None) -> Frame:
+        """The frame at node ``j`` (0-based): it follows the elastic deformation, its
+        orientation is the body frame's (lumped nodes carry no rotation)."""
+        if not 0 <= j < self.data.n_nodes:
+            raise ModelError(f"{self.name}: node {j} outside 0..{self.data.n_nodes - 1}")
+        return Frame(self, self.data.u0[j], self._phi_nodes[j], None, name or f"node {j}")
+
+    def node_group(self, name: str) -> np.ndarray:
+        """0-based node indices of the named group of the body file."""
+        try:
+            return self.data.node_groups[name]
+        except KeyError:
+            raise ModelError(f"{self.name}: no node group {name!r}; "
+                             f"the body has {sorted(self.data.node_groups)}") from None
+
+    def com_frame(self) -> Frame:
+        """Centre of mass: ū = (I1 + S̄ q_f)/m = S̄_t/m (thesis eq. 2.55)."""
+        si = self.integrals
+        return Frame(self, si.I1 / si.mass, si.S_bar / si.mass, None, "centre of mass")
+
+    @property
+    def mass(self) -> float:
+        return self.integrals.mass
+
+    # --- dynamics from shape integrals --------------------------------------------------
+    def _inertia(self, A, q_f):
+        """M̄ of thesis eq. 2.44 in (Ṙ, ω̄, q̇_f): blocks eq. 2.47, 2.50, 2.57, 2.58, 2.66, 2.69
+        with ω̄ in place of Ḡ θ̇."""
+        si = self.integrals
+        S_t, I_thth, I_thf, G = si.deformed(q_f)
+        n = 6 + self.n_modes
+        M = np.empty((n, n))
+        M[:3, :3] = si.mass * np.eye(3)
+        M[:3, 3:6] = -A @ skew(S_t)
+        M[:3, 6:] = A @ si.S_bar
+        M[3:6, 3:6] = I_thth
+        M[3:6, 6:] = I_thf
+        M[6:, 6:] = si.M_ff
+        M[3:, :3] = M[:3, 3:].T
+        M[6:, 3:6] = I_thf.T
+        return M, (S_t, I_thth, G)
+
+    def _quadratic_velocity(self, A, w, qdot_f, aux):
+        S_t, I_thth, G = aux
+        return np.concatenate(self.integrals.quadratic_velocity(A, w, qdot_f, S_t, I_thth, G))
+
+    def _elastic(self, q_f, qdot_f):
+        return self.K_ff @ q_f + self.D_ff @ qdot_f
+
+    def elastic_energy(self, q) -> float:
+        """½ q_fᵀ K_ff q_f [J]."""
+        q_f = q[self._f]
+        return 0.5 * q_f @ self.K_ff @ q_f
+
+    def stiffness_tangent(self):
+        T = np.zeros((self.nu, self.nu))
+        T[self._fu, self._fu] = self.K_ff
+        return T
+
+    def damping_tangent(self):
+        D = np.zeros((self.nu, self.nu))
+        D[self._fu, self._fu] = self.D_ff
+        return D
+
+    def node_positions(self, q, nodes=None, t=0.0) -> np.ndarray:
+        """Inertial positions (k, 3) [m] of ``nodes`` (all if None), eq. 2.24."""
+        idx = slice(None) if nodes is None else np.asarray(nodes)
+        ub = self.data.u0[idx] + self._phi_nodes[idx] @ q[self._f]
+        R, A, *_ = self._frame(q, None, t)
+        return R + ub @ A.T

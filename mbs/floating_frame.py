@@ -1,0 +1,283 @@
+"""Bodies described in a floating frame of reference (thesis Sec. 2.4): kinematics and layout.
+
+The frame has origin R and orientation A; a point sits at r = R + A ū with
+ū = ū0 + Φ q_f (thesis eq. 2.24). Two kinds of frame:
+
+* **free**: q = (R, q_r, q_f), u = (Ṙ, u_r, q̇_f) with the orientation parametrization
+  of :mod:`mbs.parametrization` (ω̄ = T(q_r) u_r). Then (thesis eq. 2.70, 2.72, here with
+  ω̄ = T u_r)
+
+      J_T = [1, −A ũ T, A Φ],   J_R = [0, A T, 0],
+      J̇_T u = A [ω̃² ū + 2 ω̃ Φ q̇_f − ũ Ṫ u_r],   J̇_R u = A Ṫ u_r.
+
+* **prescribed** (frame-fixed, thesis Sec. 5.1, or moving on a given path): q = q_f,
+  u = q̇_f, the frame's motion R(t), A(t) given by a :class:`PrescribedFrameMotion`;
+  J_T = A Φ, J_R = 0, and J̇_T u = R̈ + A [ω̄̇ × ū + ω̃² ū + 2 ω̃ Φ q̇_f].
+
+Subclasses supply the inertia: ``_inertia(A, q_f)`` gives the mass matrix M̄ in the
+full coordinates (Ṙ, ω̄, q̇_f) and ``_quadratic_velocity`` the forces
+Q̄_v = −Σ m J̄ᵀ J̄̇ u there; this module maps both to the body's own coordinates,
+
+    free:        M = Tᵀ M̄ T,   h = Tᵀ (Q̄_v − M̄ (0, Ṫ u_r, 0)) − K q − D u
+    prescribed:  M = M̄_ff,     h = Q̄_f − M̄_f,(R,θ) (R̈, ω̄̇) − K q − D u
+
+with T = blockdiag(1, T(q_r), 1).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from ffrmbs.errors import ModelError
+
+from .body import Body, Frame
+from .parametrization import parametrization
+from .rotations import skew
+
+
+@dataclass(frozen=True)
+class PrescribedFrameMotion:
+    """A body frame moving on a given path (or fixed, :meth:`fixed`).
+
+    ``translation(t)`` returns (R, Ṙ, R̈) in inertial components [m, m/s, m/s²];
+    ``rotation(t)`` returns (A, ω̄, ω̄̇) with ω̄ in body-frame components [rad/s, rad/s²].
+    """
+
+    translation: Callable
+    rotation: Callable
+
+    @classmethod
+    def fixed(cls, R=(0.0, 0.0, 0.0), A=None) -> "PrescribedFrameMotion":
+        """The body frame fixed in the inertial frame at R [m] with orientation A."""
+        R = np.asarray(R, dtype=float)
+        A = np.eye(3) if A is None else np.asarray(A, dtype=float)
+        zero = np.zeros(3)
+        return cls(lambda t: (R, zero, zero), lambda t: (A, zero, zero))
+
+
+class FloatingFrameBody(Body):
+    """Shared kinematics of FFR and rigid bodies (see module docstring).
+
+    ``frame`` is "free" or a :class:`PrescribedFrameMotion`; ``rotation`` names the
+    parametrization of a free frame ("quaternion" default, or "cardan").
+    """
+
+    n_modes = 0
+
+    def __init__(self, name, n_modes, frame="free", rotation="quaternion"):
+        super().__init__(name)
+        self.n_modes = n_modes
+        if isinstance(frame, PrescribedFrameMotion):
+            self.motion, self.param = frame, None
+            self.nq = self.nu = n_modes
+            self._f = slice(0, n_modes)
+            self._fu = slice(0, n_modes)
+        elif frame == "free":
+            self.motion, self.param = None, parametrization(rotation)
+            nr = self.param.nq
+            self.nq = 3 + nr + n_modes
+            self.nu = 6 + n_modes
+            self._r = slice(3, 3 + nr)
+            self._f = slice(3 + nr, self.nq)
+            self._fu = slice(6, self.nu)
+        else:
+            raise ModelError(f"{name}: frame must be 'free' or a PrescribedFrameMotion, got {frame!r}")
+        self.q_init = np.zeros(self.nq)
+        self.u_init = np.zeros(self.nu)
+        if self.param is not None:
+            self.q_init[self._r] = self.param.coordinates(np.eye(3))
+
+    @property
+    def is_free(self) -> bool:
+        """True for a free frame, False for a prescribed one."""
+        return self.motion is None
+
+    # --- initial state ----------------------------------------------------------------
+    def set_initial(self, R=None, A=None, v=None, omega=None, q_f=None, qdot_f=None):
+        """Set the initial state: origin R [m], orientation A (3, 3), origin velocity v
+        [m/s], inertial angular velocity ω [rad/s], elastic coordinates and rates.
+        Returns self."""
+        if self.motion is not None and any(x is not None for x in (R, A, v, omega)):
+            raise ModelError(f"{self.name}: the frame motion is prescribed; set only q_f and qdot_f")
+        q, u = self.q_init, self.u_init
+        if R is not None:
+            q[:3] = R
+        if A is not None:
+            q[self._r] = self.param.coordinates(np.asarray(A, dtype=float))
+        if v is not None:
+            u[:3] = v
+        if omega is not None:
+            A_now = self.param.matrix(q[self._r])
+            u[3:6] = self.param.velocity_coordinates(q[self._r], A_now.T @ np.asarray(omega, float))
+        if q_f is not None:
+            q[self._f] = q_f
+        if qdot_f is not None:
+            u[self._fu] = qdot_f
+        return self
+
+    # --- frame state ------------------------------------------------------------------
+    def _frame(self, q, u, t):
+        """(R, A, v, ω̄, T, Ṫu_r, a_R, ω̄̇); the last two are zero for a free frame (their
+        effect there enters through u̇)."""
+        if self.motion is None:
+            qr, ur = q[self._r], u[3:6] if u is not None else None
+            A = self.param.matrix(qr)
+            T = self.param.T(qr)
+            if u is None:
+                return q[:3], A, None, None, T, None, None, None
+            return q[:3], A, u[:3], T @ ur, T, self.param.T_dot_u(qr, ur), None, None
+        R, v, a = self.motion.translation(t)
+        A, w, wd = self.motion.rotation(t)
+        return R, A, v, w, None, None, a, wd
+
+    def orientation(self, q, t=0.0):
+        """Body-frame orientation A (3, 3)."""
+        return self._frame(q, None, t)[1]
+
+    def angular_velocity(self, q, u, t=0.0):
+        """Inertial angular velocity ω = A ω̄ [rad/s]."""
+        _, A, _, w, *_ = self._frame(q, u, t)
+        return A @ w
+
+    def elastic_coordinates(self, q):
+        return q[self._f]
+
+    def _u_bar(self, q, frame: Frame):
+        return frame.u0 + frame.phi @ q[self._f] if self.n_modes else frame.u0
+
+    def point_position(self, q, frame, t=0.0):
+        R, A, *_ = self._frame(q, None, t)
+        return R + A @ self._u_bar(q, frame)
+
+    def point_velocity(self, q, u, frame, t=0.0):
+        R, A, v, w, *_ = self._frame(q, u, t)
+        rel = np.cross(w, self._u_bar(q, frame))
+        if self.n_modes:
+            rel += frame.phi @ u[self._fu]
+        return v + A @ rel
+
+    def point_J_T(self, q, frame, t=0.0):
+        R, A, _, _, T, *_ = self._frame(q, None, t)
+        J = np.empty((3, self.nu))
+        if self.motion is None:
+            J[:, :3] = np.eye(3)
+            J[:, 3:6] = -A @ skew(self._u_bar(q, frame)) @ T
+        J[:, self._fu] = A @ frame.phi
+        return J
+
+    def J_R(self, q, t=0.0):
+        J = np.zeros((3, self.nu))
+        if self.motion is None:
+            _, A, _, _, T, *_ = self._frame(q, None, t)
+            J[:, 3:6] = A @ T
+        return J
+
+    def point_bias_T(self, q, u, frame, t=0.0):
+        R, A, v, w, T, Tdu, a, wd = self._frame(q, u, t)
+        ub = self._u_bar(q, frame)
+        acc = np.cross(w, np.cross(w, ub))
+        if self.n_modes:
+            acc += 2.0 * np.cross(w, frame.phi @ u[self._fu])
+        if self.motion is None:
+            return A @ (acc + np.cross(Tdu, ub))
+        return a + A @ (acc + np.cross(wd, ub))
+
+    def bias_R(self, q, u, t=0.0):
+        _, A, _, _, _, Tdu, _, wd = self._frame(q, u, t)
+        return A @ (Tdu if self.motion is None else wd)
+
+    # --- dynamics -----------------------------------------------------------------------
+    def _inertia(self, A, q_f):
+        """(M̄ (6+n_f, 6+n_f), aux) in the full coordinates (Ṙ, ω̄, q̇_f)."""
+        raise NotImplementedError
+
+    def _quadratic_velocity(self, A, w, qdot_f, aux):
+        """Q̄_v (6+n_f,) in the full coordinates."""
+        raise NotImplementedError
+
+    def _elastic(self, q_f, qdot_f):
+        """K q_f + D q̇_f (n_f,); rigid bodies have none."""
+        return np.zeros(self.n_modes)
+
+    def mass_matrix(self, q, t=0.0):
+        _, A, _, _, T, *_ = self._frame(q, None, t)
+        Mb, _ = self._inertia(A, q[self._f])
+        if self.motion is not None:
+            return Mb[6:, 6:].copy()
+        if self.param.name != "quaternion":
+            Mb[3:6, :] = T.T @ Mb[3:6, :]
+            Mb[:, 3:6] = Mb[:, 3:6] @ T
+        return Mb
+
+    def h(self, q, u, t=0.0):
+        _, A, _, w, T, Tdu, a, wd = self._frame(q, u, t)
+        q_f, qd_f = q[self._f], u[self._fu]
+        Mb, aux = self._inertia(A, q_f)
+        Q = self._quadratic_velocity(A, w, qd_f, aux)
+        if self.motion is not None:
+            out = Q[6:] - Mb[6:, :3] @ a - Mb[6:, 3:6] @ wd
+        else:
+            out = Q
+            if self.param.name != "quaternion":
+                out = Q - Mb[:, 3:6] @ Tdu
+                out[3:6] = T.T @ out[3:6]
+        if self.n_modes:
+            out[-self.n_modes:] -= self._elastic(q_f, qd_f)
+        return out
+
+    def _full_velocity(self, q, u, t):
+        _, A, v, w, *_ = self._frame(q, u, t)
+        return A, np.concatenate((v, w, u[self._fu]))
+
+    def kinetic_energy(self, q, u, t=0.0):
+        """T = ½ ū̇ᵀ M̄ ū̇ over the full frame and elastic velocities [J] (thesis eq. 2.43)."""
+        A, uf = self._full_velocity(q, u, t)
+        return 0.5 * uf @ self._inertia(A, q[self._f])[0] @ uf
+
+    def linear_momentum(self, q, u, t=0.0):
+        """Σ m_j ṙ_j [kg m/s]: the first three rows of M̄ ū̇."""
+        A, uf = self._full_velocity(q, u, t)
+        return self._inertia(A, q[self._f])[0][:3] @ uf
+
+    def angular_momentum(self, q, u, t=0.0):
+        """Σ m_j r_j × ṙ_j about the inertial origin [kg m²/s] = R × p + A (M̄ ū̇)_θ."""
+        A, uf = self._full_velocity(q, u, t)
+        Mu = self._inertia(A, q[self._f])[0] @ uf
+        R = self._frame(q, None, t)[0]
+        return np.cross(R, Mu[:3]) + A @ Mu[3:6]
+
+    def qdot(self, q, u):
+        if self.motion is not None:
+            return u.copy()
+        out = np.empty(self.nq)
+        out[:3] = u[:3]
+        out[self._r] = self.param.qdot(q[self._r], u[3:6])
+        out[self._f] = u[self._fu]
+        return out
+
+    def increment(self, q, du):
+        if self.motion is not None:
+            return q + du
+        out = np.empty(self.nq)
+        out[:3] = q[:3] + du[:3]
+        out[self._r] = self.param.increment(q[self._r], du[3:6])
+        out[self._f] = q[self._f] + du[self._fu]
+        return out
+
+    def normalize(self, q):
+        if self.param is not None:
+            self.param.normalize(q[self._r])
+
+    # --- frames -----------------------------------------------------------------------
+    def frame_at(self, position, orientation=None, name=None) -> Frame:
+        """A frame fixed to the body frame at ū0 = ``position`` [m] (does not follow the
+        elastic deformation)."""
+        return Frame(self, position, None, orientation, name)
+
+    @property
+    def origin(self) -> Frame:
+        """The origin of the body frame, R."""
+        return self.frame_at((0.0, 0.0, 0.0), name="origin")

@@ -1,0 +1,113 @@
+"""The loop every smooth integrator shares: steps that land on the output times, sampling,
+and a clear stop when the state diverges."""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from ffrmbs.errors import ModelError, SimulationError
+
+from ..body import Frame
+from ..link import body_q
+from ..result import Result
+
+
+def output_times(t_end, dt, t_out):
+    """Sorted output times in [0, t_end]; every step when ``t_out`` is None."""
+    if not (t_end > 0 and dt > 0):
+        raise ModelError(f"need t_end > 0 and dt > 0, got t_end={t_end}, dt={dt}")
+    if t_out is None:
+        n = max(1, math.ceil(t_end / dt - 1e-9))
+        return np.linspace(0.0, t_end, n + 1)
+    t_out = np.asarray(t_out, dtype=float).ravel()
+    if t_out.size == 0 or np.any(np.diff(t_out) <= 0) or t_out[0] < 0 or t_out[-1] > t_end * (1 + 1e-12):
+        raise ModelError("t_out must be strictly increasing times within [0, t_end]")
+    return t_out
+
+
+def _probe(system, spec):
+    """A callable (t, q, u) -> array for an output spec: a Frame (its position) or a callable."""
+    if isinstance(spec, Frame):
+        return lambda t, q, u: spec.position(body_q(spec, q), t)
+    if callable(spec):
+        return spec
+    raise ModelError(f"an output must be a Frame or a callable (t, q, u), got {spec!r}")
+
+
+class StepFailure(Exception):
+    """Raised by an integrator's ``step`` when it cannot complete the step; the driver turns
+    it into a SimulationError with the time and step number."""
+
+
+class Integrator:
+    """Base class: subclasses implement ``start(t, q, u)`` and ``step(h)`` on ``self.t``,
+    ``self.q``, ``self.u`` and count Newton iterations in ``self.iterations``."""
+
+    name = "integrator"
+
+    def __init__(self, system):
+        self.system = system
+        self.iterations = 0
+
+    def options(self) -> dict:
+        return {}
+
+    def start(self, t, q, u):
+        raise NotImplementedError
+
+    def step(self, h):
+        raise NotImplementedError
+
+    def run(self, q0, u0, t_end, dt, t_out, outputs, energies):
+        sys = self.system
+        times = output_times(t_end, dt, t_out)
+        probes = {name: _probe(sys, spec) for name, spec in outputs.items()}
+        n = len(times)
+        res = Result(np.full(n, np.nan), np.full((n, sys.nq), np.nan), np.full((n, sys.nu), np.nan))
+        res.stats = {"integrator": self.name, "dt": dt, **self.options()}
+        q, u = np.array(q0, dtype=float), np.array(u0, dtype=float)
+        sys.normalize(q)
+        cpu0, wall0 = time.process_time(), time.perf_counter()
+        self.start(0.0, q, u)
+        steps = 0
+
+        def record(i):
+            res.t[i], res.q[i], res.u[i] = self.t, self.q, self.u
+            for name, probe in probes.items():
+                value = np.asarray(probe(self.t, self.q, self.u), dtype=float)
+                if name not in res.outputs:
+                    res.outputs[name] = np.full((n,) + value.shape, np.nan)
+                res.outputs[name][i] = value
+            if energies:
+                for key, fn in (("kinetic", sys.kinetic_energy), ("potential", sys.potential_energy)):
+                    res.energy.setdefault(key, np.full(n, np.nan))
+                res.energy["kinetic"][i] = sys.kinetic_energy(self.t, self.q, self.u)
+                res.energy["potential"][i] = sys.potential_energy(self.t, self.q)
+
+        i = 0
+        try:
+            while i < n:
+                gap = times[i] - self.t
+                k = math.ceil(gap / dt - 1e-9) if gap > 1e-14 * max(1.0, abs(times[i])) else 0
+                for _ in range(k):
+                    try:
+                        self.step(gap / k)
+                    except StepFailure as failure:
+                        raise SimulationError(self.t, steps + 1, str(failure)) from None
+                    steps += 1
+                    if not (np.all(np.isfinite(self.q)) and np.all(np.isfinite(self.u))):
+                        raise SimulationError(self.t, steps, "the state became NaN or infinite")
+                self.t = times[i]
+                record(i)
+                i += 1
+        except SimulationError as err:
+            err.result = res.truncated(i)
+            err.result.stats.update(steps=steps, newton_iterations=self.iterations,
+                                    cpu_s=time.process_time() - cpu0)
+            raise
+        res.stats.update(steps=steps, newton_iterations=self.iterations,
+                         cpu_s=time.process_time() - cpu0, wall_s=time.perf_counter() - wall0)
+        return res
