@@ -160,7 +160,7 @@ class System:
         M = self.mass_matrix(t, q)
         h = self.h(t, q, u)
         if not self.n_c:
-            return scipy.linalg.solve(M, h, assume_a="pos"), np.zeros(0)
+            return scipy.linalg.solve(M, h, assume_a="pos", check_finite=False), np.zeros(0)
         C = self.constraint_jacobian(t, q)
         a, b = baumgarte
         rhs_c = -self.constraint_bias(t, q, u)

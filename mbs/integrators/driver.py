@@ -97,6 +97,9 @@ class Integrator:
                         self.step(gap / k)
                     except StepFailure as failure:
                         raise SimulationError(self.t, steps + 1, str(failure)) from None
+                    except np.linalg.LinAlgError as failure:
+                        raise SimulationError(self.t, steps + 1, f"singular system matrix ({failure}); "
+                                              "a rotation singularity or a redundant constraint?") from None
                     steps += 1
                     if not (np.all(np.isfinite(self.q)) and np.all(np.isfinite(self.u))):
                         raise SimulationError(self.t, steps, "the state became NaN or infinite")

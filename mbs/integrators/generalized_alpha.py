@@ -84,7 +84,7 @@ class GeneralizedAlpha(Integrator):
                 d = np.linalg.solve(KKT, -np.concatenate((res, g / (bt * h * h * c))))
                 da, lam = d[:nu], lam + d[nu:]
             else:
-                da = scipy.linalg.solve(S, -res, assume_a="sym")
+                da = scipy.linalg.solve(S, -res, assume_a="sym", check_finite=False)
             a1 += da
             self.iterations += 1
             if not np.all(np.isfinite(a1)):
