@@ -1,0 +1,435 @@
+"""Applied loads: forces and torques on frames, distributed and nodal loads, force files.
+
+Every load here is a :class:`~mbs.link.ForceElement` that adds its generalized forces
+through the frame Jacobians (thesis eq. 2.76):
+
+    Q = J_Tᵀ F   (force F [N] at a point),      Q = J_Rᵀ τ   (torque τ [N m]).
+
+Components are inertial, or — ``frame_fixed=True`` — in the axes of the frame, which
+turn with it: the inertial force is then A F with A = ``frame.orientation``. Loads are
+not conservative (they may depend on time): their potential energy is zero, and they
+add no tangents (the stiffness of follower loads is neglected by implicit integrators).
+
+Time dependence: a constant, a callable f(t), or a :class:`Tabulated` table — "step"
+tables are the report's loads as sums of step functions (report eq. 9).
+
+Fast many-node loads rest on one fact: a point's J_T is affine in its body-frame data
+(ū0, Φ) (thesis eq. 2.70 with ū = ū0 + Φ q_f, eq. 2.23):
+
+    J_T(ū0, Φ) = [1, −A (ū0 + Φ q_f)~ T, A Φ]   (free frame),   A Φ   (prescribed frame),
+
+so Σ_j c_j J_T(ū0_j, Φ_j) = J_T(Σ c_j ū0_j, Σ c_j Φ_j) + (Σ c_j − 1) J_T(0, 0). A load
+spread over N nodes then costs one O(N n_f) sum once and O(n_f) per evaluation.
+
+Force files (report Appendix A, "Inputting Forces"): the first row holds the times [s];
+each further row the forces [N] of one unblocked degree of freedom at those times, DOF
+3j + k for node j (0-based) and direction k = x, y, z, in increasing order; values
+separated by blanks. Each column holds from its time until the next (report eq. 9).
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from ffrmbs.errors import InputFileError, ModelError
+
+from .body import Frame
+from .flexible_body import FlexibleBodyFFR
+from .link import ForceElement, add_point_force, add_torque, body_q
+
+WEIGHT_SUM_TOL = 1e-9   # |Σ w_j − 1| allowed for DistributedForce weights
+
+
+# --- time functions -------------------------------------------------------------------
+
+def _check_times(times, what) -> np.ndarray:
+    """``times`` as a finite, strictly increasing (n_t,) array, else ModelError."""
+    times = np.asarray(times, dtype=float)
+    if times.ndim != 1 or times.size == 0:
+        raise ModelError(f"{what}: times must be a non-empty 1-D array, got shape {times.shape}")
+    if not np.isfinite(times).all():
+        raise ModelError(f"{what}: times must be finite")
+    bad = np.flatnonzero(np.diff(times) <= 0.0)
+    if bad.size:
+        i = bad[0]
+        raise ModelError(f"{what}: times must increase strictly, but times[{i + 1}] = "
+                         f"{float(times[i + 1])!r} s follows times[{i}] = {float(times[i])!r} s")
+    return times
+
+
+def step_index(times, t) -> int:
+    """The row j with times[j] <= t < times[j+1] (the last row from times[-1] on), or −1
+    before times[0]: the step functions of report eq. 9 with h(0) = 1."""
+    return int(np.searchsorted(times, t, side="right")) - 1
+
+
+class Tabulated:
+    """A function of time given by a table.
+
+    Parameters
+    ----------
+    times : (n_t,) [s]
+        Strictly increasing.
+    values : (n_t,) or (n_t, k)
+        Value(s) at each time, in the unit of the quantity (N for forces).
+    kind : "step" or "linear"
+        "step": value j holds for times[j] <= t < times[j+1] — Σ_j h(t − t_j) Δf_j with
+        Δf_j = f_j − f_{j−1}, the report's step-function loads (report eq. 9).
+        "linear": linear interpolation between the rows.
+    hold_first : bool
+        Before times[0] the function is zero (default: no load before the first step,
+        f_{−1} = 0 in report eq. 9); with ``hold_first=True`` it is values[0] there.
+        After times[-1] the last value holds, for both kinds.
+
+    Calling the table at a time t [s] returns a float (1-D values) or a (k,) array.
+    """
+
+    KINDS = ("step", "linear")
+
+    def __init__(self, times, values, kind="step", hold_first=False):
+        if kind not in self.KINDS:
+            raise ModelError(f"Tabulated: kind must be one of {self.KINDS}, got {kind!r}")
+        self.times = _check_times(times, "Tabulated")
+        self.values = np.array(values, dtype=float)
+        if self.values.ndim not in (1, 2) or self.values.shape[0] != self.times.size:
+            raise ModelError(f"Tabulated: values must have shape ({self.times.size},) or "
+                             f"({self.times.size}, k) to match the times, got {self.values.shape}")
+        self.kind = kind
+        self.hold_first = bool(hold_first)
+
+    @property
+    def value_shape(self) -> tuple:
+        """Shape of one value: () or (k,)."""
+        return self.values.shape[1:]
+
+    def __call__(self, t):
+        j = step_index(self.times, t)
+        if j < 0 and not self.hold_first:
+            return np.zeros(self.value_shape) if self.value_shape else 0.0
+        if j < 0 or self.kind == "step" or j == self.times.size - 1:
+            v = self.values[max(j, 0)]
+            return v.copy() if self.value_shape else float(v)
+        s = (t - self.times[j]) / (self.times[j + 1] - self.times[j])
+        return (1.0 - s) * self.values[j] + s * self.values[j + 1]
+
+
+def _vector_function(value, what):
+    """A callable t -> (3,) array from a constant (3,), a callable or a :class:`Tabulated`."""
+    if isinstance(value, Tabulated):
+        if value.value_shape != (3,):
+            raise ModelError(f"{what}: the table must have 3 values per time, "
+                             f"got shape {value.values.shape}")
+        return value
+    if callable(value):
+        def checked(t):
+            v = np.asarray(value(t), dtype=float)
+            if v.shape != (3,):
+                raise ModelError(f"{what}: the function returned shape {v.shape} at t = {t} s, "
+                                 "expected (3,)")
+            return v
+        return checked
+    v = np.array(value, dtype=float)
+    if v.shape != (3,) or not np.isfinite(v).all():
+        raise ModelError(f"{what}: expected 3 finite components, a callable f(t) or a "
+                         f"Tabulated, got {value!r}")
+    return lambda t: v
+
+
+# --- forces and torques on one frame --------------------------------------------------
+
+class Force(ForceElement):
+    """A force at ``frame``'s point: Q = J_Tᵀ F (thesis eq. 2.76, J_T of eq. 2.70).
+
+    Parameters
+    ----------
+    frame : Frame
+        The point of application (not a ground frame).
+    force : (3,) [N], callable f(t) -> (3,), or Tabulated with (n_t, 3) values
+    frame_fixed : bool
+        False: inertial components. True: components in the frame's axes, so the
+        inertial force is A F with A = ``frame.orientation(q_body, t)`` (a follower load).
+    """
+
+    def __init__(self, frame: Frame, force, frame_fixed=False):
+        if frame.body is None:
+            raise ModelError(f"{type(self).__name__}: {frame!r} is fixed in the inertial "
+                             "frame; a load there does nothing — apply it to a body's frame")
+        self.frame = frame
+        self.force = _vector_function(force, type(self).__name__)
+        self.frame_fixed = bool(frame_fixed)
+
+    def bodies(self):
+        return [self.frame.body]
+
+    def inertial_force(self, t, q) -> np.ndarray:
+        """F in inertial components (3,) [N] at time t [s] and global positions q."""
+        F = self.force(t)
+        if self.frame_fixed:
+            F = self.frame.orientation(body_q(self.frame, q), t) @ F
+        return F
+
+    def add_forces(self, t, q, u, h):
+        add_point_force(self.frame, q, t, self.inertial_force(t, q), h)
+
+
+class Torque(ForceElement):
+    """A torque on ``frame``'s body: Q = J_Rᵀ τ (thesis eq. 2.76, J_R of eq. 2.72).
+
+    ``torque`` (3,) [N m], callable τ(t) or Tabulated; ``frame_fixed`` as for
+    :class:`Force` (True: components in the frame's axes, inertial torque A τ).
+    """
+
+    def __init__(self, frame: Frame, torque, frame_fixed=False):
+        if frame.body is None:
+            raise ModelError(f"Torque: {frame!r} is fixed in the inertial frame; "
+                             "apply the torque to a body's frame")
+        self.frame = frame
+        self.torque = _vector_function(torque, "Torque")
+        self.frame_fixed = bool(frame_fixed)
+
+    def bodies(self):
+        return [self.frame.body]
+
+    def add_forces(self, t, q, u, h):
+        tau = self.torque(t)
+        if self.frame_fixed:
+            tau = self.frame.orientation(body_q(self.frame, q), t) @ tau
+        add_torque(self.frame, q, t, tau, h)
+
+
+# --- loads spread over the nodes of a flexible body -----------------------------------
+
+class DistributedForce(Force):
+    """A resultant force spread over nodes of a flexible body with weights w_j, Σ w_j = 1:
+
+        Q = Σ_j w_j J_T,jᵀ F = J_T(ū0 = Σ w_j ū0_j, Φ = Σ w_j Φ_j)ᵀ F,
+
+    exact because J_T is affine in (ū0, Φ) (module docstring, thesis eq. 2.70, 2.76). The
+    weighted-mean frame is built once (O(N n_f)); each evaluation costs O(n_f),
+    whatever the node count. A face load: ``w = face_load(mesh, nodes, [1, 0, 0])[nodes, 0]``.
+
+    Parameters
+    ----------
+    body : FlexibleBodyFFR
+    nodes : (n,) int or str
+        0-based node indices, or the name of a node group of the body.
+    weights : (n,)
+        One weight per entry of ``nodes``, summing to 1 (within 1e-9).
+    force : (3,) [N], callable or Tabulated — the resultant, see :class:`Force`.
+    frame_fixed : bool
+        True (default): components in the body frame's axes; False: inertial.
+    """
+
+    def __init__(self, body: FlexibleBodyFFR, nodes, weights, force, frame_fixed=True):
+        if not isinstance(body, FlexibleBodyFFR):
+            raise ModelError(f"DistributedForce acts on a FlexibleBodyFFR, got {body!r}")
+        nodes = body.node_group(nodes) if isinstance(nodes, str) else np.asarray(nodes, dtype=int).ravel()
+        weights = np.asarray(weights, dtype=float).ravel()
+        if weights.shape != nodes.shape:
+            raise ModelError(f"DistributedForce: {weights.size} weights for {nodes.size} nodes; "
+                             "give one weight per node (e.g. weights[nodes] of a nodal array)")
+        if nodes.size and (nodes.min() < 0 or nodes.max() >= body.data.n_nodes):
+            raise ModelError(f"DistributedForce: node indices must lie in 0..{body.data.n_nodes - 1}")
+        if not abs(weights.sum() - 1.0) <= WEIGHT_SUM_TOL:
+            raise ModelError(f"DistributedForce: the weights sum to {float(weights.sum())!r}, not 1; "
+                             "divide them by their sum (the force argument is the resultant)")
+        phi_nodes = body.phi.reshape(body.data.n_nodes, 3, body.n_modes)
+        frame = Frame(body, weights @ body.data.u0[nodes],
+                      np.einsum("j,jcf->cf", weights, phi_nodes[nodes]), name="load centre")
+        super().__init__(frame, force, frame_fixed)
+
+
+# --- force files (report Appendix A) ----------------------------------------------------
+
+def _free_dofs(n_nodes, blocked_dofs) -> np.ndarray:
+    """Indices of the unblocked DOFs among 0..3N−1 (increasing). ``blocked_dofs``: None,
+    a boolean mask (3N,) (True = blocked) or integer DOF indices 3j + k."""
+    n_dof = 3 * int(n_nodes)
+    if blocked_dofs is None:
+        return np.arange(n_dof)
+    blocked = np.asarray(blocked_dofs)
+    mask = np.zeros(n_dof, dtype=bool)
+    if blocked.dtype == bool:
+        if blocked.shape != (n_dof,):
+            raise ModelError(f"blocked_dofs: a boolean mask needs 3 x {n_nodes} = {n_dof} "
+                             f"entries, got shape {blocked.shape}")
+        mask = blocked
+    elif blocked.size:
+        if not np.issubdtype(blocked.dtype, np.integer):
+            raise ModelError("blocked_dofs must be a boolean mask or integer DOF indices 3j + k, "
+                             f"got dtype {blocked.dtype}")
+        if blocked.min() < 0 or blocked.max() >= n_dof:
+            raise ModelError(f"blocked_dofs: DOF indices must lie in 0..{n_dof - 1}")
+        mask[blocked.ravel()] = True
+    return np.flatnonzero(~mask)
+
+
+def _parse_row(path, lineno, tokens) -> np.ndarray:
+    """The numbers of one data line; InputFileError naming the first bad entry."""
+    row = np.empty(len(tokens))
+    for col, token in enumerate(tokens):
+        try:
+            row[col] = float(token)
+        except ValueError:
+            raise InputFileError(path, lineno, f"entry {col + 1} ({token!r}) is not a number") from None
+    bad = np.flatnonzero(~np.isfinite(row))
+    if bad.size:
+        raise InputFileError(path, lineno, f"entry {bad[0] + 1} ({tokens[bad[0]]!r}) is not finite")
+    return row
+
+
+def read_force_file(path, n_nodes, blocked_dofs=None):
+    """Read a force file (report Appendix A, "Inputting Forces"; format in the module
+    docstring) of a body with ``n_nodes`` nodes.
+
+    ``blocked_dofs``: None, a boolean mask (3N,) (True = blocked) or integer DOF indices
+    3j + k; the file holds one row per unblocked DOF, and blocked DOFs get zero force.
+    Blanks and tabs in any number separate values; blank lines are skipped.
+
+    Returns ``(times (n_t,) [s], forces (n_t, N, 3) [N])``. Raises
+    :class:`~ffrmbs.errors.InputFileError` (path, 1-based line, fault) for a missing or
+    empty file, a non-numeric or non-finite entry, a row whose length differs from the
+    times row, a wrong number of rows (1 + unblocked DOFs) and non-increasing times.
+    """
+    path = Path(path)
+    free = _free_dofs(n_nodes, blocked_dofs)
+    try:
+        text = path.read_text(encoding="utf-8", errors="replace")
+    except FileNotFoundError:
+        raise InputFileError(path, None, "file not found") from None
+    except OSError as exc:
+        raise InputFileError(path, None, f"cannot read file: {exc.strerror}") from None
+    lines = [(n, line.split()) for n, line in enumerate(text.splitlines(), start=1) if line.strip()]
+    if not lines:
+        raise InputFileError(path, None, "empty file: expected a row of times and one row "
+                             "of forces per unblocked DOF")
+    n_t = len(lines[0][1])
+    rows = []
+    for lineno, tokens in lines:
+        row = _parse_row(path, lineno, tokens)
+        if row.size != n_t:
+            raise InputFileError(path, lineno, f"{row.size} entries, but the times row "
+                                 f"(line {lines[0][0]}) has {n_t}")
+        rows.append(row)
+    expected = 1 + free.size
+    counted = (f"expected 1 row of times + {free.size} rows of forces (3 x {n_nodes} nodes "
+               f"- {3 * n_nodes - free.size} blocked DOFs)")
+    if len(rows) > expected:
+        raise InputFileError(path, lines[expected][0], f"{len(rows) - expected} row(s) too many: {counted}")
+    if len(rows) < expected:
+        raise InputFileError(path, lines[-1][0] + 1, f"the file ends after {len(rows) - 1} "
+                             f"rows of forces: {counted}")
+    times = rows[0]
+    bad = np.flatnonzero(np.diff(times) <= 0.0)
+    if bad.size:
+        i = bad[0]
+        raise InputFileError(path, lines[0][0], f"times must increase strictly, but entry {i + 2} "
+                             f"({float(times[i + 1])!r}) follows entry {i + 1} ({float(times[i])!r})")
+    full = np.zeros((3 * n_nodes, n_t))
+    full[free] = rows[1:]
+    return times, np.ascontiguousarray(full.T.reshape(n_t, n_nodes, 3))
+
+
+def write_force_file(path, times, forces, blocked_dofs=None) -> None:
+    """Write ``times`` (n_t,) [s] and nodal ``forces`` (n_t, N, 3) [N] as a force file
+    (report Appendix A; format in the module docstring), leaving out the rows of
+    ``blocked_dofs`` (as for :func:`read_force_file`), whose forces must be zero.
+
+    Numbers are written in their shortest exact form, so reading gives back the same
+    floats. Atomic: a temporary file in the same directory replaces ``path`` at the end.
+    """
+    times = _check_times(times, "write_force_file")
+    forces = np.asarray(forces, dtype=float)
+    if forces.ndim != 3 or forces.shape[0] != times.size or forces.shape[2] != 3:
+        raise ModelError(f"write_force_file: forces must have shape ({times.size}, N, 3), "
+                         f"got {forces.shape}")
+    if not np.isfinite(forces).all():
+        raise ModelError("write_force_file: forces must be finite")
+    n_nodes = forces.shape[1]
+    free = _free_dofs(n_nodes, blocked_dofs)
+    by_dof = forces.reshape(times.size, 3 * n_nodes).T
+    blocked = np.setdiff1d(np.arange(3 * n_nodes), free)
+    if np.any(by_dof[blocked] != 0.0):
+        dof = blocked[np.flatnonzero(np.any(by_dof[blocked] != 0.0, axis=1))[0]]
+        raise ModelError(f"write_force_file: DOF {dof} (node {dof // 3}, direction "
+                         f"{'xyz'[dof % 3]}) is blocked but carries a force, which the file "
+                         "cannot hold")
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name + ".", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as f:
+            for row in (times, *by_dof[free]):
+                f.write(" ".join(map(repr, row.tolist())) + "\n")
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+class NodalForces(ForceElement):
+    """Step-function nodal forces on a flexible body (report eq. 9, force files of report
+    Appendix A): row r of ``forces`` holds for times[r] <= t < times[r+1], the last from
+    times[-1] on, none before times[0].
+
+        Q(t) = Σ_j J_T,jᵀ D F_j(t),    D = A (``frame_fixed``) or 1 (inertial components).
+
+    Writing F_j = Σ_k F_jk e_k and using that J_T is affine in (ū0, Φ) (module docstring),
+    Σ_j F_jk J_T,j = J_T(V_k) + (W_k − 1) J_T(origin) with the "virtual frame" V_k of
+    ū0 = Σ_j F_jk ū0_j [N m], Φ = Σ_j F_jk Φ_j and W_k = Σ_j F_jk [N]. These are summed
+    once per time row (O(n_t N n_f)); an evaluation then costs four J_T, O(n_f), through
+    the body's own Jacobians, so it holds for free and prescribed frames alike. For a
+    free frame and body-frame components it equals (thesis eq. 2.70, 2.76)
+
+        Q = [A Σ F_j ;  Tᵀ Σ_j (ū0_j + Φ_j q_f) × F_j ;  Σ_j Φ_jᵀ F_j].
+
+    Parameters
+    ----------
+    body : FlexibleBodyFFR
+    times : (n_t,) [s], strictly increasing
+    forces : (n_t, N, 3) [N], N = the body's node count
+    frame_fixed : bool
+        True (default): components in the body frame's axes; False: inertial.
+    """
+
+    def __init__(self, body: FlexibleBodyFFR, times, forces, frame_fixed=True):
+        if not isinstance(body, FlexibleBodyFFR):
+            raise ModelError(f"NodalForces acts on a FlexibleBodyFFR, got {body!r}")
+        self.body = body
+        self.times = _check_times(times, "NodalForces")
+        n, n_f = body.data.n_nodes, body.n_modes
+        forces = np.asarray(forces, dtype=float)
+        if forces.shape != (self.times.size, n, 3):
+            raise ModelError(f"NodalForces: forces must have shape ({self.times.size}, {n}, 3) "
+                             f"for {self.times.size} times and {n} nodes, got {forces.shape}")
+        self.frame_fixed = bool(frame_fixed)
+        u0 = forces.transpose(0, 2, 1) @ body.data.u0                          # (n_t, 3, 3)
+        phi = np.tensordot(forces, body.phi.reshape(n, 3, n_f), axes=([1], [0]))  # (n_t, 3, 3, n_f)
+        self._excess = forces.sum(axis=1) - 1.0          # W_k − 1 per row (n_t, 3)
+        self._frames = [[Frame(body, u0[r, k], phi[r, k], name=f"row {r} e{k}") for k in range(3)]
+                        for r in range(self.times.size)]
+        self._origin = body.origin
+
+    @classmethod
+    def from_file(cls, body: FlexibleBodyFFR, path, blocked_dofs=None, frame_fixed=True):
+        """The nodal forces of a force file (:func:`read_force_file`) on ``body``."""
+        times, forces = read_force_file(path, body.data.n_nodes, blocked_dofs)
+        return cls(body, times, forces, frame_fixed)
+
+    def bodies(self):
+        return [self.body]
+
+    def add_forces(self, t, q, u, h):
+        r = step_index(self.times, t)
+        if r < 0:
+            return
+        qb = q[self.body.q_slice]
+        D = self._origin.orientation(qb, t) if self.frame_fixed else np.eye(3)
+        Q = self._origin.J_T(qb, t).T @ (D @ self._excess[r])
+        for k, frame in enumerate(self._frames[r]):
+            Q += frame.J_T(qb, t).T @ D[:, k]
+        h[self.body.u_slice] += Q
