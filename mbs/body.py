@@ -110,6 +110,13 @@ class Frame:
         """Inertial angular velocity ω (3,) [rad/s] (points share their body's rotation)."""
         return np.zeros(3) if self.body is None else self.body.angular_velocity(q, u, t)
 
+    def elastic_displacement(self, q):
+        """ū_f = Φ q_f (3,) [m]: the point's elastic displacement in body-frame components
+        (thesis eq. 2.23); zero for points fixed to the frame and for rigid bodies."""
+        if self.body is None or not self.phi.size:
+            return np.zeros(3)
+        return self.phi @ self.body.elastic_coordinates(q)
+
     def J_T(self, q, t=0.0):
         """∂ṙ/∂u (3, nu) (thesis eq. 2.70)."""
         return self.body.point_J_T(q, self, t)

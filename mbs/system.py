@@ -201,14 +201,15 @@ class System:
 
     # --- simulation ---------------------------------------------------------------------
     def simulate(self, t_end, dt, integrator="generalized-alpha", t_out=None, outputs=None,
-                 energies=False, q0=None, u0=None, **options):
+                 energies=False, q0=None, u0=None, breakpoints=(), **options):
         """Integrate from t = 0 to ``t_end`` [s] with step ``dt`` [s].
 
         ``integrator``: "generalized-alpha" (implicit, default; option ``rho_inf``) or
         "rk4" (explicit; option ``baumgarte``). ``t_out``: output times (default: every
         step); the integrator lands exactly on each. ``outputs``: {name: Frame (its
         position is recorded) or callable(t, q, u) -> array}. ``energies``: also record
-        kinetic and potential energy. Returns a :class:`~mbs.result.Result`; a diverging
+        kinetic and potential energy. ``breakpoints``: times [s] where loads jump; the
+        integrator stops just before each and restarts there. Returns a :class:`~mbs.result.Result`; a diverging
         run raises :class:`~ffrmbs.errors.SimulationError` whose ``result`` holds what
         was computed up to then.
         """
@@ -219,4 +220,4 @@ class System:
             q0 = q_init if q0 is None else np.asarray(q0, dtype=float)
             u0 = u_init if u0 is None else np.asarray(u0, dtype=float)
         return integrator_class(integrator)(self, **options).run(
-            q0, u0, t_end, dt, t_out, outputs or {}, energies)
+            q0, u0, t_end, dt, t_out, outputs or {}, energies, breakpoints)

@@ -61,9 +61,16 @@ class Integrator:
     def step(self, h):
         raise NotImplementedError
 
-    def run(self, q0, u0, t_end, dt, t_out, outputs, energies):
+    def run(self, q0, u0, t_end, dt, t_out, outputs, energies, breakpoints=()):
+        """Integrate and sample (see ``System.simulate``). At each breakpoint t_b the
+        integration ends at t_b − 1e-12 max(1, t_b) s, safely below t_b despite rounding
+        (so loads that jump at t_b act with their left limit), and restarts at t_b with
+        consistent accelerations."""
         sys = self.system
         times = output_times(t_end, dt, t_out)
+        breaks = sorted(float(b) for b in breakpoints if 0.0 < b < t_end)
+        landings = sorted(set(times.tolist()) | set(breaks))
+        record_at = {t: i for i, t in enumerate(times)}
         probes = {name: _probe(sys, spec) for name, spec in outputs.items()}
         n = len(times)
         res = Result(np.full(n, np.nan), np.full((n, sys.nq), np.nan), np.full((n, sys.nu), np.nan))
@@ -72,7 +79,7 @@ class Integrator:
         sys.normalize(q)
         cpu0, wall0 = time.process_time(), time.perf_counter()
         self.start(0.0, q, u)
-        steps = 0
+        steps, recorded = 0, 0
 
         def record(i):
             res.t[i], res.q[i], res.u[i] = self.t, self.q, self.u
@@ -82,16 +89,17 @@ class Integrator:
                     res.outputs[name] = np.full((n,) + value.shape, np.nan)
                 res.outputs[name][i] = value
             if energies:
-                for key, fn in (("kinetic", sys.kinetic_energy), ("potential", sys.potential_energy)):
+                for key in ("kinetic", "potential"):
                     res.energy.setdefault(key, np.full(n, np.nan))
                 res.energy["kinetic"][i] = sys.kinetic_energy(self.t, self.q, self.u)
                 res.energy["potential"][i] = sys.potential_energy(self.t, self.q)
 
-        i = 0
         try:
-            while i < n:
-                gap = times[i] - self.t
-                k = math.ceil(gap / dt - 1e-9) if gap > 1e-14 * max(1.0, abs(times[i])) else 0
+            for target in landings:
+                is_break = target in breaks
+                end = target - 1e-12 * max(1.0, abs(target)) if is_break else target
+                gap = end - self.t
+                k = math.ceil(gap / dt - 1e-9) if gap > 1e-14 * max(1.0, abs(target)) else 0
                 for _ in range(k):
                     try:
                         self.step(gap / k)
@@ -103,11 +111,14 @@ class Integrator:
                     steps += 1
                     if not (np.all(np.isfinite(self.q)) and np.all(np.isfinite(self.u))):
                         raise SimulationError(self.t, steps, "the state became NaN or infinite")
-                self.t = times[i]
-                record(i)
-                i += 1
+                if is_break:
+                    self.start(target, self.q, self.u)
+                self.t = target
+                if target in record_at:
+                    record(record_at[target])
+                    recorded += 1
         except SimulationError as err:
-            err.result = res.truncated(i)
+            err.result = res.truncated(recorded)
             err.result.stats.update(steps=steps, newton_iterations=self.iterations,
                                     cpu_s=time.process_time() - cpu0)
             raise
