@@ -16,6 +16,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ffrmbs.errors import ModelError
+
 
 class Body:
     """Base of all bodies: a name, sizes, initial state and the slices given by the System."""
@@ -119,11 +121,16 @@ class Frame:
 
     def J_T(self, q, t=0.0):
         """∂ṙ/∂u (3, nu) (thesis eq. 2.70)."""
-        return self.body.point_J_T(q, self, t)
+        return self._owner().point_J_T(q, self, t)
 
     def J_R(self, q, t=0.0):
         """∂ω/∂u (3, nu) (thesis eq. 2.72)."""
-        return self.body.J_R(q, t)
+        return self._owner().J_R(q, t)
+
+    def _owner(self):
+        if self.body is None:
+            raise ModelError(f"{self!r} is fixed in the inertial frame: it has no Jacobian")
+        return self.body
 
     def bias_T(self, q, u, t=0.0):
         """J̇_T u (3,) [m/s²]: the acceleration of the point at u̇ = 0."""

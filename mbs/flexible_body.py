@@ -90,12 +90,14 @@ class FlexibleBodyFFR(FloatingFrameBody):
         return D
 
     # --- frames on the body -------------------------------------------------------------
-    def node(self, j: int, name=None) -> Frame:
-        """The frame at node ``j`` (0-based): it follows the elastic deformation, its
-        orientation is the body frame's (lumped nodes carry no rotation)."""
+    def node(self, j: int, orientation=None, name=None) -> Frame:
+        """The frame at node ``j`` (0-based): it follows the elastic deformation. Its
+        orientation is the body frame's times the constant ``orientation``: lumped nodes
+        carry no rotation, so a joint at a node constrains the body frame's rotation, not
+        the local material rotation."""
         if not 0 <= j < self.data.n_nodes:
             raise ModelError(f"{self.name}: node {j} outside 0..{self.data.n_nodes - 1}")
-        return Frame(self, self.data.u0[j], self._phi_nodes[j], None, name or f"node {j}")
+        return Frame(self, self.data.u0[j], self._phi_nodes[j], orientation, name or f"node {j}")
 
     def node_group(self, name: str) -> np.ndarray:
         """0-based node indices of the named group of the body file."""

@@ -53,6 +53,11 @@ class ForceElement:
         """Stored energy [J] (springs, gravity); 0 for non-conservative elements."""
         return 0.0
 
+    def breakpoints(self):
+        """Times [s] where the element's force jumps (step loads); the integrators stop
+        just before each and restart there (``System.simulate``)."""
+        return ()
+
     def add_tangents(self, t, q, u, K, D) -> None:
         """Optionally add −∂Q/∂q (in velocity-increment coordinates) and −∂Q/∂u into the
         global K, D (nu, nu) for implicit integrators; the default adds nothing."""

@@ -117,6 +117,13 @@ class Tabulated:
         return (1.0 - s) * self.values[j] + s * self.values[j + 1]
 
 
+def _jumps(function):
+    """The jump times of a step Tabulated, () for anything else."""
+    if isinstance(function, Tabulated) and function.kind == "step":
+        return tuple(function.times)
+    return ()
+
+
 def _vector_function(value, what):
     """A callable t -> (3,) array from a constant (3,), a callable or a :class:`Tabulated`."""
     if isinstance(value, Tabulated):
@@ -175,6 +182,9 @@ class Force(ForceElement):
     def add_forces(self, t, q, u, h):
         add_point_force(self.frame, q, t, self.inertial_force(t, q), h)
 
+    def breakpoints(self):
+        return _jumps(self.force)
+
 
 class Torque(ForceElement):
     """A torque on ``frame``'s body: Q = J_Rᵀ τ (thesis eq. 2.76, J_R of eq. 2.72).
@@ -199,6 +209,9 @@ class Torque(ForceElement):
         if self.frame_fixed:
             tau = self.frame.orientation(body_q(self.frame, q), t) @ tau
         add_torque(self.frame, q, t, tau, h)
+
+    def breakpoints(self):
+        return _jumps(self.torque)
 
 
 # --- loads spread over the nodes of a flexible body -----------------------------------
@@ -422,6 +435,9 @@ class NodalForces(ForceElement):
 
     def bodies(self):
         return [self.body]
+
+    def breakpoints(self):
+        return tuple(self.times)
 
     def add_forces(self, t, q, u, h):
         r = step_index(self.times, t)

@@ -208,8 +208,9 @@ class System:
         "rk4" (explicit; option ``baumgarte``). ``t_out``: output times (default: every
         step); the integrator lands exactly on each. ``outputs``: {name: Frame (its
         position is recorded) or callable(t, q, u) -> array}. ``energies``: also record
-        kinetic and potential energy. ``breakpoints``: times [s] where loads jump; the
-        integrator stops just before each and restarts there. Returns a :class:`~mbs.result.Result`; a diverging
+        kinetic and potential energy. ``breakpoints``: times [s] where loads jump, added to
+        those the force elements declare (step tables, force files); the integrator stops
+        just before each and restarts there. Returns a :class:`~mbs.result.Result`; a diverging
         run raises :class:`~ffrmbs.errors.SimulationError` whose ``result`` holds what
         was computed up to then.
         """
@@ -220,4 +221,5 @@ class System:
             q0 = q_init if q0 is None else np.asarray(q0, dtype=float)
             u0 = u_init if u0 is None else np.asarray(u0, dtype=float)
         return integrator_class(integrator)(self, **options).run(
-            q0, u0, t_end, dt, t_out, outputs or {}, energies, breakpoints)
+            q0, u0, t_end, dt, t_out, outputs or {}, energies,
+            set(breakpoints).union(*(f.breakpoints() for f in self.forces)))

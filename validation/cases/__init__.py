@@ -1,3 +1,3 @@
 """Validation cases; each module defines NAME (= module name), DESCRIPTION and run(quick)."""
 
-CASE_MODULES = ["cantilever", "complex_beam"]
+CASE_MODULES = ["cantilever", "complex_beam", "ffr_frequencies", "ffr_free_flight"]
