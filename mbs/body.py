@@ -37,6 +37,10 @@ class Body:
     def h(self, q, u, t=0.0) -> np.ndarray:
         raise NotImplementedError
 
+    def mass_and_h(self, q, u, t=0.0):
+        """(M, h) at one state; bodies override it to share work between the two."""
+        return self.mass_matrix(q, t), self.h(q, u, t)
+
     def qdot(self, q, u) -> np.ndarray:
         raise NotImplementedError
 

@@ -21,8 +21,8 @@ from ffrmbs.errors import ModelError
 from preprocess import BodyData, read_body
 
 from .body import Frame
+from ._kernels import ffr_mass_and_qv
 from .floating_frame import FloatingFrameBody
-from .rotations import skew
 from .shape_integrals import ShapeIntegrals
 
 
@@ -117,26 +117,17 @@ class FlexibleBodyFFR(FloatingFrameBody):
         return self.integrals.mass
 
     # --- dynamics from shape integrals --------------------------------------------------
-    def _inertia(self, A, q_f):
-        """M̄ of thesis eq. 2.44 in (Ṙ, ω̄, q̇_f): blocks eq. 2.47, 2.50, 2.57, 2.58, 2.66, 2.69
-        with ω̄ in place of Ḡ θ̇."""
+    def _dynamics(self, A, q_f, w, qdot_f):
+        """M̄ of thesis eq. 2.44 in (Ṙ, ω̄, q̇_f) (blocks eq. 2.47, 2.50, 2.57, 2.58, 2.66,
+        2.69 with ω̄ in place of Ḡ θ̇) and Q̄_v of eq. 2.77–2.79, by the numba kernel
+        :func:`mbs._kernels.ffr_mass_and_qv` (numpy reference: :class:`ShapeIntegrals`)."""
         si = self.integrals
-        S_t, I_thth, I_thf, G = si.deformed(q_f)
         n = 6 + self.n_modes
-        M = np.empty((n, n))
-        M[:3, :3] = si.mass * np.eye(3)
-        M[:3, 3:6] = -A @ skew(S_t)
-        M[:3, 6:] = A @ si.S_bar
-        M[3:6, 3:6] = I_thth
-        M[3:6, 6:] = I_thf
-        M[6:, 6:] = si.M_ff
-        M[3:, :3] = M[:3, 3:].T
-        M[6:, 3:6] = I_thf.T
-        return M, (S_t, I_thth, G)
-
-    def _quadratic_velocity(self, A, w, qdot_f, aux):
-        S_t, I_thth, G = aux
-        return np.concatenate(self.integrals.quadratic_velocity(A, w, qdot_f, S_t, I_thth, G))
+        M, Q = np.empty((n, n)), np.empty(n)
+        ffr_mass_and_qv(np.ascontiguousarray(A), np.asarray(w, dtype=float), np.asarray(q_f, dtype=float),
+                        np.asarray(qdot_f, dtype=float), si.mass, si.I1, si.S_bar, si.I_kl, si.I_bar,
+                        si.S_kl, si.M_ff, si.S_skew, M, Q)
+        return M, Q
 
     def _elastic(self, q_f, qdot_f):
         return self.K_ff @ q_f + self.D_ff @ qdot_f

@@ -14,9 +14,9 @@ The frame has origin R and orientation A; a point sits at r = R + A ū with
   u = q̇_f, the frame's motion R(t), A(t) given by a :class:`PrescribedFrameMotion`;
   J_T = A Φ, J_R = 0, and J̇_T u = R̈ + A [ω̄̇ × ū + ω̃² ū + 2 ω̃ Φ q̇_f].
 
-Subclasses supply the inertia: ``_inertia(A, q_f)`` gives the mass matrix M̄ in the
-full coordinates (Ṙ, ω̄, q̇_f) and ``_quadratic_velocity`` the forces
-Q̄_v = −Σ m J̄ᵀ J̄̇ u there; this module maps both to the body's own coordinates,
+Subclasses supply the inertia: ``_dynamics(A, q_f, ω̄, q̇_f)`` gives the mass matrix M̄ in
+the full coordinates (Ṙ, ω̄, q̇_f) and the forces Q̄_v = −Σ m J̄ᵀ J̄̇ u there; this module
+maps both to the body's own coordinates,
 
     free:        M = Tᵀ M̄ T,   h = Tᵀ (Q̄_v − M̄ (0, Ṫ u_r, 0)) − K q − D u
     prescribed:  M = M̄_ff,     h = Q̄_f − M̄_f,(R,θ) (R̈, ω̄̇) − K q − D u
@@ -190,43 +190,39 @@ class FloatingFrameBody(Body):
         return A @ (Tdu if self.motion is None else wd)
 
     # --- dynamics -----------------------------------------------------------------------
-    def _inertia(self, A, q_f):
-        """(M̄ (6+n_f, 6+n_f), aux) in the full coordinates (Ṙ, ω̄, q̇_f)."""
-        raise NotImplementedError
-
-    def _quadratic_velocity(self, A, w, qdot_f, aux):
-        """Q̄_v (6+n_f,) in the full coordinates."""
+    def _dynamics(self, A, q_f, w, qdot_f):
+        """(M̄ (6+n_f, 6+n_f), Q̄_v (6+n_f,)) in the full coordinates (Ṙ, ω̄, q̇_f); fresh
+        arrays the caller may modify."""
         raise NotImplementedError
 
     def _elastic(self, q_f, qdot_f):
         """K q_f + D q̇_f (n_f,); rigid bodies have none."""
         return np.zeros(self.n_modes)
 
-    def mass_matrix(self, q, t=0.0):
-        _, A, _, _, T, *_ = self._frame(q, None, t)
-        Mb, _ = self._inertia(A, q[self._f])
-        if self.motion is not None:
-            return Mb[6:, 6:].copy()
-        if self.param.name != "quaternion":
-            Mb[3:6, :] = T.T @ Mb[3:6, :]
-            Mb[:, 3:6] = Mb[:, 3:6] @ T
-        return Mb
-
-    def h(self, q, u, t=0.0):
+    def mass_and_h(self, q, u, t=0.0):
+        """(M, h) at one state, sharing the shape-integral pass (module docstring)."""
         _, A, _, w, T, Tdu, a, wd = self._frame(q, u, t)
         q_f, qd_f = q[self._f], u[self._fu]
-        Mb, aux = self._inertia(A, q_f)
-        Q = self._quadratic_velocity(A, w, qd_f, aux)
+        Mb, Q = self._dynamics(A, q_f, w, qd_f)
         if self.motion is not None:
-            out = Q[6:] - Mb[6:, :3] @ a - Mb[6:, 3:6] @ wd
+            h = Q[6:] - Mb[6:, :3] @ a - Mb[6:, 3:6] @ wd
+            M = Mb[6:, 6:]
         else:
-            out = Q
+            h, M = Q, Mb
             if self.param.name != "quaternion":
-                out = Q - Mb[:, 3:6] @ Tdu
-                out[3:6] = T.T @ out[3:6]
+                h = Q - Mb[:, 3:6] @ Tdu
+                h[3:6] = T.T @ h[3:6]
+                M[3:6, :] = T.T @ M[3:6, :]
+                M[:, 3:6] = M[:, 3:6] @ T
         if self.n_modes:
-            out[-self.n_modes:] -= self._elastic(q_f, qd_f)
-        return out
+            h[-self.n_modes:] -= self._elastic(q_f, qd_f)
+        return M, h
+
+    def mass_matrix(self, q, t=0.0):
+        return self.mass_and_h(q, np.zeros(self.nu), t)[0]
+
+    def h(self, q, u, t=0.0):
+        return self.mass_and_h(q, u, t)[1]
 
     def _full_velocity(self, q, u, t):
         _, A, v, w, *_ = self._frame(q, u, t)
@@ -235,17 +231,17 @@ class FloatingFrameBody(Body):
     def kinetic_energy(self, q, u, t=0.0):
         """T = ½ ū̇ᵀ M̄ ū̇ over the full frame and elastic velocities [J] (thesis eq. 2.43)."""
         A, uf = self._full_velocity(q, u, t)
-        return 0.5 * uf @ self._inertia(A, q[self._f])[0] @ uf
+        return 0.5 * uf @ self._dynamics(A, q[self._f], uf[3:6], uf[6:])[0] @ uf
 
     def linear_momentum(self, q, u, t=0.0):
         """Σ m_j ṙ_j [kg m/s]: the first three rows of M̄ ū̇."""
         A, uf = self._full_velocity(q, u, t)
-        return self._inertia(A, q[self._f])[0][:3] @ uf
+        return self._dynamics(A, q[self._f], uf[3:6], uf[6:])[0][:3] @ uf
 
     def angular_momentum(self, q, u, t=0.0):
         """Σ m_j r_j × ṙ_j about the inertial origin [kg m²/s] = R × p + A (M̄ ū̇)_θ."""
         A, uf = self._full_velocity(q, u, t)
-        Mu = self._inertia(A, q[self._f])[0] @ uf
+        Mu = self._dynamics(A, q[self._f], uf[3:6], uf[6:])[0] @ uf
         R = self._frame(q, None, t)[0]
         return np.cross(R, Mu[:3]) + A @ Mu[3:6]
 

@@ -39,17 +39,15 @@ class RigidBody(FloatingFrameBody):
         c = self.com
         self.inertia_origin = inertia + self.mass * ((c @ c) * np.eye(3) - np.outer(c, c))
 
-    def _inertia(self, A, q_f):
+    def _dynamics(self, A, q_f, w, qdot_f):
         M = np.empty((6, 6))
         M[:3, :3] = self.mass * np.eye(3)
         M[:3, 3:] = -self.mass * A @ skew(self.com)
         M[3:, :3] = M[:3, 3:].T
         M[3:, 3:] = self.inertia_origin
-        return M, None
-
-    def _quadratic_velocity(self, A, w, qdot_f, aux):
-        return np.concatenate((-self.mass * A @ np.cross(w, np.cross(w, self.com)),
-                               -np.cross(w, self.inertia_origin @ w)))
+        Q = np.concatenate((-self.mass * A @ np.cross(w, np.cross(w, self.com)),
+                            -np.cross(w, self.inertia_origin @ w)))
+        return M, Q
 
     def com_frame(self) -> Frame:
         return self.frame_at(self.com, name="centre of mass")

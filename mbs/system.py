@@ -107,13 +107,27 @@ class System:
     def h(self, t, q, u):
         """Smooth generalized forces h (nu,): bodies' Q_v − K q − D u, gravity, links."""
         out = np.empty(self.nu)
-        for b, com in zip(self.bodies, self._com):
+        for b in self.bodies:
             out[b.u_slice] = b.h(q[b.q_slice], u[b.u_slice], t)
-            if self.gravity.any():
+        self._add_external(t, q, u, out)
+        return out
+
+    def mass_and_h(self, t, q, u):
+        """(M, h) in one pass over the bodies (what an implicit step needs per iteration)."""
+        M = np.zeros((self.nu, self.nu))
+        out = np.empty(self.nu)
+        for b in self.bodies:
+            M[b.u_slice, b.u_slice], out[b.u_slice] = b.mass_and_h(q[b.q_slice], u[b.u_slice], t)
+        self._add_external(t, q, u, out)
+        return M, out
+
+    def _add_external(self, t, q, u, out):
+        """Gravity and force elements into ``out``."""
+        if self.gravity.any():
+            for b, com in zip(self.bodies, self._com):
                 add_point_force(com, q, t, b.mass * self.gravity, out)
         for f in self.forces:
             f.add_forces(t, q, u, out)
-        return out
 
     def tangents(self, t, q, u):
         """(K_t, D_t) (nu, nu): constant elastic and damping tangents plus link tangents,
@@ -157,8 +171,7 @@ class System:
         """(u̇, λ) from [[M, −C_qᵀ], [C_q, 0]] (u̇, λ) = (h, −γ − 2a ġ − b² g): the
         index-1 form, with Baumgarte's stabilization terms a [1/s], b [1/s] if given.
         Sign convention: reaction forces W λ = C_qᵀ λ enter as M u̇ = h + W λ."""
-        M = self.mass_matrix(t, q)
-        h = self.h(t, q, u)
+        M, h = self.mass_and_h(t, q, u)
         if not self.n_c:
             return scipy.linalg.solve(M, h, assume_a="pos", check_finite=False), np.zeros(0)
         C = self.constraint_jacobian(t, q)

@@ -93,6 +93,27 @@ def test_mass_matrix_and_quadratic_velocity_equal_node_sums(bodies, seed, rotati
 
 @settings(max_examples=10, deadline=None)
 @given(seed=seeds)
+def test_numba_kernel_equals_numpy_reference(bodies, seed):
+    """mbs._kernels.ffr_mass_and_qv against ShapeIntegrals.deformed / quadratic_velocity."""
+    body = bodies["quaternion"]
+    q, u = random_state(body, seed)
+    A, si = rot.quat_to_matrix(q[3:7]), body.integrals
+    M, Q = body._dynamics(A, q[-N_F:], u[3:6], u[-N_F:])
+    S_t, I_thth, I_thf, G = si.deformed(q[-N_F:])
+    M_ref = np.zeros_like(M)
+    M_ref[:3, :3] = si.mass * np.eye(3)
+    M_ref[:3, 3:6] = -A @ rot.skew(S_t)
+    M_ref[:3, 6:] = A @ si.S_bar
+    M_ref[3:6, 3:6], M_ref[3:6, 6:], M_ref[6:, 6:] = I_thth, I_thf, si.M_ff
+    M_ref[3:, :3] = M_ref[:3, 3:].T
+    M_ref[6:, 3:6] = I_thf.T
+    Q_ref = np.concatenate(si.quadratic_velocity(A, u[3:6], u[-N_F:], S_t, I_thth, G))
+    assert rel(M, M_ref) < 1e-13
+    assert rel(Q, Q_ref) < 1e-13
+
+
+@settings(max_examples=10, deadline=None)
+@given(seed=seeds)
 def test_lagrange_equations_by_finite_differences(bodies, seed):
     """Cardan coordinates (u = q̇): M = ∂²T/∂q̇² and Q_v = −Ṁ q̇ + ∂T/∂q (thesis eq. 2.77),
     with T = ½ Σ m_j |J_Tj q̇|² summed over the nodes and derivatives by central differences."""

@@ -70,8 +70,8 @@ class GeneralizedAlpha(Integrator):
             abar1 = (af * self.a + (1 - af) * a1 - am * self.abar) / (1 - am)
             u1 = base_u + h * gm * abar1
             q1 = sys.increment(self.q, base_dq + h * h * bt * abar1)
-            M = sys.mass_matrix(t1, q1)
-            res = M @ a1 - sys.h(t1, q1, u1)
+            M, h1 = sys.mass_and_h(t1, q1, u1)
+            res = M @ a1 - h1
             S = M + stiff
             if nc:
                 C = sys.constraint_jacobian(t1, q1)
