@@ -1,0 +1,1 @@
+"""Benchmarks: timings that tests must not assert on (run as ``python3 -m validation.bench.<name>``)."""
