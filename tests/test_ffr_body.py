@@ -281,3 +281,13 @@ def test_mode_selection_and_errors(data):
         FlexibleBodyFFR(data, 2, rotation="euler")
     with pytest.raises(ModelError, match="node"):
         body.node(10**6)
+
+
+def test_node_positions_equal_node_frames(bodies):
+    """The vectorized node positions (eq. 2.24) equal each node frame's position."""
+    body = bodies["quaternion"]
+    q, _ = random_state(body, 11)
+    nodes = [0, 5, body.data.n_nodes - 1]
+    expected = np.array([body.node(j).position(q) for j in nodes])
+    np.testing.assert_allclose(body.node_positions(q, nodes), expected, atol=1e-13)
+    np.testing.assert_allclose(body.node_positions(q)[nodes], expected, atol=1e-13)
