@@ -36,6 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from ffrmbs.errors import InputFileError, ModelError
+from preprocess.textfiles import read_text
 
 from .body import Frame
 from .flexible_body import FlexibleBodyFFR
@@ -310,12 +311,7 @@ def read_force_file(path, n_nodes, blocked_dofs=None):
     """
     path = Path(path)
     free = _free_dofs(n_nodes, blocked_dofs)
-    try:
-        text = path.read_text(encoding="utf-8", errors="replace")
-    except FileNotFoundError:
-        raise InputFileError(path, None, "file not found") from None
-    except OSError as exc:
-        raise InputFileError(path, None, f"cannot read file: {exc.strerror}") from None
+    text = read_text(path)
     lines = [(n, line.split()) for n, line in enumerate(text.splitlines(), start=1) if line.strip()]
     if not lines:
         raise InputFileError(path, None, "empty file: expected a row of times and one row "

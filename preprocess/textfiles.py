@@ -63,14 +63,19 @@ _NUMBER = re.compile(
 _NON_FINITE = re.compile(r"[+-]?(?:nan|inf|infinity)", re.IGNORECASE)
 
 
-def _data_rows(path: Path) -> list[tuple[int, list[str]]]:
-    """(1-based line number, tokens) of every data row of a text file; at least one."""
+def read_text(path: Path) -> str:
+    """The text of ``path``; a missing or unreadable file raises InputFileError."""
     try:
-        text = path.read_text(encoding="utf-8", errors="replace")
+        return path.read_text(encoding="utf-8", errors="replace")
     except FileNotFoundError:
         raise InputFileError(path, None, "file not found") from None
     except OSError as exc:
         raise InputFileError(path, None, f"cannot read file: {exc.strerror}") from None
+
+
+def _data_rows(path: Path) -> list[tuple[int, list[str]]]:
+    """(1-based line number, tokens) of every data row of a text file; at least one."""
+    text = read_text(path)
     rows = []
     for lineno, line in enumerate(text.split("\n"), start=1):
         tokens = line.split("%", 1)[0].split("#", 1)[0].replace(",", " ").split()
