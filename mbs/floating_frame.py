@@ -224,25 +224,24 @@ class FloatingFrameBody(Body):
     def h(self, q, u, t=0.0):
         return self.mass_and_h(q, u, t)[1]
 
-    def _full_velocity(self, q, u, t):
-        _, A, v, w, *_ = self._frame(q, u, t)
-        return A, np.concatenate((v, w, u[self._fu]))
+    def _generalized_momentum(self, q, u, t):
+        """(R, A, ū̇ = (Ṙ, ω̄, q̇_f), M̄ ū̇): the full velocities and their momenta."""
+        R, A, v, w, *_ = self._frame(q, u, t)
+        uf = np.concatenate((v, w, u[self._fu]))
+        return R, A, uf, self._dynamics(A, q[self._f], w, uf[6:])[0] @ uf
 
     def kinetic_energy(self, q, u, t=0.0):
         """T = ½ ū̇ᵀ M̄ ū̇ over the full frame and elastic velocities [J] (thesis eq. 2.43)."""
-        A, uf = self._full_velocity(q, u, t)
-        return 0.5 * uf @ self._dynamics(A, q[self._f], uf[3:6], uf[6:])[0] @ uf
+        _, _, uf, Mu = self._generalized_momentum(q, u, t)
+        return 0.5 * uf @ Mu
 
     def linear_momentum(self, q, u, t=0.0):
         """Σ m_j ṙ_j [kg m/s]: the first three rows of M̄ ū̇."""
-        A, uf = self._full_velocity(q, u, t)
-        return self._dynamics(A, q[self._f], uf[3:6], uf[6:])[0][:3] @ uf
+        return self._generalized_momentum(q, u, t)[3][:3]
 
     def angular_momentum(self, q, u, t=0.0):
         """Σ m_j r_j × ṙ_j about the inertial origin [kg m²/s] = R × p + A (M̄ ū̇)_θ."""
-        A, uf = self._full_velocity(q, u, t)
-        Mu = self._dynamics(A, q[self._f], uf[3:6], uf[6:])[0] @ uf
-        R = self._frame(q, None, t)[0]
+        R, A, _, Mu = self._generalized_momentum(q, u, t)
         return np.cross(R, Mu[:3]) + A @ Mu[3:6]
 
     def qdot(self, q, u):

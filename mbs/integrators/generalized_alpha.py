@@ -89,7 +89,7 @@ class GeneralizedAlpha(Integrator):
             self.iterations += 1
             if not np.all(np.isfinite(a1)):
                 break
-            if np.abs(da).max() <= self.tol * (np.abs(a1).max() + 1e-300) or not np.abs(da).max():
+            if np.abs(da).max() <= self.tol * (np.abs(a1).max() + 1e-300):
                 break
         else:
             raise StepFailure(f"generalized-α Newton did not converge in {self.max_iter} iterations "

@@ -60,7 +60,7 @@ def simulate(data, weights, n_modes, dt, integrator, probe, rho_inf=0.9):
     node_a = beam.node(probe)
     options = {"rho_inf": rho_inf} if integrator == "generalized-alpha" else {}
     res = system.simulate(T_END, dt, integrator=integrator, t_out=np.arange(0.0, T_END + 1e-12, OUT_DT),
-                          breakpoints=[T_SWITCH], energies=False,
+                          breakpoints=[T_SWITCH],
                           outputs={"A": node_a,
                                    "A_elastic": lambda t, q, u: node_a.elastic_displacement(q[beam.q_slice])},
                           **options)
