@@ -1,0 +1,18 @@
+"""The report's fast modal solvers for bodies without contact (report Sec. 2–4).
+
+``PureMA`` (analytic modal response to step loads), ``SimpleRB`` (plus uncoupled
+rigid-body motion) and ``CoupledRB`` (two-way coupled), on a ``ModalBasis`` built from
+the same body data as :class:`~mbs.FlexibleBodyFFR`; loads are ``StepLoads``
+(report eq. 9, Appendix A force files). Mode selection by effective mass and the
+α–Ω decision boundaries live in :mod:`mbs.modal.mode_selection` and
+:mod:`mbs.modal.decision`.
+"""
+
+from .basis import ModalBasis
+from .coupled_rb import CoupledRB
+from .pure_ma import PureMA
+from .result import ModalResult
+from .simple_rb import SimpleRB
+from .step_loads import StepLoads
+
+__all__ = ["CoupledRB", "ModalBasis", "ModalResult", "PureMA", "SimpleRB", "StepLoads"]
