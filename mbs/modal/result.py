@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..rotations import rotvec_from_matrix
+from ._kernels import place_nodes
 from .basis import ModalBasis
 
 
@@ -62,17 +63,21 @@ class ModalResult:
     def positions(self) -> np.ndarray:
         """Output node positions in G, (n_t, k, 3) [m]: ρ_cm + R (b0 + u) (eq. 24); for a
         PureMA result (no rigid-body state) ū0 + u."""
-        u = self.elastic_displacement()
-        if self.R is None:
-            return self.basis.u0[self.nodes][None] + u
-        b = self.basis.b0[self.nodes][None] + u
-        return self.rho[:, None, :] + b @ self.R.transpose(0, 2, 1)
+        return self._placed(np.zeros((self.nodes.size, 3)))
 
     def displacements(self) -> np.ndarray:
         """Output node displacements from the initial mesh positions, (n_t, k, 3) [m] —
         what an FE code such as Akantu reports (the body starts with B at the centre of
         mass, axes parallel to the mesh axes)."""
-        return self.positions() - self.basis.u0[self.nodes][None]
+        return self._placed(self.basis.u0[self.nodes])
+
+    def _placed(self, offset) -> np.ndarray:
+        u = self.elastic_displacement()
+        if self.R is None:
+            return self.basis.u0[self.nodes][None] + u - offset[None]
+        out = np.empty_like(u)
+        place_nodes(self.rho, np.ascontiguousarray(self.R), self.basis.b0[self.nodes], u, offset, out)
+        return out
 
     def rotation_vectors(self) -> np.ndarray:
         """Rotation vectors θ (n_t, 3) [rad] with R = R(θ) (eq. 23), |θ| <= π, robust at
