@@ -27,22 +27,33 @@ by coordinates if it renumbered them) and the same elements; K is symmetric; the
 six rigid-body motions lie in K's null space (this also checks the DOF
 numbering); the three mass columns agree and the masses sum to ρV.
 
-Akantu keeps its parsed input in a process-wide parser; each call re-parses its
-own material file, so calls with different materials do not interfere. Not
-thread-safe.
+The mesh and material hand-over and these node and mass checks live in
+:func:`build_model`, shared with :mod:`validation.peers.akantu_dynamics` (explicit
+dynamics on the same Akantu model).
+
+Akantu keeps its parsed input in a process-wide parser; each model is built right
+after parsing its own material file, so calls with different materials do not
+interfere. Not thread-safe.
+
+Lifetimes (found with akantu 5.0.7): a ``SolidMechanicsModel`` does not keep its
+``Mesh`` alive (using or deleting the model after the mesh is gone crashes the
+process), so :func:`build_model` ties the mesh's lifetime to the model's; the
+arrays ``getDisplacement()``, ``getMass()``, ... are numpy views of the model's
+memory that do not keep the model alive: copy what must outlive it.
 """
 
 from __future__ import annotations
 
 import tempfile
+import weakref
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
-import scipy.sparse as sp
 
 from preprocess.modes import rigid_body_modes
 
-__all__ = ["available", "assemble"]
+__all__ = ["available", "assemble", "check_mesh", "build_model", "AkantuModel"]
 
 _TET_TYPES = {4: ("tetra", "_tetrahedron_4"), 10: ("tetra10", "_tetrahedron_10")}
 
@@ -83,38 +94,69 @@ def _node_map(aka_nodes, points):
     return perm
 
 
-def assemble(points, tets, density, young, poisson):
-    """Akantu's stiffness K (CSR, (3N, 3N)) and lumped node masses (N,) of a tet mesh.
+def check_mesh(points, tets, density, young, poisson):
+    """Validated copies ``(points (N, 3) float, tets (E, 4|10) int64)`` of a mesh and material.
 
-    Parameters
-    ----------
-    points : (N, 3) float array of node coordinates.
-    tets : (E, 4) tet4 or (E, 10) tet10 connectivity, 0-based, VTK/meshio node order
-        (the order of :mod:`preprocess.mesh`), positively oriented.
-    density, young, poisson : ρ, E, ν of a linear elastic isotropic material (any
-        consistent units; SI gives N/m and kg).
-
-    Returns
-    -------
-    (K, masses): ``scipy.sparse.csr_matrix`` (3N, 3N) with DOF ``3*node + direction``
-    in the caller's node numbering, and ``numpy`` array (N,) of lumped masses.
-
-    Raises ImportError when akantu is not installed, ValueError on malformed input,
-    RuntimeError when a consistency check on Akantu's result fails.
+    Raises ValueError on malformed input: wrong shapes, node indices outside
+    ``points``, or a material outside ρ > 0, E > 0, -1 < ν < 0.5.
     """
-    import akantu as aka
-    import meshio
-
     points = np.ascontiguousarray(points, dtype=float)
     tets = np.ascontiguousarray(tets, dtype=np.int64)
     if points.ndim != 2 or points.shape[1] != 3:
         raise ValueError(f"points must have shape (N, 3), not {points.shape}")
+    if not np.all(np.isfinite(points)):
+        raise ValueError("points must be finite")
     if tets.ndim != 2 or tets.shape[1] not in _TET_TYPES or len(tets) == 0:
         raise ValueError(f"tets must have shape (E, 4) or (E, 10) with E > 0, not {tets.shape}")
     if tets.min() < 0 or tets.max() >= len(points):
         raise ValueError("tets refer to nodes outside points")
     if not (density > 0 and young > 0 and -1.0 < poisson < 0.5):
         raise ValueError(f"need ρ > 0, E > 0, -1 < ν < 0.5; got {density}, {young}, {poisson}")
+    return points, tets
+
+
+class AkantuModel(NamedTuple):
+    """An initialized Akantu model of a caller's mesh (see :func:`build_model`)."""
+
+    model: object
+    """``akantu.SolidMechanicsModel``; its node arrays are in Akantu's node order."""
+    perm: np.ndarray
+    """(N,) int: the caller's node ``i`` is Akantu's node ``perm[i]``."""
+    masses: np.ndarray
+    """(N,) lumped node masses [kg for SI input] in the CALLER's node order."""
+
+
+def _keep_alive(mesh):
+    """Weakref-finalizer callback holding ``mesh`` until its model is destroyed."""
+
+
+def build_model(points, tets, density, young, poisson, analysis_method):
+    """An Akantu ``SolidMechanicsModel`` of a tet mesh, initialized for ``analysis_method``.
+
+    The route of the module docstring: gmsh 2.2 mesh and material file into a
+    temporary directory, ``akantu.parseInput``, ``Mesh(3).read``, then
+    ``SolidMechanicsModel(mesh).initFull(_analysis_method=analysis_method)`` and
+    ``assembleMassLumped``. The mesh stays alive as long as the model.
+
+    Parameters
+    ----------
+    points, tets, density, young, poisson : as :func:`assemble` (checked with
+        :func:`check_mesh`).
+    analysis_method : an Akantu analysis method, e.g. ``akantu._static`` or
+        ``akantu._explicit_lumped_mass``.
+
+    Returns
+    -------
+    :class:`AkantuModel` ``(model, perm, masses)``.
+
+    Raises ImportError when akantu is not installed, ValueError on malformed input,
+    RuntimeError when Akantu read other nodes or elements than given, or its lumped
+    masses are not equal per direction or do not sum to ρV.
+    """
+    import akantu as aka
+    import meshio
+
+    points, tets = check_mesh(points, tets, density, young, poisson)
     meshio_type, aka_type_name = _TET_TYPES[tets.shape[1]]
     aka_type = getattr(aka, aka_type_name)
     n = len(points)
@@ -139,32 +181,67 @@ def assemble(points, tets, density, young, poisson):
         mesh = aka.Mesh(3)
         mesh.read(str(msh))
 
-        if mesh.getNbElement(type=aka_type) != len(tets):
-            raise RuntimeError(f"Akantu read {mesh.getNbElement(type=aka_type)} elements, "
-                               f"the mesh has {len(tets)}")
-        perm = _node_map(np.array(mesh.getNodes(), dtype=float), points)
-        inv = np.empty(n, dtype=np.int64)
-        inv[perm] = np.arange(n)
-        conn = inv[np.array(mesh.getConnectivity(aka_type), dtype=np.int64)]
-        ours, theirs = np.sort(tets, axis=1), np.sort(conn, axis=1)
-        if not np.array_equal(ours[np.lexsort(ours.T[::-1])], theirs[np.lexsort(theirs.T[::-1])]):
-            raise RuntimeError("Akantu's elements are not the mesh's elements")
+    if mesh.getNbElement(type=aka_type) != len(tets):
+        raise RuntimeError(f"Akantu read {mesh.getNbElement(type=aka_type)} elements, "
+                           f"the mesh has {len(tets)}")
+    perm = _node_map(np.array(mesh.getNodes(), dtype=float), points)
+    inv = np.empty(n, dtype=np.int64)
+    inv[perm] = np.arange(n)
+    conn = inv[np.array(mesh.getConnectivity(aka_type), dtype=np.int64)]
+    ours, theirs = np.sort(tets, axis=1), np.sort(conn, axis=1)
+    if not np.array_equal(ours[np.lexsort(ours.T[::-1])], theirs[np.lexsort(theirs.T[::-1])]):
+        raise RuntimeError("Akantu's elements are not the mesh's elements")
 
-        model = aka.SolidMechanicsModel(mesh)
-        model.initFull(_analysis_method=aka._static)
-        model.assembleStiffnessMatrix()
-        K_aka = aka.AkantuSparseMatrix(model.getDOFManager().getMatrix("K")).tocsr()
-        model.assembleMassLumped()
-        mass3 = np.array(model.getMass(), dtype=float)
-        del model, mesh
+    model = aka.SolidMechanicsModel(mesh)
+    weakref.finalize(model, _keep_alive, mesh).atexit = False
+    model.initFull(_analysis_method=analysis_method)
+    model.assembleMassLumped()
+    mass3 = np.array(model.getMass(), dtype=float)
+    if mass3.shape != (n, 3):
+        raise RuntimeError(f"Akantu returned masses {mass3.shape} for {n} nodes")
+    if np.abs(mass3 - mass3[:, :1]).max() > 1e-12 * np.abs(mass3).max():
+        raise RuntimeError("Akantu's lumped masses differ between directions")
+    masses = mass3[perm, 0].copy()
+    total = density * _volume(points, tets)
+    if abs(masses.sum() - total) > 1e-10 * total:
+        raise RuntimeError(f"Akantu's masses sum to {masses.sum()}, not ρV = {total}")
+    return AkantuModel(model, perm, masses)
 
-    if K_aka.shape != (3 * n, 3 * n) or mass3.shape != (n, 3):
-        raise RuntimeError(f"Akantu returned K {K_aka.shape} and masses {mass3.shape} for {n} nodes")
+
+def assemble(points, tets, density, young, poisson):
+    """Akantu's stiffness K (CSR, (3N, 3N)) and lumped node masses (N,) of a tet mesh.
+
+    Parameters
+    ----------
+    points : (N, 3) float array of node coordinates.
+    tets : (E, 4) tet4 or (E, 10) tet10 connectivity, 0-based, VTK/meshio node order
+        (the order of :mod:`preprocess.mesh`), positively oriented.
+    density, young, poisson : ρ, E, ν of a linear elastic isotropic material (any
+        consistent units; SI gives N/m and kg).
+
+    Returns
+    -------
+    (K, masses): ``scipy.sparse.csr_matrix`` (3N, 3N) with DOF ``3*node + direction``
+    in the caller's node numbering, and ``numpy`` array (N,) of lumped masses.
+
+    Raises ImportError when akantu is not installed, ValueError on malformed input,
+    RuntimeError when a consistency check on Akantu's result fails.
+    """
+    import akantu as aka
+
+    points, tets = check_mesh(points, tets, density, young, poisson)
+    n = len(points)
+    model, perm, masses = build_model(points, tets, density, young, poisson, aka._static)
+    model.assembleStiffnessMatrix()
+    K_aka = aka.AkantuSparseMatrix(model.getDOFManager().getMatrix("K")).tocsr()
+    del model
+
+    if K_aka.shape != (3 * n, 3 * n):
+        raise RuntimeError(f"Akantu returned K {K_aka.shape} for {n} nodes")
     dof = (3 * perm[:, None] + np.arange(3)).ravel()  # our DOF i is Akantu's DOF dof[i]
     K = K_aka[dof][:, dof].tocsr()
     K.sum_duplicates()
     K.sort_indices()
-    masses = mass3[perm, 0].copy()
 
     kmax = abs(K).max()
     if abs(K - K.T).max() > 1e-12 * kmax:
@@ -173,9 +250,4 @@ def assemble(points, tets, density, young, poisson):
     if np.abs(K @ R).max() > 1e-8 * kmax * np.abs(R).max():
         raise RuntimeError("rigid-body motions are not in the null space of Akantu's K "
                            "(node or DOF numbering mismatch)")
-    if np.abs(mass3 - mass3[:, :1]).max() > 1e-12 * np.abs(mass3).max():
-        raise RuntimeError("Akantu's lumped masses differ between directions")
-    total = density * _volume(points, tets)
-    if abs(masses.sum() - total) > 1e-10 * total:
-        raise RuntimeError(f"Akantu's masses sum to {masses.sum()}, not ρV = {total}")
     return K, masses
