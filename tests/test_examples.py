@@ -27,3 +27,16 @@ def test_flexible_pendulum_conserves_energy_and_keeps_its_pivot():
     radius = np.linalg.norm(result["tip"][:, 1:], axis=1)
     assert np.ptp(radius) < 1e-8
     assert result["tip"][-1, 1] < -0.02      # it fell
+
+
+def test_modal_impact_moves_the_centre_of_mass_by_the_impulse():
+    """F = (100, 0, 10) N for τ = 10 ms on a 40 000 kg beam: the centre of mass moves
+    ½ a τ² + a τ (t − τ) with a = F/m, whatever the rotation (F turns by < 1e-6 rad)."""
+    out = io.StringIO()
+    result, verdict = load_example("modal_impact").main(t_end=0.2, out=out)
+    assert verdict == "SimpleRB"
+    a = np.array([100.0, 0.0, 10.0]) / result.basis.total_mass
+    tau, t = 0.01, result.t[-1]
+    expected = 0.5 * a * tau ** 2 + a * tau * (t - tau)
+    np.testing.assert_allclose(result.rho[-1] - result.rho[0], expected, rtol=0, atol=1e-5 * np.abs(expected).max())
+    assert "surface nodes" in out.getvalue()
