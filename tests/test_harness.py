@@ -182,3 +182,22 @@ def test_registry_imports_listed_modules_lazily(tmp_path, demo, monkeypatch):
     doc, _ = read_outputs(tmp_path)
     assert doc["cases"]["demo"]["status"] == "ok"
     assert doc["cases"]["missing"]["failure"].startswith("ModelError: validation case 'missing'")
+
+
+def test_case_figures_are_written_and_shown(tmp_path):
+    """A case's extra figure goes to <case>_<name>.png and is linked from the report."""
+    def run(quick):
+        result = CaseResult(rows=[make_row("fig", {}, 0.1, 0.5, "rel.", "ref")])
+
+        def draw(path):
+            with open(path, "wb") as f:
+                f.write(b"\x89PNG fake")
+
+        result.figures["boundaries"] = draw
+        return result
+
+    run_validation(tmp_path, cases=[fake_case("fig", run)], progress=None)
+    assert (tmp_path / "fig_boundaries.png").read_bytes() == b"\x89PNG fake"
+    _, report = read_outputs(tmp_path)
+    assert "![fig: boundaries](fig_boundaries.png)" in report
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith("tmp")]

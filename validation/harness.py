@@ -56,12 +56,16 @@ class CaseResult:
         Keys whose values define one marker series of the work-precision plot; a key is
         looked up in the row, then in its ``config``. None: ``DEFAULT_PLOT_GROUPS``,
         i.e. one series per (code, error_kind, reference).
+    figures : dict name -> callable(path)
+        Extra figures (e.g. the report's Fig. 9 plot): each callable writes a PNG to the
+        path it is given; the harness names it ``<case>_<name>.png`` and shows it in the report.
     """
 
     rows: list = field(default_factory=list)
     skipped: list = field(default_factory=list)
     notes: list = field(default_factory=list)
     plot_groups: tuple | list | None = None
+    figures: dict = field(default_factory=dict)
 
 
 def make_row(case, config, cpu_s, error, error_kind, reference, code="ffrmbs", **extra):
@@ -297,8 +301,8 @@ def _cell(value):
     return text.replace("|", "\\|").replace("\n", " ")
 
 
-def _case_report(outcome, png_name):
-    """Markdown lines of one case: heading, description, table, plot, notes, skipped."""
+def _case_report(outcome, png_name, figures=()):
+    """Markdown lines of one case: heading, description, table, plots, notes, skipped."""
     lines = [f"## {outcome.name}", ""]
     if outcome.description:
         lines += [outcome.description, ""]
@@ -323,6 +327,8 @@ def _case_report(outcome, png_name):
     n_out = sum(not _plottable(row) for row in rows)
     if png_name is not None:
         lines += [f"![{outcome.name}: work-precision]({png_name})", ""]
+    for title, file_name in figures:
+        lines += [f"![{outcome.name}: {title}]({file_name})", ""]
     if n_out:
         lines += [f"{n_out} of {len(rows)} rows not plotted: error NaN or zero, or cpu time "
                   "not positive.", ""]
@@ -333,7 +339,7 @@ def _case_report(outcome, png_name):
     return lines
 
 
-def _report(outcomes, pngs, quick, machine, date):
+def _report(outcomes, pngs, figures, quick, machine, date):
     """The whole report.md text."""
     lines = ["# ffrmbs validation report", "",
              f"- date: {date}",
@@ -347,8 +353,25 @@ def _report(outcomes, pngs, quick, machine, date):
         lines.append(f"| {o.name} | {len(o.result.rows) if o.result else 0} | {status} |")
     lines.append("")
     for o in outcomes:
-        lines += _case_report(o, pngs.get(o.name))
+        lines += _case_report(o, pngs.get(o.name), figures.get(o.name, ()))
     return "\n".join(lines)
+
+
+def _write_figures(out_dir, outcome):
+    """Write a case's extra figures atomically; [(title, file name)] of those written."""
+    written = []
+    for title, draw in outcome.result.figures.items():
+        name = re.sub(r"[^A-Za-z0-9_.-]", "_", f"{outcome.name}_{title}") + ".png"
+        fd, tmp = tempfile.mkstemp(dir=out_dir, suffix=".png")
+        os.close(fd)
+        try:
+            draw(tmp)
+            os.replace(tmp, os.path.join(out_dir, name))
+        finally:
+            if os.path.exists(tmp):
+                os.remove(tmp)
+        written.append((title, name))
+    return written
 
 
 def _results_json(outcomes, quick, machine, date):
@@ -406,13 +429,14 @@ def run_validation(out_dir, quick=False, only=None, cases=None, progress=print):
             pngs[o.name] = re.sub(r"[^A-Za-z0-9_.-]", "_", o.name) + ".png"
             _plot(os.path.join(out_dir, pngs[o.name]), o.name, plotted,
                   o.result.plot_groups or DEFAULT_PLOT_GROUPS)
+    figures = {o.name: _write_figures(out_dir, o) for o in outcomes if o.result and o.result.figures}
     machine = _machine()
     date = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
     doc = _results_json(outcomes, quick, machine, date)
     _write_atomic(os.path.join(out_dir, "results.json"),
                   lambda f: f.write(json.dumps(doc, indent=1, allow_nan=False).encode()))
     report_path = os.path.join(out_dir, "report.md")
-    _write_atomic(report_path, lambda f: f.write(_report(outcomes, pngs, quick, machine, date).encode()))
+    _write_atomic(report_path, lambda f: f.write(_report(outcomes, pngs, figures, quick, machine, date).encode()))
     say(f"wrote {report_path}")
     failed = [o.name for o in outcomes if o.failure is not None]
     if failed:

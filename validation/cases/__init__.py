@@ -1,4 +1,4 @@
 """Validation cases; each module defines NAME (= module name), DESCRIPTION and run(quick)."""
 
 CASE_MODULES = ["cantilever", "complex_beam", "ffr_frequencies", "ffr_free_flight", "wobble_effective_mass",
-                "wobble_rotation", "wobble_complex", "wobble_case_study"]
+                "wobble_rotation", "wobble_complex", "wobble_case_study", "wobble_decoupling"]
