@@ -21,6 +21,12 @@ so that Pᵀ f_fict = −Σ_kl A_kl (Sb[k, l] + S[k, l] r) − 2 Σ_kl Ω̃_kl S
 A = α̃ + Ω̃Ω̃, and Σ_i m_i b_i b_iᵀ = B0 + Sb·r + (Sb·r)ᵀ + rᵀ S r gives Î(r): O(n²) per
 step whatever the node count (the tests check both against the node-by-node sums).
 The step is explicit and first order, like the report's.
+
+What the algorithm leaves out: step 5 uses Euler's rigid-body equation with the current
+Î(r), without the rates d(Î)/dt Ω and d/dt Σ m b × ḃ of a deforming body. The total
+energy then varies by a bounded amount that does not shrink with h — for a free spin,
+twice the largest elastic potential energy (``wobble_energy``). The full FFR equations
+(:class:`~mbs.FlexibleBodyFFR`) keep these terms; ``wobble_rotation`` compares the two.
 """
 
 from __future__ import annotations

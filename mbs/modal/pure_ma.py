@@ -135,6 +135,6 @@ class PureMA:
         response = self.response()
         r, v = response(t_out)
         cpu = time.process_time() - start
-        out = self.basis.output_nodes(nodes or ("surface" if self.boundary else "all"))
+        out = self.basis.output_nodes(("surface" if self.boundary else "all") if nodes is None else nodes)
         return ModalResult(t=t_out, r=r, rdot=v, basis=self.basis, nodes=out,
                            stats={"cpu_s": cpu, "load_steps": response.starts.size})

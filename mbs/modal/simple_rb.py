@@ -153,7 +153,7 @@ class SimpleRB:
         r, rdot = response(t_out)
         at = np.searchsorted(grid, t_out)
         cpu = time.process_time() - start
-        out = self.basis.output_nodes(nodes or ("surface" if self.boundary else "all"))
+        out = self.basis.output_nodes(("surface" if self.boundary else "all") if nodes is None else nodes)
         inertia = np.broadcast_to(self.basis.inertia, (t_out.size, 3, 3))
         return ModalResult(t=t_out, r=r, rdot=rdot, basis=self.basis, nodes=out, rho=rho[at], v=v[at],
                            R=R[at], Omega=Om[at], inertia=inertia,

@@ -1,4 +1,6 @@
 """Validation cases; each module defines NAME (= module name), DESCRIPTION and run(quick)."""
 
-CASE_MODULES = ["cantilever", "complex_beam", "ffr_frequencies", "ffr_free_flight", "wobble_effective_mass",
-                "wobble_rotation", "wobble_complex", "wobble_case_study", "wobble_decoupling"]
+CASE_MODULES = ["cantilever", "complex_beam", "ffr_frequencies", "ffr_free_flight", "wobble_step", "wobble_energy",
+                "wobble_shear", "wobble_effective_mass",
+                "wobble_rotation", "wobble_complex", "wobble_case_study", "wobble_decoupling",
+                "wobble_boundary"]
