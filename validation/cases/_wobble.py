@@ -86,6 +86,18 @@ def nodal_history(loads: StepLoads, n_nodes) -> tuple[np.ndarray, np.ndarray]:
     return loads.times, forces
 
 
+def akantu_run(mesh, data, loads: StepLoads, t_out, follower):
+    """Akantu's explicit FE run of the scene (see :mod:`validation.peers.akantu_dynamics`),
+    loads as nodal step tables, outputs at ``t_out``; the peer's result dict."""
+    from validation.peers import akantu_dynamics
+
+    times, forces = nodal_history(loads, data.n_nodes)
+    mat = data.material
+    return akantu_dynamics.explicit_dynamics(
+        mesh.points, mesh.tets, mat["density"], mat["young"], mat["poisson"], load_times=times,
+        load_forces=forces, t_end=t_out[-1], output_times=t_out, follower=follower)
+
+
 def rms_error(u, u_ref) -> tuple[np.ndarray, float]:
     """RMS error over the nodes as a fraction of the reference's RMS displacement (report
     Fig. 17, 19): per output time (n_t,) and over the whole history (one number)."""

@@ -34,11 +34,7 @@ def run(quick: bool) -> CaseResult:
     t_out = np.arange(0.0, t_end + 1e-12, OUT_DT)
     mesh, data = wb.beam(n_modes=30)
     loads = wb.complex_loads(mesh)
-    times, forces = wb.nodal_history(loads, data.n_nodes)
-    mat = data.material
-    aka = akantu_dynamics.explicit_dynamics(mesh.points, mesh.tets, mat["density"], mat["young"], mat["poisson"],
-                                            load_times=times, load_forces=forces, t_end=t_end,
-                                            output_times=t_out, follower=True)
+    aka = wb.akantu_run(mesh, data, loads, t_out, follower=True)
     u_ref = aka["displacement"]
     late = t_out >= 0.1
     lines = ["| solver | scheme | modes | dt [s] | CPU s | RMS error (all t) | max RMS error (t >= 0.1 s) |",

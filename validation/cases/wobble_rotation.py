@@ -53,16 +53,6 @@ def _ffr(data, n_modes, loads, t_out, dt, omega=None):
     return res["x"] - data.u0[None], res["e"], res.stats["cpu_s"]
 
 
-def _akantu(mesh, data, loads, t_out):
-    from validation.peers import akantu_dynamics
-
-    times, forces = wb.nodal_history(loads, data.n_nodes)
-    mat = data.material
-    return akantu_dynamics.explicit_dynamics(
-        mesh.points, mesh.tets, mat["density"], mat["young"], mat["poisson"], load_times=times,
-        load_forces=forces, t_end=t_out[-1], output_times=t_out, follower=True)
-
-
 def _couple(result, quick, mesh, data):
     t_end = 0.2 if quick else 1.0
     t_out = np.linspace(0.0, t_end, 101)
@@ -86,7 +76,7 @@ def _couple(result, quick, mesh, data):
     from validation.peers import akantu_dynamics
 
     if akantu_dynamics.available():
-        aka = _akantu(mesh, data, loads, t_out)
+        aka = wb.akantu_run(mesh, data, loads, t_out, follower=True)
     else:
         result.skipped.append("akantu: skipped: akantu not installed (pip install '.[peers]')")
     lines = ["| formulation | scheme | dt [s] | CPU s | θ_x error vs analytic | RMS error vs Akantu |",
