@@ -4,6 +4,8 @@
 and writes ``results.json``, ``report.md`` and one work-precision PNG per case.
 """
 
-from validation.harness import CASES, CaseResult, available_cases, make_row, run_validation, timed
+from validation.harness import (CASES, CaseResult, CpuTiming, available_cases, cpu_per_call, cpu_samples, make_row,
+                                run_validation, timed)
 
-__all__ = ["CASES", "CaseResult", "available_cases", "make_row", "run_validation", "timed"]
+__all__ = ["CASES", "CaseResult", "CpuTiming", "available_cases", "cpu_per_call", "cpu_samples", "make_row",
+           "run_validation", "timed"]

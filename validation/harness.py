@@ -29,6 +29,7 @@ import time
 import traceback
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -92,6 +93,59 @@ def timed(fn, *args, **kw):
     start = time.process_time()
     result = fn(*args, **kw)
     return result, time.process_time() - start
+
+
+class CpuTiming(NamedTuple):
+    """CPU time per call of a function: ``samples`` (repeats,) [s], each the mean over a
+    batch of ``loops`` calls; ``result`` the last call's return value."""
+
+    result: object
+    samples: np.ndarray
+    loops: int
+
+    @property
+    def median(self) -> float:
+        """Median of the samples [s]."""
+        return float(np.median(self.samples))
+
+    @property
+    def std(self) -> float:
+        """Sample standard deviation [s] (NaN for one sample)."""
+        return float(np.std(self.samples, ddof=1)) if self.samples.size > 1 else float("nan")
+
+    @property
+    def robust_std(self) -> float:
+        """1.4826 × the median absolute deviation [s]: the standard deviation of normal
+        scatter, insensitive to a batch slowed by the machine's other load."""
+        return float(1.4826 * np.median(np.abs(self.samples - self.median)))
+
+
+def cpu_samples(fns, repeats=5, min_batch_s=0.02):
+    """A :class:`CpuTiming` of each function of ``fns``.
+
+    Like ``timeit``: after one untimed warm-up call (compiled kernels load on first use),
+    each of ``repeats`` samples times a batch of ``loops`` calls (enough for
+    ``min_batch_s`` CPU seconds, from one calibration call) and divides by ``loops``.
+    The batches of the functions alternate, so a slow drift of the machine's load
+    affects them alike.
+    """
+    for fn in fns:
+        fn()
+    calibrations = [timed(fn) for fn in fns]
+    results = [result for result, _ in calibrations]
+    loops = [max(1, int(np.ceil(min_batch_s / max(cpu, 1e-6)))) for _, cpu in calibrations]
+    samples = [[] for _ in fns]
+    for _ in range(repeats):
+        for j, fn in enumerate(fns):
+            batch, cpu = timed(lambda: [fn() for _ in range(loops[j])])
+            results[j] = batch[-1]
+            samples[j].append(cpu / loops[j])
+    return [CpuTiming(results[j], np.array(samples[j]), loops[j]) for j in range(len(fns))]
+
+
+def cpu_per_call(fn, repeats=5, min_batch_s=0.02) -> CpuTiming:
+    """The :class:`CpuTiming` of ``fn()`` (see :func:`cpu_samples`)."""
+    return cpu_samples([fn], repeats, min_batch_s)[0]
 
 
 def _check_case_module(name, module):

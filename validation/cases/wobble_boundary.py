@@ -42,10 +42,9 @@ from threadpoolctl import threadpool_limits
 from mbs.modal import ModalBasis, SimpleRB
 from preprocess import build_body
 from preprocess.geometry import mesh_geo_file
-from validation import CaseResult, make_row
+from validation import CaseResult, CpuTiming, cpu_samples, make_row
 from validation.cases import _wobble
 from validation.cases.cantilever import MATERIAL
-from validation.cases.wobble_step import CpuTiming, cpu_samples
 
 NAME = "wobble_boundary"
 DESCRIPTION = ("case-study load with SimpleRB on three meshes, with and without the boundary "
@@ -114,7 +113,7 @@ def run(quick: bool) -> CaseResult:
             default = cpu_samples(runs, repeats, batch)
         ref = timings[1].result[:, surface]
         diff = np.abs(timings[0].result - ref).max() / np.abs(ref).max()
-        elastic = [SimpleRB(basis, [loads], dt=RIGID_DT, boundary=b).solve(t_out, nodes=surface.tolist())
+        elastic = [SimpleRB(basis, [loads], dt=RIGID_DT, boundary=b).solve(t_out, nodes=surface)
                    .elastic_displacement() for b in (True, False)]
         diff_elastic = np.abs(elastic[0] - elastic[1]).max() / np.abs(elastic[1]).max()
         for boundary, timing in zip((True, False), timings):

@@ -12,21 +12,23 @@ turns by less than 1e-6 rad while they act — the note gives the figure).
 
 Our time is end to end and warm (numba kernels compiled beforehand): building the
 solver, the solve, and the displacements of every node at every output time —
-what the error is computed from; the median of 5 runs, BLAS on one thread. The modes are preprocessing
-(offline, report Sec. 2.1) and not counted, as in the report. Error: RMS over all nodes
+what the error is computed from; the median of 5 batches (``cpu_per_call``), BLAS on
+one thread. The modes are preprocessing (offline, report Sec. 2.1) and not counted,
+as in the report. Error: RMS over all nodes
 and output times as a fraction of Akantu's RMS displacement, and its largest value
 at one output time after 0.1 s (quick: 0.02 s).
 """
 
 from __future__ import annotations
 
-import time
+from dataclasses import replace
 
 import numpy as np
 from threadpoolctl import threadpool_limits
 
 from mbs.modal import CoupledRB, ModalBasis, SimpleRB
-from validation import CaseResult, make_row
+from preprocess.modes import free_modes
+from validation import CaseResult, cpu_per_call, make_row
 from validation.cases import _wobble as wb
 
 NAME = "wobble_case_study"
@@ -37,36 +39,25 @@ REPEATS = 5
 
 
 def _end_to_end(make_solver, t_out):
-    """(displacements, median CPU s over REPEATS runs, rotation angle at the impact's end);
-    BLAS on one thread, like Akantu's loop (CPU time counts every thread)."""
+    """(displacements, median CPU s per run, rotation angle at the impact's end), timed by
+    :func:`validation.cpu_per_call` with BLAS on one thread, like Akantu's loop (CPU time
+    counts every thread)."""
+    def solve_and_place():
+        res = make_solver().solve(t_out)
+        return res.displacements(), res
+
     with threadpool_limits(limits=1, user_api="blas"):
-        _one(make_solver, t_out)                      # untimed: first-touch of the arrays
-        runs = [_one(make_solver, t_out) for _ in range(REPEATS)]
-    cpus = [cpu for _, cpu, _ in runs]
-    u, _, res = runs[-1]
-    theta = np.linalg.norm(res.rotation_vectors()[np.searchsorted(t_out, wb.IMPACT)])
-    return u, float(np.median(cpus)), theta
-
-
-def _one(make_solver, t_out):
-    """One timed end-to-end run: (displacements, CPU s, result)."""
-    start = time.process_time()
-    res = make_solver().solve(t_out)
-    u = res.displacements()
-    return u, time.process_time() - start, res
+        timing = cpu_per_call(solve_and_place, repeats=REPEATS)
+    u, res = timing.result
+    return u, timing.median, np.linalg.norm(res.rotation_vectors()[np.searchsorted(t_out, wb.IMPACT)])
 
 
 def _with_masses(data, masses, n_modes):
     """The body with another code's lumped masses (same K) and its own free modes: separates
     the solver's error from the two codes' different tet10 lumping (Akantu: corners 1/8 of
     the element mass; ours 1/9)."""
-    from preprocess import BodyData
-    from preprocess.modes import free_modes
-
     w2, phi = free_modes(data.stiffness, masses, data.u0, n_modes)
-    return BodyData(u0=data.u0, phi=phi, masses=masses, stiffness=data.stiffness, eigenvalues=w2,
-                    node_groups=data.node_groups, surface_triangles=data.surface_triangles,
-                    material=data.material, params=dict(data.params))
+    return replace(data, masses=masses, phi=phi, eigenvalues=w2)
 
 
 def run(quick: bool) -> CaseResult:
@@ -83,7 +74,6 @@ def run(quick: bool) -> CaseResult:
     loads = wb.case_study_loads(mesh)
     aka = wb.akantu_run(mesh, data, loads, t_out, follower=False)
     u_ref = aka["displacement"]
-    time.sleep(1.0)   # let the peer's worker threads go idle: process CPU time counts every thread
     late = t_out >= (0.02 if quick else 0.1)
     configs = [("SimpleRB", s, n, dt) for n in (10, 30) for s in ("rkmk4", "report") for dt in (1e-2, 8.7e-4)]
     configs += [("CoupledRB", "report", 10, 1e-4), ("SimpleRB, Akantu's masses", "rkmk4", 10, 1e-2)]

@@ -14,11 +14,12 @@ output times of the elastic displacement, relative to the all-modes RMS.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from mbs.modal import ModalBasis, PureMA
 from mbs.modal.mode_selection import auto_select_modes, effective_mass_table, effective_masses
-from preprocess import BodyData
 from preprocess.modes import all_modes
 from validation import CaseResult, make_row
 from validation.cases import _wobble as wb
@@ -26,12 +27,6 @@ from validation.cases import _wobble as wb
 NAME = "wobble_effective_mass"
 DESCRIPTION = ("effective masses (report eq. 36, Table 2) of the shear test and complex forcing, and the "
                "displacement error of the 90 % selection vs all modes")
-
-
-def _with_modes(data, w2, phi) -> BodyData:
-    return BodyData(u0=data.u0, phi=phi, masses=data.masses, stiffness=data.stiffness, eigenvalues=w2,
-                    node_groups=data.node_groups, surface_triangles=data.surface_triangles,
-                    material=data.material, params=dict(data.params))
 
 
 def _response(data, modes, loads, t_out):
@@ -42,7 +37,7 @@ def _response(data, modes, loads, t_out):
 def _scene(result, name, data, loads, clamp_nodes, t_out):
     times, forces = wb.nodal_history(loads, data.n_nodes)
     w2_all, phi_all = all_modes(data.stiffness, data.masses, clamp_nodes, data.u0)
-    full = _with_modes(data, w2_all, phi_all)
+    full = replace(data, phi=phi_all, eigenvalues=w2_all)
     u_all, cpu_all = _response(full, None, loads, t_out)
     scale = np.sqrt(np.mean(np.sum(u_all ** 2, axis=2)))
     omega2 = data.modal_eigenvalues()

@@ -35,9 +35,8 @@ from __future__ import annotations
 import numpy as np
 
 from mbs.modal import CoupledRB, ModalBasis, PureMA, SimpleRB, StepLoads
-from validation import CaseResult, make_row
+from validation import CaseResult, cpu_per_call, make_row
 from validation.cases import _wobble
-from validation.cases.wobble_step import cpu_per_call
 
 NAME = "wobble_energy"
 DESCRIPTION = ("energy conservation: one mode under step loads (report Fig. 10); free beam "

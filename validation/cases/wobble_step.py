@@ -28,13 +28,11 @@ exact in floating point and the error is the solver's own, not the reference's
 
 from __future__ import annotations
 
-from typing import NamedTuple
-
 import numpy as np
 
 from mbs.modal import StepLoads
 from mbs.modal.oscillator import StepResponse
-from validation import CaseResult, make_row, timed
+from validation import CaseResult, cpu_per_call, make_row
 
 NAME = "wobble_step"
 DESCRIPTION = ("one mode (ω = 1096 rad/s) under cos(ω_F t) by step functions vs eq. 37, "
@@ -46,59 +44,6 @@ WINDOW = 0.1                                           # error window [s]
 N_OUT = 2001                                           # output times in the window
 PULSE_END = 2.0 ** -7                                  # [s]
 DURATIONS = (1.0, 1e3, 1e6)                            # start of the evaluation window [s]
-
-
-class CpuTiming(NamedTuple):
-    """CPU time per call of a function: ``samples`` (repeats,) [s], each the mean over a
-    batch of ``loops`` calls; ``result`` the last call's return value."""
-
-    result: object
-    samples: np.ndarray
-    loops: int
-
-    @property
-    def median(self) -> float:
-        """Median of the samples [s]."""
-        return float(np.median(self.samples))
-
-    @property
-    def std(self) -> float:
-        """Sample standard deviation [s] (NaN for one sample)."""
-        return float(np.std(self.samples, ddof=1)) if self.samples.size > 1 else float("nan")
-
-    @property
-    def robust_std(self) -> float:
-        """1.4826 × the median absolute deviation [s]: the standard deviation of normal
-        scatter, insensitive to a batch slowed by the machine's other load."""
-        return float(1.4826 * np.median(np.abs(self.samples - self.median)))
-
-
-def cpu_samples(fns, repeats=5, min_batch_s=0.02):
-    """A :class:`CpuTiming` of each function of ``fns``.
-
-    Like ``timeit``: after one untimed warm-up call (compiled kernels load on first use),
-    each of ``repeats`` samples times a batch of ``loops`` calls (enough for
-    ``min_batch_s`` CPU seconds, from one calibration call) and divides by ``loops``.
-    The batches of the functions alternate, so a slow drift of the machine's load
-    affects them alike.
-    """
-    for fn in fns:
-        fn()
-    calibrations = [timed(fn) for fn in fns]
-    results = [result for result, _ in calibrations]
-    loops = [max(1, int(np.ceil(min_batch_s / max(cpu, 1e-6)))) for _, cpu in calibrations]
-    samples = [[] for _ in fns]
-    for _ in range(repeats):
-        for j, fn in enumerate(fns):
-            batch, cpu = timed(lambda: [fn() for _ in range(loops[j])])
-            results[j] = batch[-1]
-            samples[j].append(cpu / loops[j])
-    return [CpuTiming(results[j], np.array(samples[j]), loops[j]) for j in range(len(fns))]
-
-
-def cpu_per_call(fn, repeats=5, min_batch_s=0.02) -> CpuTiming:
-    """The :class:`CpuTiming` of ``fn()`` (see :func:`cpu_samples`)."""
-    return cpu_samples([fn], repeats, min_batch_s)[0]
 
 
 def exact(t, omega_f, omega=OMEGA):
