@@ -99,8 +99,12 @@ def _matmul3(A, B, out):
 
 
 @njit(cache=True)
-def _step_report(h, rho, v, R, Om, F_B, T_B, F_G, B_G, mass, I, Iinv, ws):
-    acc, alpha, T, dth, E, R2 = ws[0], ws[1], ws[2], ws[3], ws[4], ws[5]
+def report_step(h, rho, v, R, Om, F_B, T_B, F_G, B_G, mass, I, Iinv, alpha, ws):
+    """One step of the report's explicit scheme (eq. 26–28, corrected; module docstring):
+    ρ, v, R, Ω updated in place, the α of the step (eq. 20) written to ``alpha`` (3,);
+    ``ws`` scratch as allocated in :func:`rigid_motion`. CoupledRB calls it with the
+    deformed body's Î(r) and torque."""
+    acc, T, dth, E, R2 = ws[0], ws[2], ws[3], ws[4], ws[5]
     _accelerations(R, Om, F_B, T_B, F_G, B_G, mass, I, Iinv, acc, alpha, T)
     for i in range(3):
         rho[i] += h * v[i] + 0.5 * h * h * acc[i]
@@ -158,6 +162,12 @@ def _step_rkmk4(h, rho, v, R, Om, F_B, T_B, F_G, B_G, mass, I, Iinv, ws, ys):
 
 
 @njit(cache=True)
+def workspace():
+    """Scratch arrays of the steps: (acc, α, T, θ (3,) each, E, R (3, 3) each)."""
+    return (np.empty(3), np.empty(3), np.empty(3), np.empty(3), np.empty((3, 3)), np.empty((3, 3)))
+
+
+@njit(cache=True)
 def rigid_motion(grid, F_B, T_B, F_G, B_G, mass, I, Iinv, rho0, v0, R0, Om0, scheme,
                  rho, v, R, Om):
     """Integrate over ``grid`` (n_g,) [s]; loads per interval (n_g − 1, 3) / (n_g − 1, 3, 3);
@@ -172,12 +182,12 @@ def rigid_motion(grid, F_B, T_B, F_G, B_G, mass, I, Iinv, rho0, v0, R0, Om0, sch
     v_ = v0.copy()
     R_ = R0.copy()
     O_ = Om0.copy()
-    ws = (np.empty(3), np.empty(3), np.empty(3), np.empty(3), np.empty((3, 3)), np.empty((3, 3)))
+    ws = workspace()
     ys = (np.empty(12), np.empty(12), np.empty(12), np.empty(12), np.empty(12), np.empty(12))
     for k in range(grid.shape[0] - 1):
         h = grid[k + 1] - grid[k]
         if scheme == 0:
-            _step_report(h, r_, v_, R_, O_, F_B[k], T_B[k], F_G[k], B_G[k], mass, I, Iinv, ws)
+            report_step(h, r_, v_, R_, O_, F_B[k], T_B[k], F_G[k], B_G[k], mass, I, Iinv, ws[1], ws)
         else:
             _step_rkmk4(h, r_, v_, R_, O_, F_B[k], T_B[k], F_G[k], B_G[k], mass, I, Iinv, ws, ys)
         rho[k + 1] = r_

@@ -19,6 +19,7 @@ move an unconstrained body by linear (small-rotation) theory.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -28,7 +29,8 @@ from preprocess.modes import rigid_body_modes
 
 @dataclass(frozen=True)
 class ModalBasis:
-    """Modes, masses and geometry of one body (see module docstring)."""
+    """Modes, masses and geometry of one body (see module docstring); the derived
+    geometry (centre of mass, b0, inertia) is computed on first use and kept."""
 
     u0: np.ndarray
     masses: np.ndarray
@@ -79,17 +81,17 @@ class ModalBasis:
         """m_tot [kg]."""
         return float(self.masses.sum())
 
-    @property
+    @cached_property
     def center_of_mass(self) -> np.ndarray:
         """Centre of mass of the undeformed body in mesh coordinates, (3,) [m]."""
         return self.masses @ self.u0 / self.masses.sum()
 
-    @property
+    @cached_property
     def b0(self) -> np.ndarray:
         """Node positions in B: relative to the centre of mass, (N, 3) [m]."""
         return self.u0 - self.center_of_mass
 
-    @property
+    @cached_property
     def inertia(self) -> np.ndarray:
         """Inertia tensor about the centre of mass from the lumped masses (eq. 25), (3, 3)."""
         b = self.b0

@@ -3,10 +3,9 @@
 One step of length h, after the report's algorithm (Sec. 3.4.4):
 
 1. state f_ext, R, Ω, r, ṙ (b = b0 + P r, ḃ = P ṙ), ρ_cm, ρ̇_cm, Î(r);
-2.–3. F_G = R Σ f + F_G,inertial + m g; ρ and ρ̇ by eq. 16 / 26–27;
-4. torque with the deformed lever arms T = Σ (b0_i + P_i r) × f_i (eq. 19);
-5. α = Î(r)⁻¹ (T − Ω × Î(r) Ω) (eq. 20, corrected);
-6. Ω and R by eq. 26–28 (R_{n+1} = R_n R(Δθ), Δθ in B axes);
+2.–6. the report's explicit rigid-body step (:func:`mbs.modal._kernels.report_step`,
+   eq. 16, 20, 26–28) with the deformed body's Î(r) and the torque of the deformed
+   lever arms T = Σ (b0_i + P_i r) × f_i (eq. 19);
 7. the fictitious forces of eq. 22 with the updated Ω, projected into modal space;
 8. the modes advanced exactly over h under 𝓕_ext + 𝓕_fict held constant (eq. 10–12);
 9. Î updated with the new r.
@@ -38,7 +37,7 @@ import numpy as np
 from ffrmbs.errors import ModelError, SimulationError
 
 from ..rotations import skew
-from ._kernels import so3_exp
+from ._kernels import report_step, workspace
 from .basis import ModalBasis
 from .oscillator import transition
 from .pure_ma import decay_rates, initial_modal_state, loads_on_rows, segment_starts
@@ -143,7 +142,7 @@ class CoupledRB:
         rho, v, R, Om = self.rho0.copy(), self.v0.copy(), self.R0.copy(), self.Om0.copy()
         r, rd = self.r0.copy(), self.rdot0.copy()
         I = ci.inertia(r)
-        E = np.empty((3, 3))
+        alpha, ws = np.empty(3), workspace()
         steps = {}
         out_at = np.searchsorted(grid, t_out)
         j = 0
@@ -156,16 +155,9 @@ class CoupledRB:
             if k == grid.size - 1:
                 break
             h = grid[k + 1] - grid[k]
-            a = (R @ lo.F_B[k] + lo.F_G[k]) / m                            # steps 2-3
-            rho += h * v + 0.5 * h * h * a
-            v += h * a
-            T = lo.T_B[k] + D[k] @ r                                         # step 4
-            T_G = lo.B_G[k] @ R
-            T += np.array([T_G[1, 2] - T_G[2, 1], T_G[2, 0] - T_G[0, 2], T_G[0, 1] - T_G[1, 0]])
-            alpha = np.linalg.solve(I, T - np.cross(Om, I @ Om))            # step 5
-            so3_exp(h * Om + 0.5 * h * h * alpha, E)                         # step 6
-            R = R @ E
-            Om = Om + h * alpha
+            Iinv = np.linalg.inv(I)                                          # steps 2-6
+            report_step(h, rho, v, R, Om, lo.F_B[k], lo.T_B[k] + D[k] @ r, lo.F_G[k], lo.B_G[k], m, I, Iinv,
+                        alpha, ws)
             F = F_ext[k] + ci.fictitious(alpha, Om, r, rd)                   # step 7
             if h not in steps:
                 steps[h] = transition(b.omega2, self.sigma, h)
