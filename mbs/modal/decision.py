@@ -200,9 +200,12 @@ class DecisionBoundaries:
         return self.k_dyn * (self.d_alpha * _magnitude(alpha) + self.d_omega * _magnitude(omega) ** 2)
 
     def recommend(self, alpha, omega) -> str:
-        """"SimpleRB" (estimate below d_negligible), "outside linear elasticity"
-        (above d_linear) or "CoupledRB" (between)."""
-        d = self.displacement(alpha, omega)
+        """The :meth:`region` of the estimated displacement for α [rad/s²] and Ω [rad/s]."""
+        return self.region(self.displacement(alpha, omega))
+
+    def region(self, d) -> str:
+        """"SimpleRB" (d below d_negligible), "outside linear elasticity" (above d_linear)
+        or "CoupledRB" (between) for a displacement d [m] (the regions of report Fig. 9)."""
         return SIMPLE if d < self.d_negligible else OUTSIDE if d > self.d_linear else COUPLED
 
     def sum_limit(self, d_lim) -> float:

@@ -45,7 +45,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mbs.modal import CoupledRB, ModalBasis, SimpleRB
-from mbs.modal.decision import COUPLED, OUTSIDE, SIMPLE, DecisionBoundaries, decision_boundaries
+from mbs.modal.decision import SIMPLE, DecisionBoundaries, decision_boundaries
 from validation import CaseResult, make_row
 from validation.cases import _wobble as wb
 
@@ -132,11 +132,6 @@ def step_peak_bound(basis, bounds, direction) -> float:
     return float(peak / (bounds.k_dyn * bounds.d_omega))
 
 
-def _measured_class(bounds, d) -> str:
-    """The region of Fig. 9 a displacement d [m] falls in (the report's circle colours)."""
-    return SIMPLE if d < bounds.d_negligible else OUTSIDE if d > bounds.d_linear else COUPLED
-
-
 def run(quick: bool) -> CaseResult:
     """Spins (quick: 0.1, 1, 30 rad/s about x and z, 0.05 s) and couples (quick: 100 N, 100 kN)."""
     mesh, data = wb.beam(n_modes=10)
@@ -162,7 +157,7 @@ def run(quick: bool) -> CaseResult:
         half = compare(basis, bounds, t_end=t_end, dt=DT / 2, **kw)
         change = abs(half.measured / cmp.measured - 1.0)
         changes.append(change)
-        region = _measured_class(bounds, cmp.measured)
+        region = bounds.region(cmp.measured)
         unsafe += cmp.recommendation == SIMPLE and region != SIMPLE
         ratios.setdefault((scene, axis), []).append(cmp.ratio)
         config = {"scene": scene, "axis": axis, ("omega0" if scene == "spin" else "force"): value,
