@@ -112,26 +112,63 @@ def _add_face_groups(gmsh, lo, hi):
     gmsh.model.setPhysicalName(3, gmsh.model.addPhysicalGroup(3, volumes), "body")
 
 
-def _mesh_occ(name, build, mesh_size, order) -> Mesh:
+def _set_transfinite_box(gmsh, divisions):
+    """Transfinite curves / surfaces / volume of a box: ``divisions[a]`` element edges along axis a."""
+    for dim, tag in gmsh.model.getEntities(1):
+        bb = np.array(gmsh.model.getBoundingBox(dim, tag))
+        axis = int(np.argmax(bb[3:] - bb[:3]))
+        gmsh.model.mesh.setTransfiniteCurve(tag, divisions[axis] + 1)
+    for dim, tag in gmsh.model.getEntities(2):
+        gmsh.model.mesh.setTransfiniteSurface(tag)
+    for dim, tag in gmsh.model.getEntities(3):
+        gmsh.model.mesh.setTransfiniteVolume(tag)
+
+
+def _mesh_occ(name, build, mesh_size, order, divisions=None) -> Mesh:
     with gmsh_session() as gmsh:
         gmsh.model.add(name)
         build(gmsh.model.occ)
         gmsh.model.occ.synchronize()
         bb = np.array(gmsh.model.getBoundingBox(-1, -1))
         _add_face_groups(gmsh, bb[:3], bb[3:])
+        if divisions is not None:
+            _set_transfinite_box(gmsh, divisions)
         _generate(gmsh, order, mesh_size)
         return mesh_from_gmsh_model(gmsh, f"<builtin {name}>")
 
 
-def box(lx, ly, lz, mesh_size, order=2) -> Mesh:
+def box(lx, ly, lz, mesh_size, order=2, divisions=None) -> Mesh:
     """Cuboid [0, lx] x [0, ly] x [0, lz] meshed with tetrahedra of maximum size ``mesh_size``.
 
     The report's beam is ``box(1, 1, 5, 0.5)`` (report Table 1: 579 nodes, 426 surface
     nodes, 254 tet10 with gmsh).
+
+    ``divisions=(nx, ny, nz)`` (positive ints, element edges per axis) meshes the box
+    structured instead (gmsh transfinite curves, surfaces and volume, still tetrahedra;
+    ``mesh_size`` is then ignored and may be None). The vertices then lie on the grid
+    ``x_i = i lx / nx`` (i = 0..nx), likewise in y and z, so every face's nodes form a
+    regular grid: (n_a + 1) x (n_b + 1) levels for order 1, (2 n_a + 1) x (2 n_b + 1)
+    with the straight mid-edge nodes of order 2 — the node matrix O of thesis eq. 3.24
+    (see :func:`contours.node_grid.node_matrix`).
     """
     if min(lx, ly, lz) <= 0:
         raise ModelError(f"box dimensions must be positive, got {lx}, {ly}, {lz}")
-    return _mesh_occ("box", lambda occ: occ.addBox(0, 0, 0, lx, ly, lz), mesh_size, order)
+    if divisions is not None:
+        divisions = _check_divisions(divisions)
+    return _mesh_occ("box", lambda occ: occ.addBox(0, 0, 0, lx, ly, lz), mesh_size, order, divisions)
+
+
+def _check_divisions(divisions):
+    try:
+        items = list(divisions)
+    except TypeError:
+        items = None
+    ok = items is not None and len(items) == 3 and all(
+        isinstance(n, (int, np.integer)) and not isinstance(n, bool) and n >= 1 for n in items)
+    if not ok:
+        raise ModelError(f"divisions must be three integers >= 1 (element edges along x, y, z), "
+                         f"not {divisions!r}")
+    return tuple(int(n) for n in items)
 
 
 def stepped_beam(mesh_size, order=2, l=95.0, h1=10.0, h2=34.2, w1=20.0, w2=9.74, base=10.0) -> Mesh:
