@@ -133,6 +133,14 @@ class FloatingFrameBody(Body):
         A, w, wd = self.motion.rotation(t)
         return R, A, v, w, None, None, a, wd
 
+    def frame_state(self, q, u=None, t=0.0):
+        """(R [m], A (3, 3), v [m/s], ω̄ [rad/s], T) of the body frame at (q, u, t): origin,
+        orientation, origin velocity, body-frame angular velocity and the map ω̄ = T u_r
+        (None on a prescribed frame); v and ω̄ are None when u is None. The narrow
+        protocol through which contours read frame kinematics."""
+        R, A, v, w, T, *_ = self._frame(q, u, t)
+        return R, A, v, w, T
+
     def orientation(self, q, t=0.0):
         """Body-frame orientation A (3, 3)."""
         return self._frame(q, None, t)[1]
@@ -143,7 +151,12 @@ class FloatingFrameBody(Body):
         return A @ w
 
     def elastic_coordinates(self, q):
+        """q_f (n_f,) of the body's own q (empty for rigid bodies)."""
         return q[self._f]
+
+    def elastic_velocities(self, u):
+        """q̇_f (n_f,) of the body's own u (empty for rigid bodies)."""
+        return u[self._fu]
 
     def _u_bar(self, q, frame: Frame):
         return frame.u0 + frame.phi @ q[self._f] if self.n_modes else frame.u0
@@ -160,20 +173,32 @@ class FloatingFrameBody(Body):
         return v + A @ rel
 
     def point_J_T(self, q, frame, t=0.0):
-        R, A, _, _, T, *_ = self._frame(q, None, t)
-        J = np.empty((3, self.nu))
+        _, A, _, _, T, *_ = self._frame(q, None, t)
+        return self.fill_J_T(A, T, self._u_bar(q, frame), frame.phi, np.empty((3, self.nu)))
+
+    def fill_J_T(self, A, T, u_bar, phi, out):
+        """Write J_T = [1, −A ũ T, A Φ] (thesis eq. 2.70; only A Φ on a prescribed frame)
+        of the body point at ū = ``u_bar`` with mode-shape rows ``phi`` (3, n_f) into
+        ``out`` (3, nu) and return it. A, T from :meth:`frame_state` (T is None for a
+        prescribed frame). Contours call it with interpolated ū and Φ (thesis Sec. 3.2.2)."""
         if self.motion is None:
-            J[:, :3] = np.eye(3)
-            J[:, 3:6] = -A @ skew(self._u_bar(q, frame)) @ T
-        J[:, self._fu] = A @ frame.phi
-        return J
+            out[:, :3] = np.eye(3)
+            out[:, 3:6] = -A @ skew(u_bar) @ T
+        if self.n_modes:
+            out[:, self._fu] = A @ phi
+        return out
+
+    def fill_J_R(self, A, T, out):
+        """Write J_R = [0, A T, 0] (thesis eq. 2.72) into ``out`` (3, nu) and return it:
+        the same for every point of the body."""
+        out[:] = 0.0
+        if self.motion is None:
+            out[:, 3:6] = A @ T
+        return out
 
     def J_R(self, q, t=0.0):
-        J = np.zeros((3, self.nu))
-        if self.motion is None:
-            _, A, _, _, T, *_ = self._frame(q, None, t)
-            J[:, 3:6] = A @ T
-        return J
+        _, A, _, _, T, *_ = self._frame(q, None, t)
+        return self.fill_J_R(A, T, np.empty((3, self.nu)))
 
     def point_bias_T(self, q, u, frame, t=0.0):
         R, A, v, w, T, Tdu, a, wd = self._frame(q, u, t)

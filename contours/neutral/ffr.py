@@ -1,0 +1,131 @@
+"""The FFR family of neutral contours: concrete factories for :class:`mbs.FlexibleBodyFFR`
+(thesis Sec. 3.2.2, 4.4.1; MBSim's ``Contour1sNeutralLinearExternalFFR``).
+
+The products interpolate, on the undeformed node grid of the body file, the local
+position ū = ū0 + Φ q_f and the mode shapes Φ once (thesis Table 4.1); position,
+velocity and J_T = [1, −A ũ T, A Φ] (thesis Sec. 3.2.2) follow by control-point
+combinations. Nodes come from a body-file node group (structured-grid detection,
+:func:`contours.node_grid.node_matrix`), an explicit node matrix O (eq. 3.24) or a line
+of nodes.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ffrmbs.errors import ModelError
+from contours.nurbs import Interpolation1D, SurfaceInterpolation
+
+from ..node_grid import check_node_matrix, node_line, node_matrix
+from .factory import Contour1sNeutralFactory, Contour2sNeutralFactory
+from .products import NeutralNurbsLocalPosition, NeutralNurbsModeShapes, NeutralNurbsPosition, NeutralNurbsVelocity
+from .space import CurveSpace, SurfaceSpace, as_pair
+
+
+class _FFRProducts:
+    """Product creation of the FFR family (shared by the 1s and 2s factories)."""
+
+    def create_mode_shapes(self, nodal_phi):
+        return NeutralNurbsModeShapes(self.space, nodal_phi)
+
+    def create_local_position(self, nodal_u0, modes):
+        return NeutralNurbsLocalPosition(self.space, nodal_u0, modes)
+
+    def create_position(self):
+        return NeutralNurbsPosition(self.space)
+
+    def create_velocity(self):
+        return NeutralNurbsVelocity(self.space)
+
+
+class Contour1sNeutralFFR(_FFRProducts, Contour1sNeutralFactory):
+    """A curve through a line of nodes of an FFR body (neutral axis, surface centre line).
+
+    Parameters
+    ----------
+    body : FlexibleBodyFFR
+    nodes : (k,) int
+        0-based node indices in curve order (see :meth:`along_line`).
+    normal : (3,)
+        Reference normal in the body frame (e.g. (0, 1, 0) for a band on top of a beam
+        along x); it rotates with the body and is made perpendicular to the tangent.
+    degree : int
+        NURBS degree (3: C²).
+    closed : bool
+        Periodic curve (the last node connects back to the first).
+    method : "chord" or "centripetal"
+        Parametrization of the undeformed nodes (thesis eq. 3.19–3.21).
+    """
+
+    def __init__(self, body, nodes, normal, degree=3, closed=False, method="chord", name="neutral 1s"):
+        nodes = check_node_matrix(np.asarray(nodes).reshape(1, -1), body.data.n_nodes)[0]
+        self.nodes = nodes
+        interp = Interpolation1D.from_points(body.data.u0[nodes], degree, closed, method)
+        phi = body.phi.reshape(body.data.n_nodes, 3, body.n_modes)[nodes]
+        super().__init__(body, CurveSpace(interp), body.data.u0[nodes], phi, normal, name)
+
+    @classmethod
+    def along_line(cls, body, start, direction, normal, nodes=None, **kw):
+        """The contour through the nodes on the line through ``start`` [m] along
+        ``direction`` (optionally among ``nodes`` or a node-group name)."""
+        if isinstance(nodes, str):
+            nodes = body.node_group(nodes)
+        return cls(body, node_line(body.data.u0, start, direction, nodes), normal, **kw)
+
+
+class Contour2sNeutralFFR(_FFRProducts, Contour2sNeutralFactory):
+    """A surface through a structured patch of nodes of an FFR body (thesis Fig. 3.4).
+
+    Parameters
+    ----------
+    body : FlexibleBodyFFR
+    nodes : str or (k_eta, k_xi) int
+        A node-group name of the body file (a planar structured patch, ordered
+        automatically, see :func:`contours.node_grid.node_matrix`) or the node matrix O
+        (eq. 3.24) itself.
+    extra_rows : int
+        With a group: rows of coplanar surface nodes added beyond each side of the patch
+        where complete rows exist (thesis Sec. 3.2.2: better tangents near the boundary).
+    degree : int or (int, int)
+    closed : bool or (bool, bool)
+        Periodic in η and/or ξ.
+    method : "chord" or "centripetal"
+    outward : None, +1 or -1
+        Sign of t_η × t_ξ pointing out of the material; None decides it from the body's
+        nodes behind the patch.
+    """
+
+    def __init__(self, body, nodes, extra_rows=0, degree=3, closed=False, method="chord",
+                 outward=None, name="neutral 2s"):
+        data = body.data
+        if isinstance(nodes, str):
+            candidates = data.surface_nodes if data.surface_triangles is not None else None
+            O = node_matrix(data.u0, body.node_group(nodes), extra_rows, candidates)
+        else:
+            O = check_node_matrix(nodes, data.n_nodes)
+        self.nodes = O
+        grid = data.u0[O]
+        interp = SurfaceInterpolation.from_grid(grid, as_pair(degree, "degree"), as_pair(closed, "closed"), method)
+        phi = body.phi.reshape(data.n_nodes, 3, body.n_modes)[O]
+        super().__init__(body, SurfaceSpace(interp), grid, phi, 1 if outward is None else outward, name)
+        if outward is None:
+            self.sign = self._outward_sign()
+
+    def _outward_sign(self) -> float:
+        """+1 if t_η × t_ξ at the patch centre points away from the nearest nodes not on
+        the patch (the material behind it), else -1."""
+        (a, b), (c, d) = self.domain
+        self.space.locate(0.5 * (a + b), 0.5 * (c + d))
+        rows = np.zeros((6, 3))
+        self.space.contract(self.local_position.ctrl0, 3, rows)
+        n0 = np.cross(rows[1], rows[2])
+        u0 = self.body.data.u0
+        others = np.setdiff1d(np.arange(len(u0)), self.nodes.ravel())
+        if not others.size:
+            raise ModelError(f"{self.name}: the patch holds every node; give outward=+1 or -1")
+        _, near = cKDTree(u0[others]).query(rows[0], k=min(20, others.size))
+        depth = (u0[others[np.atleast_1d(near)]] - rows[0]) @ n0
+        if abs(depth.mean()) <= 1e-9 * np.abs(depth).max(initial=0.0) or not depth.any():
+            raise ModelError(f"{self.name}: cannot tell the material side of the patch; give outward=+1 or -1")
+        return 1.0 if depth.mean() < 0 else -1.0
