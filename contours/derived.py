@@ -1,0 +1,143 @@
+"""Contours built on a 1s neutral contour (thesis Sec. 4.4, Fig. 4.4; band: Sec. 5.2).
+
+A derived point sits at a fixed offset in the neutral curve's frame,
+
+    r(η, ·) = R + A (ū(η) + d̄),   d̄ = α n̄(η) + β t̄2(η),
+
+with the body-frame frame of the neutral curve: t̄ = ū_η/|ū_η|, n̄ the reference normal
+n̄0 made perpendicular to t̄, t̄2 = n̄ × t̄ (the neutral's t1, n, t2 in body axes).
+``FlexibleBand``: (α, β) = (offset, ξ), ξ ∈ [−w/2, w/2]; ``FlexibleCylinder``:
+(α, β) = ρ (cos φ, sin φ), φ ∈ [0, 2π). The frame follows the deformation through
+ū_η = Σ N'_i (P_ū0 + P_Φ q_f)_i, so with G = ∂d̄/∂ū_η (3, 3)
+
+    r_η = A (ū_η + G ū_ηη),   J_T = [1, −A (ū + d̄)~ T, A (Φ + G Φ_η)],
+    ṙ = v + A (ω̄ × (ū + d̄) + (Φ + G Φ_η) q̇_f)
+
+exactly (J_R is the body's). Continuity: the frame follows the tangent ū_η, so off the
+neutral line the surface is one order less smooth than ū_η: C^{p−2} in η on a degree-p
+neutral curve. A C² band or cylinder (thesis Sec. 3.2: sliding needs C²) needs a neutral
+curve of degree ≥ 4; a lower degree is accepted with a warning. Second derivatives: r_ξξ, r_ηξ exact; r_ηη = A ū_ηη
+neglects the offset's second derivative along the curve (O(|d̄| · |∂²G/∂η²|); zero on
+a straight undeformed neutral line).
+"""
+
+from __future__ import annotations
+
+import warnings
+from abc import abstractmethod
+
+import numpy as np
+
+from ffrmbs.errors import ModelError
+
+from .base import D_ETA, D_ETA_ETA, D_ETA_XI, D_XI, D_XI_XI, VALUE, Contour
+from .neutral import _kernels as K
+from .neutral.factory import Contour1sNeutralFactory
+from mbs.rotations import skew
+
+
+def offset_frame(a, n0):
+    """Body-frame frame of the neutral curve and its derivatives with respect to the
+    tangent a = ū_η (3,): returns (t̄, t̄2, n̄, Dt2, Dn) with Dx = ∂x/∂a (3, 3)."""
+    la = np.linalg.norm(a)
+    t = a / la
+    Dt = (np.eye(3) - np.outer(t, t)) / la
+    c = n0 - (n0 @ t) * t
+    lc = np.linalg.norm(c)
+    n = c / lc
+    Dc = -(np.outer(t, n0) + (n0 @ t) * np.eye(3)) @ Dt
+    Dn = (np.eye(3) - np.outer(n, n)) @ Dc / lc
+    t2 = np.cross(n, t)
+    Dt2 = -skew(t) @ Dn + skew(n) @ Dt
+    return t, t2, n, Dt2, Dn
+
+
+class _OffsetContour(Contour):
+    """A 2s contour at offsets (α, β)(ξ) in the frame of a 1s neutral contour."""
+
+    dim = 2
+
+    def __init__(self, neutral: Contour1sNeutralFactory, xi_domain, closed_xi, reach, name):
+        if not isinstance(neutral, Contour1sNeutralFactory):
+            raise ModelError(f"{name}: needs a 1s neutral contour, got {type(neutral).__name__}")
+        super().__init__(neutral.body, name)
+        if neutral.space.eta.p < 4:
+            warnings.warn(f"{name}: on a degree-{neutral.space.eta.p} neutral curve the offset surface is only "
+                          f"C^{neutral.space.eta.p - 2} along the curve; build the neutral contour with degree >= 4 "
+                          "for a C2 contour", stacklevel=3)
+        self.neutral = neutral
+        self.domain = (neutral.domain, xi_domain)
+        self.closed = (neutral.closed[0], closed_xi)
+        self.reach = reach  # largest |d̄| [m]
+
+    @abstractmethod
+    def _offsets(self, xi):
+        """(α, β), (α_ξ, β_ξ), (α_ξξ, β_ξξ) at ξ."""
+
+    def update(self, q, u=None, t=0.0) -> None:
+        self.neutral.update(q, u, t)
+
+    def evaluate(self, point, eta, xi=0.0, velocity=False, jacobians=False):
+        nc = self.neutral
+        nc.space.locate(eta)
+        ub, phi = nc.local_fields(6)
+        t, t2, n, Dt2, Dn = offset_frame(ub[D_ETA], nc.normal_ref)
+        (al, be), (al1, be1), (al2, be2) = self._offsets(xi)
+        d = al * n + be * t2
+        G = al * Dn + be * Dt2
+        A, R = nc.A, nc.R
+        point.eta, point.xi = eta, xi
+        D = point.derivs
+        D[VALUE] = R + A @ (ub[VALUE] + d)
+        D[D_ETA] = A @ (ub[D_ETA] + G @ ub[D_ETA_ETA])
+        D[D_XI] = A @ (al1 * n + be1 * t2)
+        D[D_ETA_ETA] = A @ ub[D_ETA_ETA]
+        D[D_ETA_XI] = A @ ((al1 * Dn + be1 * Dt2) @ ub[D_ETA_ETA])
+        D[D_XI_XI] = A @ (al2 * n + be2 * t2)
+        K.frame_2s(D, 1.0, point.frame)
+        if velocity or jacobians:
+            m = nc.n_modes
+            phi_point = phi[VALUE].reshape(3, m) + G @ phi[D_ETA].reshape(3, m)
+            if velocity:
+                nc._update_velocity()
+                point.v[:] = nc.v + A @ (np.cross(nc.w, ub[VALUE] + d) + phi_point @ nc.qdot_f)
+            if jacobians:
+                nc.body.fill_J_T(A, nc.T, ub[VALUE] + d, phi_point, point.J_T)
+                nc.body.fill_J_R(A, nc.T, point.J_R)
+        return point
+
+    def bounding_box(self) -> np.ndarray:
+        """The neutral curve's box grown by the largest offset (conservative)."""
+        box = self.neutral.bounding_box()
+        return box + np.array([[-self.reach], [self.reach]])
+
+
+class FlexibleBand(_OffsetContour):
+    """A band of ``width`` [m] at ``offset`` [m] along the neutral normal n (thesis
+    Sec. 5.2, MBSim's ``FlexibleBand``): ξ ∈ [−w/2, w/2] runs along t2 = n × t1, the
+    band's normal is the surface normal r_η × r_ξ (= n on an undeformed straight line).
+    Put it on the side the neutral's reference normal points to (offset ≥ 0)."""
+
+    def __init__(self, neutral, width, offset=0.0, name="band"):
+        if not width > 0:
+            raise ModelError(f"{name}: width must be positive, got {width}")
+        self.width, self.offset = float(width), float(offset)
+        super().__init__(neutral, (-0.5 * width, 0.5 * width), False, np.hypot(offset, 0.5 * width), name)
+
+    def _offsets(self, xi):
+        return (self.offset, xi), (0.0, 1.0), (0.0, 0.0)
+
+
+class FlexibleCylinder(_OffsetContour):
+    """A cylinder of ``radius`` [m] around the neutral curve (MBSim's
+    ``CylinderFlexible``): ξ = φ ∈ [0, 2π) from n towards t2, outward normal radial."""
+
+    def __init__(self, neutral, radius, name="cylinder"):
+        if not radius > 0:
+            raise ModelError(f"{name}: radius must be positive, got {radius}")
+        self.radius = float(radius)
+        super().__init__(neutral, (0.0, 2.0 * np.pi), True, self.radius, name)
+
+    def _offsets(self, xi):
+        c, s, r = np.cos(xi), np.sin(xi), self.radius
+        return (r * c, r * s), (-r * s, r * c), (-r * c, -r * s)

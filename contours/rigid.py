@@ -1,0 +1,146 @@
+"""Rigid contours on a :class:`mbs.Frame`: point, sphere and plane.
+
+They work on any frame — of a point mass, a rigid body, a node of an FFR body or the
+ground. A point at the inertial offset d from the frame origin moves with the frame's
+body rotation, so (thesis eq. 2.70, 2.72)
+
+    ṙ = ṙ_O + ω × d,   J_T = J_T,O − d̃ J_R,O,   J_R = J_R,O.
+
+Surface coordinates: sphere (η, ξ) = (longitude, latitude) [rad] in the frame's axes;
+plane (η, ξ) = coordinates [m] along the frame's x and y axes, normal along its z axis.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ffrmbs.errors import ModelError
+
+from .base import D_ETA, D_ETA_ETA, D_ETA_XI, D_XI, D_XI_XI, VALUE, Contour
+
+
+class _FrameContour(Contour):
+    """Shared state of the rigid contours: the frame's position, orientation, velocity
+    and Jacobians, read once per update."""
+
+    def __init__(self, frame, name):
+        body = None if frame.is_ground else frame.body
+        super().__init__(body, name)
+        self.frame_ref = frame
+        self._r = np.zeros(3)
+        self._A = np.eye(3)
+        self._v = np.zeros(3)
+        self._w = np.zeros(3)
+        self._J_T = np.zeros((3, self.nu))
+        self._J_R = np.zeros((3, self.nu))
+        self.update(None if body is None else body.q_init, None if body is None else body.u_init)
+
+    def update(self, q, u=None, t=0.0) -> None:
+        f = self.frame_ref
+        self._r[:] = f.position(q, t)
+        self._A[:] = f.orientation(q, t)
+        if u is not None:
+            self._v[:] = f.velocity(q, u, t)
+            self._w[:] = f.angular_velocity(q, u, t)
+        if not f.is_ground:
+            self._J_T[:] = f.J_T(q, t)
+            self._J_R[:] = f.J_R(q, t)
+
+    def _fill_offset(self, point, d, velocity, jacobians):
+        """Velocity and Jacobians of the point at inertial offset d from the frame origin."""
+        if velocity:
+            point.v[:] = self._v + np.cross(self._w, d)
+        if jacobians:
+            point.J_T[:] = self._J_T - np.cross(d[:, None], self._J_R, axis=0)
+            point.J_R[:] = self._J_R
+
+
+class PointContour(_FrameContour):
+    """The frame origin as a contour (dim 0): every (η, ξ) is the same point; its frame is
+    the frame's orientation."""
+
+    dim = 0
+    domain = ()
+    closed = ()
+
+    def __init__(self, frame, name="point"):
+        super().__init__(frame, name)
+
+    def evaluate(self, point, eta=0.0, xi=0.0, velocity=False, jacobians=False):
+        point.eta, point.xi = eta, xi
+        point.derivs[:] = 0.0
+        point.derivs[VALUE] = self._r
+        point.frame[:] = self._A
+        self._fill_offset(point, np.zeros(3), velocity, jacobians)
+        return point
+
+    def bounding_box(self):
+        return np.array([self._r, self._r])
+
+
+class SphereContour(_FrameContour):
+    """A sphere of ``radius`` [m] about the frame origin; n points outward."""
+
+    dim = 2
+
+    def __init__(self, frame, radius, name="sphere"):
+        if not radius > 0:
+            raise ModelError(f"{name}: radius must be positive, got {radius}")
+        self.radius = float(radius)
+        self.domain = ((0.0, 2.0 * np.pi), (-0.5 * np.pi, 0.5 * np.pi))
+        self.closed = (True, False)
+        super().__init__(frame, name)
+
+    def evaluate(self, point, eta, xi=0.0, velocity=False, jacobians=False):
+        ce, se, cx, sx = np.cos(eta), np.sin(eta), np.cos(xi), np.sin(xi)
+        A, r = self._A, self.radius
+        n = A @ np.array([cx * ce, cx * se, sx])
+        D = point.derivs
+        point.eta, point.xi = eta, xi
+        D[VALUE] = self._r + r * n
+        D[D_ETA] = r * A @ np.array([-cx * se, cx * ce, 0.0])
+        D[D_XI] = r * A @ np.array([-sx * ce, -sx * se, cx])
+        D[D_ETA_ETA] = r * A @ np.array([-cx * ce, -cx * se, 0.0])
+        D[D_ETA_XI] = r * A @ np.array([sx * se, -sx * ce, 0.0])
+        D[D_XI_XI] = -r * n
+        point.frame[:, 2] = n
+        point.frame[:, 0] = A @ np.array([-se, ce, 0.0])  # t_η / |t_η| (undefined at the poles: kept finite)
+        point.frame[:, 1] = np.cross(n, point.frame[:, 0])
+        self._fill_offset(point, r * n, velocity, jacobians)
+        return point
+
+    def bounding_box(self):
+        return np.array([self._r - self.radius, self._r + self.radius])
+
+
+class PlaneContour(_FrameContour):
+    """The plane through the frame origin spanned by its x and y axes, normal along z.
+
+    ``size`` [m] (half edge) only bounds the patch drawn by :meth:`to_trimesh`; the
+    bounding box is infinite (a plane overlaps everything in the broad phase).
+    """
+
+    dim = 2
+    closed = (False, False)
+
+    def __init__(self, frame, size=1.0, name="plane"):
+        if not size > 0:
+            raise ModelError(f"{name}: size must be positive, got {size}")
+        self.domain = ((-float(size), float(size)), (-float(size), float(size)))
+        super().__init__(frame, name)
+
+    def evaluate(self, point, eta, xi=0.0, velocity=False, jacobians=False):
+        A = self._A
+        d = eta * A[:, 0] + xi * A[:, 1]
+        point.eta, point.xi = eta, xi
+        D = point.derivs
+        D[:] = 0.0
+        D[VALUE] = self._r + d
+        D[D_ETA] = A[:, 0]
+        D[D_XI] = A[:, 1]
+        point.frame[:] = A
+        self._fill_offset(point, d, velocity, jacobians)
+        return point
+
+    def bounding_box(self):
+        return np.array([np.full(3, -np.inf), np.full(3, np.inf)])
