@@ -9,7 +9,6 @@ from contours import (Contour1sNeutralFFR, Contour1sNeutralRigid, Contour2sNeutr
 from contours.neutral import _kernels as K
 from contours.nurbs import SurfaceInterpolation
 from contours.nurbs.basis import curve_point, surface_point
-from contours.nurbs.geomdl_io import to_geomdl_surface
 from ffrmbs.errors import ModelError
 from mbs import FlexibleBodyFFR, RigidBody
 from mbs.rotations import quat_from_rotvec, quat_to_matrix
@@ -89,14 +88,24 @@ def test_linear_update_equals_per_step_interpolation_of_the_nodal_fields(beam, t
 def test_position_field_agrees_with_geomdl(beam, top):
     q, u = moving_state(beam, np.random.default_rng(2))
     top.update(q, u)
-    e, x = top.space.eta, top.space.xi
-    surf = to_geomdl_surface(e.knots, e.p, x.knots, x.p, top.position_field.ctrl)
+    surf = top.to_geomdl()
     point = top.new_point()
     for eta, xi in np.random.default_rng(3).uniform(0, 1, size=(10, 2)):
         d = surf.derivatives(eta, xi, order=2)
         top.evaluate(point, eta, xi)
         for row, (a, b) in zip(range(6), [(0, 0), (1, 0), (0, 1), (2, 0), (1, 1), (0, 2)]):
             assert np.allclose(point.derivs[row], d[a][b], rtol=1e-10, atol=1e-10)
+
+
+def test_velocity_and_curve_exports_agree_with_geomdl(beam, top):
+    q, u = moving_state(beam, np.random.default_rng(18))
+    top.update(q, u)
+    axis = Contour1sNeutralFFR.along_line(beam, (0, H / 2, W / 2), (1, 0, 0), normal=(0, 1, 0))
+    axis.update(q, u)
+    assert np.allclose(top.to_geomdl("velocity").evaluate_single((0.2, 0.9)), top.velocity(0.2, 0.9), atol=1e-12)
+    assert np.allclose(axis.to_geomdl().evaluate_single(0.42), axis.position(0.42), atol=1e-14)
+    with pytest.raises(ModelError, match="field"):
+        top.to_geomdl("speed")
 
 
 def test_second_derivatives_are_continuous_across_knots(beam, top):

@@ -21,6 +21,7 @@ from abc import abstractmethod
 import numpy as np
 
 from ffrmbs.errors import ModelError
+from contours.nurbs.geomdl_io import to_geomdl_curve, to_geomdl_surface
 
 from ..base import Contour, ContourPoint
 from . import _kernels as K
@@ -125,6 +126,22 @@ class NeutralContour(Contour):
                 raise ModelError(f"{self.name}: velocity asked for, but update() was given no u")
             self.velocity_field.update(self.v, self.A, self.w, self.local_position, self.qdot_f)
             self._velocity_current = True
+
+    def to_geomdl(self, field="position"):
+        """The current ``field`` ("position", "velocity" or "local_position") as a geomdl
+        ``BSpline.Curve`` (1s) or ``BSpline.Surface`` (2s, u = η, v = ξ), e.g. to plot,
+        export or check it with NURBS-Python."""
+        fields = {"position": self.position_field, "velocity": self.velocity_field,
+                  "local_position": self.local_position}
+        if field not in fields:
+            raise ModelError(f"{self.name}: field must be one of {sorted(fields)}, not {field!r}")
+        if field == "velocity":
+            self._update_velocity()
+        ctrl, e = fields[field].ctrl, self.space.eta
+        if self.dim == 1:
+            return to_geomdl_curve(e.knots, e.p, ctrl)
+        x = self.space.xi
+        return to_geomdl_surface(e.knots, e.p, x.knots, x.p, ctrl)
 
     def bounding_box(self) -> np.ndarray:
         """Min and max of the position control points: a B-spline lies in the convex hull
