@@ -120,3 +120,25 @@ def ffr_mass_and_qv(A, w, q_f, qd_f, mass, I1, S_bar, I_kl, I_bar, S_kl, M_ff, S
         for b in range(n):
             cor += (w[0] * S_skew[0, a, b] + w[1] * S_skew[1, a, b] + w[2] * S_skew[2, a, b]) * qd_f[b]
         Q[6 + a] = -acc - 2.0 * cor
+
+
+@njit(cache=True)
+def point_jacobian_T(A, T, u_bar, phi, free, f0, out):
+    """J_T of a body point into out (3, nu) (thesis eq. 2.70): on a free frame
+    [1, −A ũ T, A Φ] with the elastic columns from f0 = 6; on a prescribed frame only A Φ
+    (f0 = 0, T unused). Numpy reference: the formula, in ``tests/test_ffr_body.py``."""
+    n_f = phi.shape[1]
+    if free:
+        # B = −A ũ: column j of ũ is e_j × ū
+        B = np.empty((3, 3))
+        for c in range(3):
+            B[c, 0] = -(A[c, 1] * u_bar[2] - A[c, 2] * u_bar[1])
+            B[c, 1] = -(A[c, 2] * u_bar[0] - A[c, 0] * u_bar[2])
+            B[c, 2] = -(A[c, 0] * u_bar[1] - A[c, 1] * u_bar[0])
+        for c in range(3):
+            for j in range(3):
+                out[c, j] = 1.0 if c == j else 0.0
+                out[c, 3 + j] = B[c, 0] * T[0, j] + B[c, 1] * T[1, j] + B[c, 2] * T[2, j]
+    for c in range(3):
+        for k in range(n_f):
+            out[c, f0 + k] = A[c, 0] * phi[0, k] + A[c, 1] * phi[1, k] + A[c, 2] * phi[2, k]

@@ -33,9 +33,9 @@ import numpy as np
 
 from ffrmbs.errors import ModelError
 
+from ._kernels import point_jacobian_T
 from .body import Body, Frame
 from .parametrization import parametrization
-from .rotations import skew
 
 
 @dataclass(frozen=True)
@@ -85,6 +85,7 @@ class FloatingFrameBody(Body):
             self._fu = slice(6, self.nu)
         else:
             raise ModelError(f"{name}: frame must be 'free' or a PrescribedFrameMotion, got {frame!r}")
+        self._T_unused = np.zeros((3, 3))  # placeholder T of a prescribed frame for the J_T kernel
         self.q_init = np.zeros(self.nq)
         self.u_init = np.zeros(self.nu)
         if self.param is not None:
@@ -181,11 +182,8 @@ class FloatingFrameBody(Body):
         of the body point at ū = ``u_bar`` with mode-shape rows ``phi`` (3, n_f) into
         ``out`` (3, nu) and return it. A, T from :meth:`frame_state` (T is None for a
         prescribed frame). Contours call it with interpolated ū and Φ (thesis Sec. 3.2.2)."""
-        if self.motion is None:
-            out[:, :3] = np.eye(3)
-            out[:, 3:6] = -A @ skew(u_bar) @ T
-        if self.n_modes:
-            out[:, self._fu] = A @ phi
+        point_jacobian_T(A, self._T_unused if T is None else T, u_bar, phi, self.motion is None,
+                         self._fu.start, out)
         return out
 
     def fill_J_R(self, A, T, out):

@@ -13,6 +13,7 @@ from ffrmbs.errors import ModelError
 from mbs import FlexibleBodyFFR, PointMass, RigidBody, ground_frame
 from mbs.rotations import quat_from_rotvec
 from preprocess import Material, box, build_body
+from validation.bench.common import moving_state
 
 L, H, W = 0.25, 0.05, 0.05
 
@@ -27,17 +28,6 @@ def beam():
 def axis(beam):
     """The centre line, degree 4: C² band and cylinder (module docstring of contours.derived)."""
     return Contour1sNeutralFFR.along_line(beam, (0, H / 2, W / 2), (1, 0, 0), normal=(0, 1, 0), degree=4)
-
-
-def moving_state(body, seed, deform=3e-3):
-    rng = np.random.default_rng(seed)
-    q, u = body.q_init.copy(), rng.normal(size=body.nu)
-    q[:3] = rng.normal(size=3)
-    q[3:7] = quat_from_rotvec(rng.normal(size=3))
-    scale = deform / np.abs(body.phi).max()
-    q[7:] = scale * rng.normal(size=body.n_modes)
-    u[6:] *= scale
-    return q, u
 
 
 def finite_difference_checks(contour, body, q, u, eta, xi, tol=1e-7):
@@ -96,7 +86,7 @@ def test_band_on_the_undeformed_beam_is_its_top_face(beam, axis):
 
 def test_band_kinematics_on_the_moving_deformed_beam(beam, axis):
     band = FlexibleBand(axis, width=W, offset=H / 2)
-    q, u = moving_state(beam, 1)
+    q, u = moving_state(beam, np.random.default_rng(1), 3e-3)
     for eta, xi in [(0.3, 0.01), (0.77, -0.02)]:
         point = finite_difference_checks(band, beam, q, u, eta, xi)
         axis.update(q, u)
@@ -107,7 +97,7 @@ def test_band_kinematics_on_the_moving_deformed_beam(beam, axis):
 def test_band_is_C2_on_a_degree_4_neutral_curve_and_C1_on_a_cubic(beam, axis):
     """At an interior knot, the central difference of r converges to r_η at O(h²) when
     r is C² there and only at O(h) when r_ηη jumps (degree 3: warned)."""
-    q, u = moving_state(beam, 7)
+    q, u = moving_state(beam, np.random.default_rng(7), 3e-3)
     cubic = Contour1sNeutralFFR.along_line(beam, (0, H / 2, W / 2), (1, 0, 0), normal=(0, 1, 0))
     errors = {}
     for neutral in (axis, cubic):
@@ -124,7 +114,7 @@ def test_band_is_C2_on_a_degree_4_neutral_curve_and_C1_on_a_cubic(beam, axis):
 
 def test_cylinder_is_round_outward_and_closed(beam, axis):
     cyl = FlexibleCylinder(axis, radius=0.02)
-    q, u = moving_state(beam, 2)
+    q, u = moving_state(beam, np.random.default_rng(2), 3e-3)
     cyl.update(q, u)
     axis.update(q, u)
     point = cyl.new_point()
@@ -141,7 +131,7 @@ def test_cylinder_is_round_outward_and_closed(beam, axis):
 
 
 def test_bounding_boxes_contain_the_derived_contours(beam, axis):
-    q, u = moving_state(beam, 4)
+    q, u = moving_state(beam, np.random.default_rng(4), 3e-3)
     for contour in (FlexibleBand(axis, W, H / 2), FlexibleCylinder(axis, 0.03)):
         contour.update(q, u)
         lo, hi = contour.bounding_box()

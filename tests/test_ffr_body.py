@@ -291,3 +291,19 @@ def test_node_positions_equal_node_frames(bodies):
     expected = np.array([body.node(j).position(q) for j in nodes])
     np.testing.assert_allclose(body.node_positions(q, nodes), expected, atol=1e-13)
     np.testing.assert_allclose(body.node_positions(q)[nodes], expected, atol=1e-13)
+
+
+def test_point_jacobian_kernel_matches_the_formula():
+    """mbs._kernels.point_jacobian_T against J_T = [1, −A ũ T, A Φ] (thesis eq. 2.70) in numpy."""
+    from mbs._kernels import point_jacobian_T
+    from mbs.rotations import quat_from_rotvec, quat_to_matrix, skew
+
+    rng = np.random.default_rng(3)
+    A = quat_to_matrix(quat_from_rotvec(rng.normal(size=3)))
+    T, ub, phi = rng.normal(size=(3, 3)), rng.normal(size=3), rng.normal(size=(3, 5))
+    out = np.full((3, 11), np.nan)
+    point_jacobian_T(A, T, ub, phi, True, 6, out)
+    assert np.allclose(out, np.hstack([np.eye(3), -A @ skew(ub) @ T, A @ phi]), atol=1e-14)
+    out = np.full((3, 5), np.nan)
+    point_jacobian_T(A, T, ub, phi, False, 0, out)
+    assert np.allclose(out, A @ phi, atol=1e-14)

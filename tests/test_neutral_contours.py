@@ -13,6 +13,7 @@ from ffrmbs.errors import ModelError
 from mbs import FlexibleBodyFFR, RigidBody
 from mbs.rotations import quat_from_rotvec, quat_to_matrix
 from preprocess import Material, box, build_body
+from validation.bench.common import moving_state
 
 L, H, W = 0.25, 0.05, 0.05
 
@@ -21,18 +22,6 @@ L, H, W = 0.25, 0.05, 0.05
 def beam_data():
     """The thesis's 250 x 50 x 50 mm beam (Sec. 5.2), structured tet4, free-free, 12 modes."""
     return build_body(box(L, H, W, None, order=1, divisions=(10, 4, 4)), Material(920.0, 5e7, 0.3), n_modes=12)
-
-
-def moving_state(body, rng, deform=2e-3):
-    """A random state: large rotation and translation, elastic displacements ~ deform [m]."""
-    q, u = body.q_init.copy(), np.zeros(body.nu)
-    q[:3] = rng.normal(size=3)
-    q[3:7] = quat_from_rotvec(rng.normal(size=3))
-    scale = deform / np.abs(body.phi).max()
-    q[7:] = scale * rng.normal(size=body.n_modes) / np.sqrt(body.n_modes)
-    u[:] = rng.normal(size=body.nu)
-    u[6:] *= scale
-    return q, u
 
 
 @pytest.fixture(scope="module")
@@ -344,3 +333,13 @@ def test_bad_input_gives_clear_errors(beam, beam_data):
     with pytest.raises(ModelError, match="at least 4 points"):
         Contour2sNeutralFFR(coarse, "y1")
     assert Contour2sNeutralFFR(coarse, "y1", degree=(3, 2)).nodes.shape == (11, 3)
+
+
+def test_a_body_with_no_modes_selected_moves_its_contour_rigidly(beam_data):
+    body = FlexibleBodyFFR(beam_data, modes=0)
+    contour = Contour2sNeutralFFR(body, "y1")
+    q, u = body.q_init.copy(), np.random.default_rng(19).normal(size=6)
+    contour.update(q, u)
+    point = contour.evaluate(contour.new_point(), 0.5, 0.5, velocity=True, jacobians=True)
+    assert np.allclose(point.r, [L / 2, H, W / 2], atol=1e-14)
+    assert np.allclose(point.v, u[:3] + np.cross(u[3:], point.r), atol=1e-14)

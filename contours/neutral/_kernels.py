@@ -86,20 +86,14 @@ def position_ctrl(R, A, local, out):
 
 
 @numba.njit(cache=True)
-def velocity_ctrl(v, A, w, local, modes, qdot_f, out):
+def velocity_ctrl(v, A, w, local, modal, out):
     """Control points of ṙ = v + A (ω̄ × ū + Φ q̇_f) (thesis eq. 2.32) from those of ū
-    (n, 3) and of Φ (n, 3, n_f); exact by linearity of the interpolation."""
-    n_f = qdot_f.shape[0]
+    (n, 3) and of Φ q̇_f (n, 3) (``modal``); exact by linearity of the interpolation."""
     rel = np.empty(3)
     for i in range(local.shape[0]):
-        rel[0] = w[1] * local[i, 2] - w[2] * local[i, 1]
-        rel[1] = w[2] * local[i, 0] - w[0] * local[i, 2]
-        rel[2] = w[0] * local[i, 1] - w[1] * local[i, 0]
-        for c in range(3):
-            acc = 0.0
-            for k in range(n_f):
-                acc += modes[i, c, k] * qdot_f[k]
-            rel[c] += acc
+        rel[0] = w[1] * local[i, 2] - w[2] * local[i, 1] + modal[i, 0]
+        rel[1] = w[2] * local[i, 0] - w[0] * local[i, 2] + modal[i, 1]
+        rel[2] = w[0] * local[i, 1] - w[1] * local[i, 0] + modal[i, 2]
         for c in range(3):
             out[i, c] = v[c] + A[c, 0] * rel[0] + A[c, 1] * rel[1] + A[c, 2] * rel[2]
 

@@ -27,7 +27,7 @@ class _FFRProducts:
     """Product creation of the FFR family (shared by the 1s and 2s factories)."""
 
     def create_mode_shapes(self, nodal_phi):
-        return NeutralNurbsModeShapes(self.space, nodal_phi)
+        return NeutralNurbsModeShapes(self.space, nodal_phi) if nodal_phi.shape[-1] else None
 
     def create_local_position(self, nodal_u0, modes):
         return NeutralNurbsLocalPosition(self.space, nodal_u0, modes)

@@ -59,7 +59,7 @@ class NeutralNurbsModeShapes(NeutralNurbs):
         super().__init__(space, 3 * n_f)
         self.n_modes = n_f
         self.compute(nodal_phi.reshape(nodal_phi.shape[:-2] + (3 * n_f,)))
-        self.by_direction = self.ctrl.reshape(-1, 3, n_f)  # (n_ctrl_total, 3, n_f) view
+        self.flat = self.ctrl.reshape(-1, n_f)  # (3 n_ctrl_total, n_f) view: the matrix P_Φ
 
     def update(self, *state) -> None:
         """Nothing: Φ does not change in time."""
@@ -75,12 +75,11 @@ class NeutralNurbsLocalPosition(NeutralNurbs):
         self.ctrl0 = self.ctrl.copy()
         self.modes = modes
         self._flat = self.ctrl.reshape(-1)
-        self._modes_flat = None if modes is None else modes.ctrl.reshape(-1, modes.n_modes)
 
     def update(self, q_f) -> None:
         if self.modes is None or not self.modes.n_modes:
             return
-        np.dot(self._modes_flat, q_f, out=self._flat)
+        np.dot(self.modes.flat, q_f, out=self._flat)
         self.ctrl += self.ctrl0
 
 
@@ -99,8 +98,10 @@ class NeutralNurbsVelocity(NeutralNurbs):
 
     def __init__(self, space):
         super().__init__(space, 3)
-        self._no_modes = np.zeros((int(np.prod(space.ctrl_shape)), 3, 0))
+        self._modal = np.zeros_like(self.ctrl)  # control points of Φ q̇_f
+        self._modal_flat = self._modal.reshape(-1)
 
     def update(self, v, A, w, local: NeutralNurbsLocalPosition, qdot_f) -> None:
-        modes = self._no_modes if local.modes is None else local.modes.by_direction
-        K.velocity_ctrl(v, A, w, local.rows(), modes, qdot_f, self.rows())
+        if local.modes is not None and local.modes.n_modes:
+            np.dot(local.modes.flat, qdot_f, out=self._modal_flat)
+        K.velocity_ctrl(v, A, w, local.rows(), self._modal.reshape(-1, 3), self.rows())

@@ -36,9 +36,6 @@ Usage::
 from __future__ import annotations
 
 import argparse
-import json
-import os
-import platform
 import time
 
 import numpy as np
@@ -48,11 +45,12 @@ from scipy.spatial.transform import Rotation
 from mbs import FlexibleBodyFFR
 from preprocess import BodyData
 
+from .common import machine, write_json
+
 FULL = {"n_f": (10, 30, 100), "nodes": (500, 5000, 50000)}
 QUICK = {"n_f": (10, 30), "nodes": (500, 5000)}
 BOX = np.array([1.0, 1.0, 5.0])        # [m]
 TOTAL_MASS = 8000.0 * BOX.prod()       # [kg], a steel block of the box's size
-THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS")
 
 
 def synthetic_body(n_nodes, n_f, rng) -> BodyData:
@@ -154,16 +152,10 @@ def main(argv=None):
         print(f"n_f = {n_f}: done", flush=True)
     doc = {"benchmark": "ffr_evaluation", "quick": args.quick, "repeats": args.repeats,
            "seed": args.seed, "clock": "time.perf_counter (wall)",
-           "machine": {"platform": platform.platform(), "python": platform.python_version(),
-                       "numpy": np.__version__, "cpu_count": os.cpu_count(),
-                       "thread_env": {v: os.environ.get(v) for v in THREAD_VARIABLES}},
+           "machine": machine(),
            "entries": entries, "ratios": ratios(entries, sizes)}
     print(markdown(doc))
-    os.makedirs(args.out, exist_ok=True)
-    path = os.path.join(args.out, "ffr_evaluation.json")
-    with open(path, "w") as f:
-        json.dump(doc, f, indent=1)
-    print(f"wrote {path}")
+    write_json(doc, args.out, "ffr_evaluation")
     return doc
 
 

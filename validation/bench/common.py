@@ -1,0 +1,46 @@
+"""What every benchmark shares: the machine record and the report writer, and a random
+moving state of a floating-frame body."""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+
+import numba
+import numpy as np
+
+from mbs.rotations import quat_from_rotvec
+
+THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS")
+
+
+def machine() -> dict:
+    """Platform, versions, cores and the thread-count variables (timings depend on them)."""
+    return {"platform": platform.platform(), "python": platform.python_version(), "numpy": np.__version__,
+            "numba": numba.__version__, "cpu_count": os.cpu_count(),
+            "thread_env": {v: os.environ.get(v) for v in THREAD_VARIABLES}}
+
+
+def write_json(doc: dict, out: str, name: str) -> str:
+    """Write ``doc`` to ``out/name.json``, print and return the path."""
+    os.makedirs(out, exist_ok=True)
+    path = os.path.join(out, f"{name}.json")
+    with open(path, "w") as f:
+        json.dump(doc, f, indent=1)
+    print(f"wrote {path}")
+    return path
+
+
+def moving_state(body, rng, deform=2e-3):
+    """A random state (q, u) of a free FFR body (quaternion frame): large rotation and
+    translation, elastic displacements ~ ``deform`` [m] (largest nodal amplitude), random
+    frame and elastic velocities — every term of the kinematics non-zero."""
+    q, u = body.q_init.copy(), np.zeros(body.nu)
+    q[:3] = rng.normal(size=3)
+    q[3:7] = quat_from_rotvec(rng.normal(size=3))
+    scale = deform / np.abs(body.phi).max()
+    q[7:] = scale * rng.normal(size=body.n_modes) / np.sqrt(body.n_modes)
+    u[:] = rng.normal(size=body.nu)
+    u[6:] *= scale
+    return q, u
