@@ -3,7 +3,7 @@
 The thesis's 250 × 50 × 50 mm beam (Sec. 5.2, ρ = 920 kg/m³, E = 50 MPa, ν = 0.3) is
 meshed with tet4 elements, clamped at x = 0 and given its first clamped modes. The state
 combines the first two modes (the two bending modes of the square section) so that the
-centre of the free end deflects by ``--tip`` (default 10 mm) along y, with the body frame
+centre of the free end deflects by ``--tip`` (default 30 mm, drawn to scale) along y, with the body frame
 turned by 5° about z. A :class:`contours.Contour2sNeutralFFR` on the top face ``'y1'``
 follows the deformation through its control points (P_ū = P_ū0 + P_Φ q_f, thesis
 Sec. 3.2.2); the figure shows the deformed nodes, the contour sampled finely, some of its
@@ -89,7 +89,7 @@ def main(argv=None, out=sys.stdout):
     """Build, deform, draw; return {'path', 'max_distance' [m], 'tip' (3,) [m]}."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--out", default="deformed_beam_contour.png", help="PNG to write")
-    parser.add_argument("--tip", type=float, default=0.01, help="tip deflection along y [m]")
+    parser.add_argument("--tip", type=float, default=0.03, help="tip deflection along y [m] (drawn to scale)")
     parser.add_argument("--modes", type=int, default=4, help="clamped modes of the body")
     args = parser.parse_args(argv)
 
