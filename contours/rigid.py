@@ -109,6 +109,16 @@ class SphereContour(_FrameContour):
         self._fill_offset(point, r * n, velocity, jacobians)
         return point
 
+    @property
+    def centre(self) -> np.ndarray:
+        """Inertial centre [m] at the last update (a view)."""
+        return self._r
+
+    @property
+    def axes(self) -> np.ndarray:
+        """Orientation of the sphere's frame (3, 3) at the last update (a view)."""
+        return self._A
+
     def bounding_box(self):
         return np.array([self._r - self.radius, self._r + self.radius])
 

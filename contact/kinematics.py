@@ -1,0 +1,385 @@
+"""Contact kinematics: normal gap, contact frame, relative velocity and Jacobians.
+
+A contact joins contour 1 (the point side: a point or a sphere) and contour 2 (the
+surface side: a 2s or 1s contour, a plane or a sphere) at the contact points C1, C2
+(thesis Sec. 3.1, eq. 3.2–3.8). With n the outward unit normal of contour 2 at C2 and
+T = (t1, t2) its tangents (contour 2's frame),
+
+    g_N = nᵀ (r_C1 − r_C2)             [m]    (eq. 3.4, > 0 when apart)
+    ġ_N = nᵀ (v_C1 − v_C2)             [m/s]  (eq. 3.8)
+    ġ_T = Tᵀ (v_C1 − v_C2)             [m/s]  (eq. 3.8)
+    W_N = J_T1ᵀ n − J_T2ᵀ n            (nu_total,),   ġ_N = W_Nᵀ u
+    W_T = J_T1ᵀ T − J_T2ᵀ T            (nu_total, 2), ġ_T = W_Tᵀ u
+
+with J_Ti = ∂v_Ci/∂u of contour i's body at Ci (thesis eq. 2.70) in that body's slice of
+the global u (the ground contributes nothing). Sign: the thesis's eq. 3.4 writes
+g_N = n2ᵀ (r2 − r1), which with the outward n2 of eq. 3.5 is negative when the bodies
+are apart — a sign typo; here g_N = n2ᵀ (r1 − r2), positive when apart, and eq. 3.8
+likewise with (v1 − v2).
+
+C2 solves eq. 3.6 (found by the search of :mod:`contact.search`, or analytically for a
+plane or a sphere); C1 is the point itself or, for a sphere of radius ρ and centre c,
+c − ρ n (its velocity and J_T1 are those of the sphere's material point there). At a
+closest point r_C1 − r_C2 ∥ n on a 2s contour, so ġ_N is the exact time derivative of
+g_N and W_N its exact gradient (in the velocity increments, q ⊕ Δu). On a 1s contour the
+point may also lie off the curve's normal along t2; then ġ_N misses the term
+(t2-offset) · t2ᵀ ṅ (exact when that offset is zero).
+
+Contours are updated by the caller (``contour.update(q_body, u_body, t)``) before
+:meth:`ContactKinematics.update`.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+
+import numpy as np
+
+from ffrmbs.errors import ModelError
+
+from contours.rigid import PlaneContour, PointContour, SphereContour
+
+from .search import Contact1sSearch, Contact2sSearch
+
+
+class ContactKinematics(ABC):
+    """Normal gap, contact frame, relative velocity and Jacobians of a contact between
+    contour1 (point side) and contour2 (surface side), thesis eq. 3.2–3.8 (see the module
+    docstring).
+
+    Parameters
+    ----------
+    contour1, contour2 : Contour
+    nu_total : int or None
+        Length of the global u. Bodies take their ``u_slice`` from the System; bodies in
+        no System get a local layout (body 1, then body 2) and nu_total defaults to its
+        length.
+
+    Attributes (filled by :meth:`update`)
+    ----------
+    point1, point2 : ContourPoint
+        C1 and C2 (positions, frames; velocities and J_T when asked for).
+    active : bool
+        A contact point was found inside contour 2's domain; the rest is valid only then.
+    g_N : float [m];  n : (3,);  T : (3, 2);  gd_N : float [m/s];  gd_T : (2,) [m/s]
+    w_N1, w_N2 : (nu1,), (nu2,)
+        Point-local Jacobian pieces J_T1ᵀ n and −J_T2ᵀ n in the bodies' own u.
+    w_T1, w_T2 : (nu1, 2), (nu2, 2)
+        J_T1ᵀ T and −J_T2ᵀ T.
+    """
+
+    def __init__(self, contour1, contour2, nu_total=None):
+        self.contour1, self.contour2 = contour1, contour2
+        self.point1, self.point2 = contour1.new_point(), contour2.new_point()
+        self._nu_total = nu_total
+        self.active = False
+        self.g_N = np.nan
+        self.n = np.zeros(3)
+        self.T = np.zeros((3, 2))
+        self.gd_N = np.nan
+        self.gd_T = np.zeros(2)
+        self._dv = np.zeros(3)
+        self.w_N1, self.w_N2 = np.zeros(contour1.nu), np.zeros(contour2.nu)
+        self.w_T1, self.w_T2 = np.zeros((contour1.nu, 2)), np.zeros((contour2.nu, 2))
+
+    @abstractmethod
+    def _locate(self, velocity, jacobians) -> bool:
+        """Find C1 and C2, fill point1, point2 (with velocities and J_T when asked for)
+        and g_N; True if a contact point exists."""
+
+    def update(self, velocity=True, jacobians=True) -> bool:
+        """Search the contact points and fill g_N, n, T, and (if asked for) ġ_N, ġ_T and
+        the point-local Jacobians; returns :attr:`active`. The contours must have been
+        updated at this state (with u for ``velocity``)."""
+        self.active = self._locate(velocity, jacobians)
+        if not self.active:
+            return False
+        F = self.point2.frame
+        self.n[:] = F[:, 2]
+        self.T[:] = F[:, :2]
+        if velocity:
+            np.subtract(self.point1.v, self.point2.v, out=self._dv)
+            self.gd_N = float(self.n @ self._dv)
+            np.dot(self._dv, self.T, out=self.gd_T)
+        if jacobians:
+            np.dot(self.n, self.point1.J_T, out=self.w_N1)
+            np.dot(self.n, self.point2.J_T, out=self.w_N2)
+            self.w_N2 *= -1.0
+            np.dot(self.point1.J_T.T, self.T, out=self.w_T1)
+            np.dot(self.point2.J_T.T, self.T, out=self.w_T2)
+            self.w_T2 *= -1.0
+        return True
+
+    # --- assembly in the global u ---------------------------------------------------------
+    def u_slices(self):
+        """(slice of body 1, slice of body 2) in the global u; None for the ground."""
+        b1, b2 = self.contour1.body, self.contour2.body
+        given = [b.u_slice for b in (b1, b2) if b is not None]
+        if all(s is not None for s in given):
+            return tuple(None if b is None else b.u_slice for b in (b1, b2))
+        if any(s is not None for s in given):
+            raise ModelError(f"{self!r}: one body belongs to a System and the other not")
+        s1 = None if b1 is None else slice(0, b1.nu)
+        if b2 is None:
+            return s1, None
+        if b2 is b1:
+            return s1, s1
+        start = 0 if s1 is None else s1.stop
+        return s1, slice(start, start + b2.nu)
+
+    @property
+    def nu_total(self) -> int:
+        """Length of the global u."""
+        if self._nu_total is not None:
+            return self._nu_total
+        return max((s.stop for s in self.u_slices() if s is not None), default=0)
+
+    def local_blocks(self):
+        """[(u_slice, w_N (nu_b,), w_T (nu_b, 2))] per non-ground body, to assemble W_N,
+        W_T sparse or blocked (add the blocks: both contours may sit on one body)."""
+        s1, s2 = self.u_slices()
+        blocks = []
+        if s1 is not None:
+            blocks.append((s1, self.w_N1, self.w_T1))
+        if s2 is not None:
+            blocks.append((s2, self.w_N2, self.w_T2))
+        return blocks
+
+    def W_N(self, out=None):
+        """W_N (nu_total,) into ``out`` (zero outside the bodies' slices); ġ_N = W_Nᵀ u."""
+        out = np.zeros(self.nu_total) if out is None else out
+        out[:] = 0.0
+        for s, w_N, _ in self.local_blocks():
+            out[s] += w_N
+        return out
+
+    def W_T(self, out=None):
+        """W_T (nu_total, 2) into ``out`` (zero outside the bodies' slices); ġ_T = W_Tᵀ u."""
+        out = np.zeros((self.nu_total, 2)) if out is None else out
+        out[:] = 0.0
+        for s, _, w_T in self.local_blocks():
+            out[s] += w_T
+        return out
+
+    def __repr__(self):
+        return f"{type(self).__name__}({self.contour1!r}, {self.contour2!r})"
+
+
+def _require(contour, kind, what):
+    if not isinstance(contour, kind):
+        raise ModelError(f"expected {what}, got {contour!r}")
+    return contour
+
+
+def _require_dim(contour, dim):
+    if getattr(contour, "dim", None) != dim:
+        raise ModelError(f"expected a {dim}s contour, got {contour!r}")
+    return contour
+
+
+def _sphere_angles(A, m):
+    """Surface coordinates (η, ξ) [rad] of a SphereContour with axes A (3, 3) at the point
+    in the unit direction m (3,) from its centre."""
+    x, y, z = A.T @ m
+    return float(np.arctan2(y, x)) % (2.0 * np.pi), float(np.arcsin(min(1.0, max(-1.0, z))))
+
+
+class _CentreContact(ContactKinematics):
+    """Contour 1 is a point (``side1 = PointContour``, radius 0) or a sphere
+    (``side1 = SphereContour``): its centre c is projected onto contour 2
+    (``_project``), g_N = nᵀ (c − r_C2) − ρ and C1 = c − ρ n."""
+
+    side1: type
+
+    def __init__(self, contour1, contour2, nu_total):
+        _require(contour1, self.side1, f"a {self.side1.__name__}")
+        super().__init__(contour1, contour2, nu_total)
+        self.radius = contour1.radius if self.side1 is SphereContour else 0.0
+        self._centre = np.zeros(3)
+        self._A1 = np.eye(3)
+
+    @abstractmethod
+    def _project(self, c, velocity, jacobians) -> bool:
+        """Fill point2 at the contact point of contour 2 for the centre c; False if none."""
+
+    def _locate(self, velocity, jacobians):
+        p1, c1 = self.point1, self.contour1
+        if self.side1 is PointContour:
+            c1.evaluate(p1, velocity=velocity, jacobians=jacobians)
+            self._centre[:] = p1.r
+        else:
+            self._A1[:] = c1.axes
+            self._centre[:] = c1.centre
+        if not self._project(self._centre, velocity, jacobians):
+            return False
+        n = self.point2.n
+        self.g_N = float(n @ (self._centre - self.point2.r)) - self.radius
+        if self.side1 is SphereContour:
+            c1.evaluate(p1, *_sphere_angles(self._A1, -n), velocity=velocity, jacobians=jacobians)
+        return True
+
+
+class _SearchContact(_CentreContact):
+    """Contour 2 located by ``search_class`` (or a given search on it), warm-started at
+    the last contact point."""
+
+    search_class: type
+
+    def __init__(self, contour1, contour2, search, nu_total):
+        super().__init__(contour1, _require_dim(contour2, self.search_class.dim), nu_total)
+        if search is not None and search.contour is not contour2:
+            raise ModelError(f"{type(self).__name__}: the search runs on {search.contour!r}, not on {contour2!r}")
+        self.search = self.search_class(contour2) if search is None else search
+        self._start = None
+
+    def _project(self, c, velocity, jacobians):
+        found = self.search.solve(c, self._start)
+        self._start = found
+        if found is None:
+            return False
+        coords = found if self.search.dim == 2 else (found,)
+        self.contour2.evaluate(self.point2, *coords, velocity=velocity, jacobians=jacobians)
+        return True
+
+
+class ContactKinematicsPointContour2s(_SearchContact):
+    """A point (PointContour) against a 2s contour (neutral 2s, band, cylinder, sphere,
+    plane): C2 from eq. 3.6 by :class:`~contact.search.Contact2sSearch` (thesis Sec. 3.3),
+    warm-started at the last contact point; g_N by eq. 3.4, ġ by eq. 3.8 (signs: module
+    docstring). ``search``: a configured Contact2sSearch on ``surface`` (default grid
+    8 × 8). Inactive when the point's foot lies outside an open contour's domain."""
+
+    side1, search_class = PointContour, Contact2sSearch
+
+    def __init__(self, point, surface, search=None, nu_total=None):
+        super().__init__(point, surface, search, nu_total)
+
+
+class ContactKinematicsSphereContour2s(_SearchContact):
+    """A sphere (SphereContour, radius ρ) against a 2s contour: its centre c is searched
+    as a point (eq. 3.6), g_N = nᵀ (c − r_C2) − ρ (eq. 3.4), C1 = c − ρ n, ġ by eq. 3.8
+    with the sphere's material velocity at C1."""
+
+    side1, search_class = SphereContour, Contact2sSearch
+
+    def __init__(self, sphere, surface, search=None, nu_total=None):
+        super().__init__(sphere, surface, search, nu_total)
+
+
+class ContactKinematicsPointContour1s(_SearchContact):
+    """A point against a 1s contour (curve): C2 from t_ηᵀ (r_P − r(η)) = 0 by
+    :class:`~contact.search.Contact1sSearch`; the contact normal is the curve's n (its
+    reference normal made perpendicular to the tangent), T = (t1, t2) its frame;
+    g_N = nᵀ (r_P − r_C2) (eq. 3.4), ġ by eq. 3.8. The offset along t2 does not count
+    (a planar contact, thesis Sec. 5.3)."""
+
+    side1, search_class = PointContour, Contact1sSearch
+
+    def __init__(self, point, curve, search=None, nu_total=None):
+        super().__init__(point, curve, search, nu_total)
+
+
+class ContactKinematicsSphereContour1s(_SearchContact):
+    """A sphere against a 1s contour: its centre c is searched as a point,
+    g_N = nᵀ (c − r_C2) − ρ with the curve's normal n, C1 = c − ρ n, ġ by eq. 3.8."""
+
+    side1, search_class = SphereContour, Contact1sSearch
+
+    def __init__(self, sphere, curve, search=None, nu_total=None):
+        super().__init__(sphere, curve, search, nu_total)
+
+
+class _PlaneProjection(_CentreContact):
+    """Contour 2 a PlaneContour: C2 is the orthogonal projection of c onto the plane,
+    (η, ξ) = (x, y)ᵀ (c − O) in the plane's axes. The plane is unbounded for contact (its
+    ``size`` only limits drawing), so the contact is always active."""
+
+    def __init__(self, contour1, plane, nu_total):
+        super().__init__(contour1, _require(plane, PlaneContour, "a PlaneContour"), nu_total)
+
+    def _project(self, c, velocity, jacobians):
+        p2 = self.contour2.evaluate(self.point2, 0.0, 0.0)
+        d = c - p2.r
+        eta, xi = float(p2.frame[:, 0] @ d), float(p2.frame[:, 1] @ d)
+        self.contour2.evaluate(p2, eta, xi, velocity=velocity, jacobians=jacobians)
+        return True
+
+
+class ContactKinematicsPointPlane(_PlaneProjection):
+    """A point against a plane, analytic (no search): C2 = r_P − g_N n, n the plane's z
+    axis, g_N = nᵀ (r_P − O) (eq. 3.4), ġ by eq. 3.8."""
+
+    side1 = PointContour
+
+    def __init__(self, point, plane, nu_total=None):
+        super().__init__(point, plane, nu_total)
+
+
+class ContactKinematicsSpherePlane(_PlaneProjection):
+    """A sphere against a plane, analytic: g_N = nᵀ (c − O) − ρ, C2 the projection of the
+    centre c, C1 = c − ρ n (eq. 3.4, 3.8)."""
+
+    side1 = SphereContour
+
+    def __init__(self, sphere, plane, nu_total=None):
+        super().__init__(sphere, plane, nu_total)
+
+
+class ContactKinematicsSphereSphere(_CentreContact):
+    """Two spheres, analytic: n = (c1 − c2)/|c1 − c2| along the centre line,
+    g_N = |c1 − c2| − ρ1 − ρ2, C2 = c2 + ρ2 n, C1 = c1 − ρ1 n (eq. 3.4); T from sphere
+    2's frame at C2, ġ by eq. 3.8. Inactive when the centres coincide (no normal)."""
+
+    side1 = SphereContour
+
+    def __init__(self, sphere1, sphere2, nu_total=None):
+        super().__init__(sphere1, _require(sphere2, SphereContour, "a SphereContour"), nu_total)
+        self._A2 = np.eye(3)
+
+    def _project(self, c, velocity, jacobians):
+        p2 = self.point2
+        self._A2[:] = self.contour2.axes
+        d = c - self.contour2.centre
+        dist = np.linalg.norm(d)
+        if dist == 0.0:
+            return False
+        self.contour2.evaluate(p2, *_sphere_angles(self._A2, d / dist), velocity=velocity, jacobians=jacobians)
+        return True
+
+
+class PointOnCurveConstraint(ContactKinematicsPointContour1s):
+    """Bilateral "point stays on a curve" (the sliding ball of thesis Sec. 5.3): at the
+    closest curve point η* (t_ηᵀ (r_P − r(η*)) = 0, eq. 3.6) the two normal-plane
+    components of d = r_P − r(η*) in the curve frame,
+
+        g = (nᵀ d, t2ᵀ d)        (2,) [m],
+        ġ = (n, t2)ᵀ (v_P − v_C)  (2,) [m/s],   W = [W_N, W_T[:, 1]]  (nu_total, 2),
+
+    with ġ = Wᵀ u. W is the exact gradient of g on the constraint manifold g = 0 (off it,
+    the rotation of (n, t2) adds terms of order |g|). Valid while :attr:`active` (η*
+    inside an open curve's domain).
+    """
+
+    def __init__(self, point, curve, search=None, nu_total=None):
+        super().__init__(point, curve, search, nu_total)
+        self.g = np.zeros(2)
+        self.gd = np.zeros(2)
+
+    def update(self, velocity=True, jacobians=True) -> bool:
+        """As :meth:`ContactKinematics.update`, then g and (with velocity) ġ."""
+        if not super().update(velocity, jacobians):
+            return False
+        self.g[0] = self.g_N
+        self.g[1] = self.T[:, 1] @ (self.point1.r - self.point2.r)
+        if velocity:
+            self.gd[0], self.gd[1] = self.gd_N, self.gd_T[1]
+        return True
+
+    def W(self, out=None):
+        """W (nu_total, 2) into ``out`` (zero outside the bodies' slices); ġ = Wᵀ u."""
+        out = np.zeros((self.nu_total, 2)) if out is None else out
+        out[:] = 0.0
+        for s, w_N, w_T in self.local_blocks():
+            out[s, 0] += w_N
+            out[s, 1] += w_T[:, 1]
+        return out
