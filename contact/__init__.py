@@ -1,1 +1,32 @@
-"""Contact kinematics, hierarchical search, force laws and solvers (issue 6)."""
+"""Contact kinematics, hierarchical search, force laws and solvers (thesis Sec. 3.1, 3.3, 4.5).
+
+Public API::
+
+    from contact import Contact, ContactKinematicsPointContour2s, UnilateralNewtonImpact, ...
+
+* :mod:`contact.kinematics` — gaps, frames, relative velocities and Jacobians (eq. 3.2–3.8).
+* :mod:`contact.search` — the hierarchical contact search (Sec. 3.3, Alg. 4–6).
+* :mod:`contact.broad_phase` — bounding-box pruning of contact pairs.
+* :mod:`contact.laws` — set-valued and regularized force laws.
+* :mod:`contact.solver` — the contact problem of a Moreau step (prox, semismooth Newton).
+* :mod:`contact.contact` — a contact (kinematics + law) to add to a System.
+"""
+
+from .broad_phase import BroadPhase, overlapping
+from .contact import Contact, CurveConstraint
+from .kinematics import (ContactKinematics, ContactKinematicsPointContour1s, ContactKinematicsPointContour2s,
+                         ContactKinematicsPointPlane, ContactKinematicsSphereContour1s,
+                         ContactKinematicsSphereContour2s, ContactKinematicsSpherePlane,
+                         ContactKinematicsSphereSphere, PointOnCurveConstraint)
+from .laws import (Bilateral, LinearRegularizedUnilateralConstraint, RegularizedCoulombFriction,
+                   SpatialCoulombFriction, UnilateralCoulombContact, UnilateralNewtonImpact)
+from .search import Contact1sSearch, Contact2sSearch
+from .solver import ContactSolution, ProxSolver
+
+__all__ = ["Bilateral", "BroadPhase", "Contact", "Contact1sSearch", "Contact2sSearch", "ContactKinematics",
+           "ContactKinematicsPointContour1s", "ContactKinematicsPointContour2s", "ContactKinematicsPointPlane",
+           "ContactKinematicsSphereContour1s", "ContactKinematicsSphereContour2s", "ContactKinematicsSpherePlane",
+           "ContactKinematicsSphereSphere", "ContactSolution", "CurveConstraint",
+           "LinearRegularizedUnilateralConstraint", "PointOnCurveConstraint", "ProxSolver",
+           "RegularizedCoulombFriction", "SpatialCoulombFriction", "UnilateralCoulombContact",
+           "UnilateralNewtonImpact", "overlapping"]

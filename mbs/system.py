@@ -34,6 +34,7 @@ class System:
         self.bodies: list[Body] = []
         self.forces: list[ForceElement] = []
         self.constraints: list[Constraint] = []
+        self.contacts: list = []  # contact.Contact, contact.CurveConstraint (Moreau time-stepping)
         self.ground = ground_frame()
         self.nq = self.nu = self.n_c = 0
         self._com = []
@@ -50,7 +51,7 @@ class System:
             self.nu += item.nu
             self.bodies.append(item)
             self._com.append(item.com_frame())
-        elif isinstance(item, (ForceElement, Constraint)):
+        elif isinstance(item, (ForceElement, Constraint)) or getattr(item, "is_contact", False):
             for body in item.bodies():
                 if body is not None and body not in self.bodies:
                     raise ModelError(f"{type(item).__name__} acts on body {body.name!r}, "
@@ -58,11 +59,13 @@ class System:
             if isinstance(item, Constraint):
                 self.constraints.append(item)
                 self.n_c += item.n_c
+            elif getattr(item, "is_contact", False):
+                self.contacts.append(item)
             else:
                 self.forces.append(item)
         else:
             raise ModelError(f"cannot add {item!r} to a System: expected a body, a force "
-                             "element or a constraint")
+                             "element, a constraint or a contact")
         return item
 
     def frame(self, position=(0.0, 0.0, 0.0), orientation=None, name=None) -> Frame:

@@ -1,4 +1,5 @@
-"""Smooth time integrators for scenes without set-valued contacts.
+"""Time integrators: smooth ones for scenes without set-valued contacts, and Moreau's
+time-stepping (:class:`MoreauTimeStepping`, "moreau") for contacts and impacts.
 
 * :class:`GeneralizedAlpha` (implicit, default): the generalized-α method of Chung and
   Hulbert in the Lie-group form of Arnold and Brüls for the index-3 equations
@@ -16,8 +17,9 @@ from ffrmbs.errors import ModelError
 
 from .explicit import RK4
 from .generalized_alpha import GeneralizedAlpha
+from .moreau import MoreauTimeStepping
 
-INTEGRATORS = {"generalized-alpha": GeneralizedAlpha, "rk4": RK4}
+INTEGRATORS = {"generalized-alpha": GeneralizedAlpha, "rk4": RK4, "moreau": MoreauTimeStepping}
 
 
 def integrator_class(name):

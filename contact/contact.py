@@ -1,0 +1,118 @@
+"""A contact in a System: contact kinematics plus a force law (thesis Sec. 3.1, 4.1, 4.5).
+
+:class:`Contact` joins a :class:`~contact.kinematics.ContactKinematics` and a law of
+:mod:`contact.laws`:
+
+* set-valued (``UnilateralNewtonImpact``, ``UnilateralCoulombContact``): the contact is
+  closed when g_N(q_m) <= 0 at the Moreau midpoint; it then adds ``dim`` rows to the
+  contact problem, W = [w_N] or [w_N, w_T1, w_T2] (thesis eq. 3.1, 4.1);
+* single-valued (``LinearRegularizedUnilateralConstraint``, optionally with
+  ``RegularizedCoulombFriction``): a force W_N F_N + W_T F_T added to h.
+
+:class:`CurveConstraint` keeps a point on a curve (bilateral, 2 rows; thesis Sec. 5.3).
+The integrator updates every contour once per step before ``detect``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ffrmbs.errors import ModelError
+
+from .kinematics import ContactKinematics, PointOnCurveConstraint
+from .laws import (Bilateral, LinearRegularizedUnilateralConstraint, RegularizedCoulombFriction,
+                   UnilateralCoulombContact, UnilateralNewtonImpact)
+
+SET_VALUED = (UnilateralNewtonImpact, UnilateralCoulombContact)
+
+
+class Contact:
+    """A unilateral contact: ``kinematics`` and a ``law`` (see module docstring);
+    ``friction`` only with a single-valued normal law."""
+
+    is_contact = True
+
+    def __init__(self, kinematics: ContactKinematics, law, friction=None, name="contact"):
+        if not isinstance(law, SET_VALUED + (LinearRegularizedUnilateralConstraint,)):
+            raise ModelError(f"{name}: unsupported contact law {law!r}")
+        if friction is not None and not (isinstance(friction, RegularizedCoulombFriction)
+                                         and isinstance(law, LinearRegularizedUnilateralConstraint)):
+            raise ModelError(f"{name}: friction= takes a RegularizedCoulombFriction with a regularized "
+                             "normal law; use UnilateralCoulombContact for set-valued friction")
+        self.kinematics, self.law, self.friction, self.name = kinematics, law, friction, name
+        self.set_valued = isinstance(law, SET_VALUED)
+        self.dim = law.dim if self.set_valued else 0
+        self.closed = False
+        self.force_N = 0.0
+        self._W = np.zeros((0, 0))
+
+    def bodies(self):
+        return [c.body for c in self.contours() if c.body is not None]
+
+    def contours(self):
+        return [self.kinematics.contour1, self.kinematics.contour2]
+
+    @property
+    def penetration(self) -> float:
+        """max(0, −g_N) [m] at the last detection."""
+        return max(0.0, -self.kinematics.g_N) if self.closed else 0.0
+
+    def detect(self) -> bool:
+        """Locate the contact on the updated contours; closed when found and g_N <= 0."""
+        k = self.kinematics
+        self.closed = bool(k.update(velocity=not self.set_valued, jacobians=True)) and k.g_N <= 0.0
+        return self.closed
+
+    def jacobian(self, out) -> None:
+        """W (nu, dim) of the closed contact into ``out`` (zeroed by the caller)."""
+        k = self.kinematics
+        k.W_N(out[:, 0])
+        if self.dim == 3:
+            k.W_T(out[:, 1:])
+
+    def add_forces(self, h) -> None:
+        """Single-valued law: h += W_N F_N (+ W_T F_T) at the located contact."""
+        k = self.kinematics
+        self.force_N = float(self.law.force(k.g_N, k.gd_N)) if self.closed else 0.0
+        if self.force_N == 0.0:
+            return
+        if self._W.shape[0] != h.shape[0]:
+            self._W = np.zeros((h.shape[0], 3))
+        W = self._W
+        W[:] = 0.0
+        k.W_N(W[:, 0])
+        h += self.force_N * W[:, 0]
+        if self.friction is not None:
+            k.W_T(W[:, 1:])
+            h += W[:, 1:] @ self.friction.force(k.gd_T, self.force_N)
+
+
+class CurveConstraint:
+    """A point kept on a curve (bilateral, γ⁺ = 0 on the two normal-plane directions)."""
+
+    is_contact = True
+    set_valued = True
+    dim = 2
+
+    def __init__(self, kinematics: PointOnCurveConstraint, name="on curve"):
+        if not isinstance(kinematics, PointOnCurveConstraint):
+            raise ModelError(f"{name}: needs PointOnCurveConstraint kinematics")
+        self.kinematics, self.law, self.name = kinematics, Bilateral(2), name
+        self.closed = False
+
+    def bodies(self):
+        return [c.body for c in self.contours() if c.body is not None]
+
+    def contours(self):
+        return [self.kinematics.contour1, self.kinematics.contour2]
+
+    penetration = 0.0
+
+    def detect(self) -> bool:
+        self.closed = bool(self.kinematics.update(velocity=False, jacobians=True))
+        if not self.closed:
+            raise ModelError(f"{self.name}: the point left the curve's domain")
+        return True
+
+    def jacobian(self, out) -> None:
+        self.kinematics.W(out)

@@ -1,0 +1,317 @@
+"""The contact problem of one Moreau time step on velocity level (DESIGN stage 5).
+
+Given the Delassus matrix G = Wᵀ M̂⁻¹ W (m, m) [1/kg], the free end-of-step relative
+velocities ξ_free (m,) [m/s] and the pre-step ones γ⁻ = Wᵀ u_k (m,) [m/s], find the
+impulses Λ (m,) [N s] with
+
+    γ⁺ = ξ_free + G Λ,     Λ_c = prox_{C_c}(Λ_c − r_c ξ_c),   ξ_c = γ⁺_c + ε_c γ⁻_c
+
+for every contact c (its law's inclusion, :mod:`contact.laws`; thesis eq. 3.1c-d).
+Λ is the concatenation of the contacts' blocks in the order of the laws, a spatial
+contact's block being ``[N, T1, T2]``. The integrator then sets
+u_{k+1} = u_free + M̂⁻¹ W Λ.
+
+Methods (:class:`ProxSolver`):
+
+* ``"gauss-seidel"``: projected Gauss–Seidel (nonsmooth contact dynamics, Moreau 1988,
+  Jean 1999), row by row with r_i = α / G_ii (Studer 2009, sec. 6.3; Acary & Brogliato
+  2008, ch. 12); for a Coulomb contact r_T = α / λ_max(G_TT) on both tangential rows, so
+  that the disk projection stays isotropic. Converges for α in (0, 2) on frictionless
+  and bilateral problems with G positive definite (projected SOR, Cryer 1971); with
+  friction convergence is usual but not guaranteed.
+* ``"jacobi"``: all contacts from the same Λ, r_i = α / (G_ii ρ) with ρ a Gershgorin
+  bound of λ_max(D^-1/2 G D^-1/2), D = diag(G), so that the iteration contracts for
+  frictionless problems (Studer 2009, sec. 6.2).
+* ``"newton"``: a semismooth Newton method on the Fischer–Burmeister reformulation
+  φ(Λ_i, r_i ξ_i) = sqrt(Λ_i² + r_i² ξ_i²) − Λ_i − r_i ξ_i = 0 of the unilateral rows
+  and r_i ξ_i = 0 of the bilateral rows, r_i = 1 / G_ii, with an Armijo line search on
+  ½|Φ|² and a gradient step when the Newton direction is no descent (De Luca, Facchinei
+  & Kanzow 1996; Acary & Brogliato 2008, ch. 12). Local convergence is quadratic and does
+  not degrade with the conditioning of G (large mass ratios), where the prox iterations
+  slow down. It covers :class:`~contact.laws.UnilateralNewtonImpact` and
+  :class:`~contact.laws.Bilateral` contacts; a problem with friction raises ModelError
+  (use a prox method).
+
+Convergence: with v_ref = max|ξ_free + ε γ⁻| [m/s], an iteration stops when the scaled
+change max_i |ΔΛ_i| / r_i and then the natural-map residual max_i |Λ_i −
+prox(Λ − r ξ)_i| / r_i [m/s] (zero exactly at a solution, for any r > 0) are both
+<= ``tol`` · v_ref. Without convergence the last iterate comes back with
+``converged=False``; the integrator decides.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ffrmbs.errors import ModelError
+
+from . import _kernels as kern
+from .laws import Bilateral, UnilateralCoulombContact, UnilateralNewtonImpact
+
+METHODS = ("gauss-seidel", "jacobi", "newton")
+ARMIJO_SIGMA = 1e-4          # sufficient decrease of the merit ½|Φ|²
+ARMIJO_MIN_STEP = 1e-12      # smallest line-search step before giving up
+DESCENT_RHO, DESCENT_P = 1e-10, 2.1   # gradient step unless ∇Ψᵀd <= −ρ|d|^p (De Luca et al.)
+TINY_DIAGONAL = 1e-14        # G_ii below this times max G_jj: row touches no mass
+
+
+class ContactSet:
+    """The set-valued laws of one contact problem and their rows in Λ, encoded for numba.
+
+    Parameters
+    ----------
+    laws : sequence of set-valued laws
+        :class:`~contact.laws.UnilateralNewtonImpact`, :class:`~contact.laws.Bilateral`
+        or :class:`~contact.laws.UnilateralCoulombContact`; Λ holds their blocks in this
+        order.
+
+    Attributes
+    ----------
+    laws : tuple
+    offsets : ndarray (n_laws,) int
+        First row of each law's block in Λ.
+    m : int
+        Number of rows of Λ.
+    restitution : ndarray (m,)
+        ε of every row (ξ = γ⁺ + ε γ⁻).
+    kinds, entry_offsets, mu : ndarray
+        The kernel encoding (:mod:`contact._kernels`): a Bilateral of dim k is k scalar
+        entries, the other laws one entry each.
+    frictional : bool
+        Whether a law has friction.
+    """
+
+    def __init__(self, laws):
+        self.laws = tuple(laws)
+        offsets, kinds, entry_offsets, mu, eps = [], [], [], [], []
+        m = 0
+        for law in self.laws:
+            if isinstance(law, Bilateral):
+                kinds += [kern.BILATERAL] * law.dim
+                entry_offsets += list(range(m, m + law.dim))
+                mu += [0.0] * law.dim
+            elif isinstance(law, (UnilateralNewtonImpact, UnilateralCoulombContact)):
+                frictional = isinstance(law, UnilateralCoulombContact)
+                kinds.append(kern.COULOMB if frictional else kern.UNILATERAL)
+                entry_offsets.append(m)
+                mu.append(law.mu if frictional else 0.0)
+            else:
+                raise ModelError(
+                    f"contact solver: {law!r} is not a set-valued contact law it solves "
+                    "(UnilateralNewtonImpact, Bilateral, UnilateralCoulombContact)")
+            offsets.append(m)
+            eps.append(law.restitution)
+            m += law.dim
+        self.offsets = np.array(offsets, dtype=np.int64)
+        self.m = m
+        self.restitution = np.concatenate(eps) if eps else np.zeros(0)
+        self.kinds = np.array(kinds, dtype=np.int64)
+        self.entry_offsets = np.array(entry_offsets, dtype=np.int64)
+        self.mu = np.array(mu, dtype=float)
+        self.frictional = bool(np.any(self.kinds == kern.COULOMB))
+
+    def tangent_rows(self):
+        """First tangential row (T1) of every Coulomb contact, (n_c,) int."""
+        return self.entry_offsets[self.kinds == kern.COULOMB] + 1
+
+
+@dataclass
+class ContactSolution:
+    """Result of :meth:`ProxSolver.solve`.
+
+    Attributes
+    ----------
+    lam : ndarray (m,) [N s]
+        The impulses Λ (the last iterate when not converged).
+    gamma_plus : ndarray (m,) [m/s]
+        γ⁺ = ξ_free + G Λ.
+    iterations : int
+        Sweeps (prox methods) or Newton steps.
+    residual : float [m/s]
+        Natural-map residual max_i |Λ_i − prox(Λ − r ξ)_i| / r_i of ``lam``.
+    converged : bool
+    """
+
+    lam: np.ndarray
+    gamma_plus: np.ndarray
+    iterations: int
+    residual: float
+    converged: bool
+
+
+class ProxSolver:
+    """Solver of the velocity-level contact problem (module docstring).
+
+    Parameters
+    ----------
+    method : {"gauss-seidel", "jacobi", "newton"}
+    r : "auto" or float > 0 [kg]
+        Prox factors: "auto" the per-row choice of the method (module docstring), a
+        number the same r on every row (prox methods only; Newton always scales by
+        1 / G_ii).
+    relaxation : float in (0, 2)
+        α of the automatic r of the prox methods.
+    tol : float > 0
+        Relative tolerance of the residual [-] (times v_ref, module docstring).
+    max_iter : int >= 1 or None
+        Most sweeps or Newton steps; None: 10000 sweeps, 100 Newton steps.
+    """
+
+    def __init__(self, method="gauss-seidel", r="auto", relaxation=1.0, tol=1e-10,
+                 max_iter=None):
+        if method not in METHODS:
+            raise ModelError(f"ProxSolver: method must be one of {METHODS}, got {method!r}")
+        if not (isinstance(r, str) and r == "auto"):
+            if isinstance(r, str) or not (math.isfinite(float(r)) and float(r) > 0.0):
+                raise ModelError(f"ProxSolver: r must be 'auto' or a number > 0, got {r!r}")
+            r = float(r)
+        relaxation = float(relaxation)
+        if not 0.0 < relaxation < 2.0:
+            raise ModelError(f"ProxSolver: relaxation must lie in (0, 2), got {relaxation!r}")
+        tol = float(tol)
+        if not (math.isfinite(tol) and tol > 0.0):
+            raise ModelError(f"ProxSolver: tol must be a number > 0, got {tol!r}")
+        if max_iter is None:
+            max_iter = 100 if method == "newton" else 10_000
+        if int(max_iter) != max_iter or max_iter < 1:
+            raise ModelError(f"ProxSolver: max_iter must be an integer >= 1, got {max_iter!r}")
+        self.method, self.r, self.relaxation = method, r, relaxation
+        self.tol, self.max_iter = tol, int(max_iter)
+
+    def solve(self, contacts, G, xi_free, gamma_pre, lam0=None) -> ContactSolution:
+        """Impulses Λ of one time step.
+
+        Parameters
+        ----------
+        contacts : ContactSet or sequence of set-valued laws
+        G : array (m, m) [1/kg]
+            Delassus matrix Wᵀ M̂⁻¹ W (symmetric positive semi-definite).
+        xi_free : array (m,) [m/s]
+            Free end-of-step relative velocities.
+        gamma_pre : array (m,) [m/s]
+            Pre-step relative velocities γ⁻ (restitution).
+        lam0 : array (m,) [N s], optional
+            Warm start, e.g. the previous step's Λ of the same contacts; zero by default.
+        """
+        cs = contacts if isinstance(contacts, ContactSet) else ContactSet(contacts)
+        G, xi_free, gamma_pre, lam = _checked(cs, G, xi_free, gamma_pre, lam0)
+        c = xi_free + cs.restitution * gamma_pre
+        v_ref = float(np.max(np.abs(c), initial=0.0))
+        if v_ref == 0.0:               # Λ = 0 solves every law
+            lam[:] = 0.0
+            return ContactSolution(lam, xi_free.copy(), 0, 0.0, True)
+        tol_v = self.tol * v_ref
+        if self.method == "newton":
+            if cs.frictional:
+                raise ModelError("ProxSolver: method 'newton' covers unilateral and bilateral "
+                                 "contacts only; use 'gauss-seidel' with friction")
+            it, residual, converged = self._newton(cs, G, c, _diagonal(G) ** -1.0, lam, tol_v)
+        else:
+            r = self._prox_factors(cs, G)
+            it, residual, converged = kern.prox_iterate(
+                G, c, r, cs.kinds, cs.entry_offsets, cs.mu, lam, np.empty(cs.m),
+                self.method == "jacobi", tol_v, self.max_iter)
+        return ContactSolution(lam, xi_free + G @ lam, int(it), float(residual),
+                               bool(converged))
+
+    def _prox_factors(self, cs, G):
+        """r (m,) [kg] of the prox methods (module docstring)."""
+        if self.r != "auto":
+            return np.full(cs.m, self.r)
+        d = _diagonal(G)
+        alpha = self.relaxation
+        if self.method == "jacobi":
+            s = np.sqrt(d)
+            alpha /= np.max(np.sum(np.abs(G) / np.outer(s, s), axis=1))
+        r = alpha / d
+        for t in cs.tangent_rows():
+            a, b, e = G[t, t], G[t, t + 1], G[t + 1, t + 1]
+            lam_max = 0.5 * (a + e) + math.hypot(0.5 * (a - e), b)
+            r[t:t + 2] = alpha / max(lam_max, d[t], d[t + 1])
+        return r
+
+    def _newton(self, cs, G, c, r, lam, tol_v):
+        """Fischer–Burmeister semismooth Newton (module docstring); Λ in place."""
+        unilateral = np.zeros(cs.m, dtype=bool)
+        unilateral[cs.entry_offsets[cs.kinds == kern.UNILATERAL]] = True
+        np.maximum(lam, 0.0, out=lam, where=unilateral)
+        RG = r[:, None] * G
+        xi = np.empty(cs.m)
+
+        def merit(lam):
+            kern.velocities(G, c, lam, xi)
+            b = r * xi
+            norm = np.hypot(lam, b)
+            phi = np.where(unilateral, norm - lam - b, b)
+            return phi, b, norm
+
+        phi, b, norm = merit(lam)
+        for it in range(self.max_iter + 1):
+            residual = kern.prox_step(xi, r, cs.kinds, cs.entry_offsets, cs.mu, lam, False)
+            if residual <= tol_v:
+                return it, residual, True
+            if it == self.max_iter:
+                break
+            safe = np.where(norm > 0.0, norm, 1.0)
+            da = np.where(norm > 0.0, lam / safe, math.sqrt(0.5)) - 1.0
+            db = np.where(norm > 0.0, b / safe, math.sqrt(0.5)) - 1.0
+            H = np.where(unilateral[:, None], db[:, None] * RG, RG)
+            H[np.flatnonzero(unilateral), np.flatnonzero(unilateral)] += da[unilateral]
+            grad = H.T @ phi
+            try:
+                d = np.linalg.solve(H, -phi)
+            except np.linalg.LinAlgError:
+                d = np.linalg.lstsq(H, -phi, rcond=None)[0]
+            if not np.all(np.isfinite(d)) or grad @ d > -DESCENT_RHO * np.linalg.norm(d) ** DESCENT_P:
+                d = -grad
+            psi, slope, step = 0.5 * phi @ phi, grad @ d, 1.0
+            while True:
+                trial = lam + step * d
+                phi_t, b_t, norm_t = merit(trial)
+                if 0.5 * phi_t @ phi_t <= psi + ARMIJO_SIGMA * step * slope:
+                    break
+                step *= 0.5
+                if step < ARMIJO_MIN_STEP:
+                    return it, residual, False
+            lam[:] = trial
+            phi, b, norm = phi_t, b_t, norm_t
+        return self.max_iter, residual, False
+
+
+def _diagonal(G):
+    """diag(G) with rows that touch no mass (G_ii ≈ 0) replaced by max G_jj (or 1)."""
+    d = np.diag(G).copy()
+    d_max = float(np.max(d, initial=0.0))
+    if d_max <= 0.0:
+        return np.ones_like(d)
+    return np.where(d > TINY_DIAGONAL * d_max, d, d_max)
+
+
+def _checked(cs, G, xi_free, gamma_pre, lam0):
+    """Validated float copies (G, ξ_free, γ⁻, Λ0) or ModelError."""
+    G = np.asarray(G, dtype=float)
+    m = cs.m
+    if G.ndim != 2 or G.shape[0] != G.shape[1]:
+        raise ModelError(f"contact solver: G must be square, got shape {G.shape}")
+    if G.shape[0] != m:
+        raise ModelError(f"contact solver: G is {G.shape[0]} x {G.shape[0]}, the laws have "
+                         f"{m} rows")
+    arrays = [G]
+    for name, x in (("xi_free", xi_free), ("gamma_pre", gamma_pre),
+                    ("lam0", np.zeros(m) if lam0 is None else lam0)):
+        x = np.array(x, dtype=float)
+        if x.shape != (m,):
+            raise ModelError(f"contact solver: {name} must have shape ({m},), got {x.shape}")
+        arrays.append(x)
+    for name, x in zip(("G", "xi_free", "gamma_pre", "lam0"), arrays):
+        if not np.all(np.isfinite(x)):
+            raise ModelError(f"contact solver: {name} has non-finite entries")
+    scale = float(np.max(np.abs(G), initial=0.0))
+    if np.any(np.diag(G) < -TINY_DIAGONAL * scale):
+        raise ModelError("contact solver: G has a negative diagonal entry; it must be "
+                         "positive semi-definite")
+    G = np.ascontiguousarray(G)
+    return G, arrays[1], arrays[2], arrays[3]

@@ -1,0 +1,76 @@
+"""Moreau time-stepping against the analytic bouncing ball and the sliding block:
+impact times, rebound heights, Zeno rest without sinking, no energy gain for e <= 1,
+Coulomb deceleration and stopping distance."""
+
+import numpy as np
+import pytest
+
+from contact.contact import Contact
+from contact.kinematics import ContactKinematicsPointPlane, ContactKinematicsSpherePlane
+from contact.laws import UnilateralCoulombContact, UnilateralNewtonImpact
+from contours import PlaneContour, PointContour, SphereContour
+from ffrmbs.errors import ModelError
+from mbs import PointMass, System, ground_frame
+
+G, H0, R = 9.81, 1.0, 0.1
+
+
+def bouncing_ball(e, t_end, dt):
+    system = System(gravity=(0, 0, -G))
+    ball = system.add(PointMass(1.0, position=(0, 0, H0 + R)))
+    kin = ContactKinematicsSpherePlane(SphereContour(ball.point, R), PlaneContour(ground_frame()))
+    system.add(Contact(kin, UnilateralNewtonImpact(e)))
+    return system.simulate(t_end, dt, integrator="moreau", energies=True)
+
+
+@pytest.mark.parametrize("e", [0.0, 0.7, 1.0])
+def test_bouncing_ball_matches_the_analytic_impacts_and_never_gains_energy(e):
+    dt = 1e-3
+    res = bouncing_ball(e, 2.0, dt)
+    z = res.q[:, 2] - R
+    v1 = np.sqrt(2 * G * H0)
+    t1 = v1 / G
+    first = res.t[np.argmax(res.u[:, 2] > 0)] if e > 0 else None
+    if e > 0:
+        assert abs(first - t1) < 2 * dt                       # the impact time
+        t2 = t1 + 2 * e * v1 / G
+        after = (res.t > t1 + 2 * dt) & (res.t < t2 - 2 * dt)
+        assert np.isclose(z[after].max(), (e * v1) ** 2 / (2 * G), rtol=0, atol=2 * v1 * dt)   # rebound apex
+    else:
+        assert np.allclose(res.u[res.t > t1 + 2 * dt, 2], 0.0, atol=1e-12)    # plastic: stays
+    E = res.energy["kinetic"] + res.energy["potential"]
+    assert (E - E[0]).max() < 1e-10 * E[0]
+    assert z.min() > -v1 * dt                                   # penetration at most one step's travel
+
+
+def test_zeno_bounce_comes_to_rest_without_sinking():
+    e = 0.7
+    res = bouncing_ball(e, 4.0, 1e-3)
+    t_zeno = np.sqrt(2 * H0 / G) * (1 + 2 * e / (1 - e))     # Σ of the geometric flight times
+    rest = res.t > t_zeno + 0.05
+    assert np.abs(res.u[rest, 2]).max() < 1e-9
+    assert np.abs(res.q[rest, 2] - R).max() < 1e-5            # resting on the plane, not sinking
+    assert np.ptp(res.q[rest, 2]) < 1e-9
+
+
+@pytest.mark.parametrize("v0", [1.0, 3.0])
+def test_block_slides_with_coulomb_deceleration_and_sticks(v0):
+    mu, dt = 0.3, 1e-3
+    system = System(gravity=(0, 0, -G))
+    block = system.add(PointMass(2.0, velocity=(v0, 0.0, 0.0)))
+    kin = ContactKinematicsPointPlane(PointContour(block.point), PlaneContour(ground_frame()))
+    system.add(Contact(kin, UnilateralCoulombContact(e=0.0, mu=mu)))
+    t_stop = v0 / (mu * G)
+    res = system.simulate(t_stop + 0.3, dt, integrator="moreau")
+    sliding = res.t < t_stop - 2 * dt
+    assert np.allclose(res.u[sliding, 0], v0 - mu * G * res.t[sliding], atol=1e-9)
+    assert np.allclose(res.u[res.t > t_stop + dt, 0], 0.0, atol=1e-9)
+    assert np.isclose(res.q[-1, 0], v0 ** 2 / (2 * mu * G), atol=v0 * dt)
+    assert np.abs(res.q[:, 2]).max() < 1e-12
+
+
+def test_bad_options():
+    system = System()
+    system.add(PointMass(1.0))
+    with pytest.raises(ModelError, match="theta"):
+        system.simulate(0.1, 0.01, integrator="moreau", theta=0.2)
