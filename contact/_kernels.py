@@ -5,9 +5,10 @@ The contact problem is encoded in arrays: ``kinds`` (n_e,) int64 of the entries
 [N, T1, T2]), their first rows ``offsets`` (n_e,) int64 and friction coefficients
 ``mu`` (n_e,). The law's velocity is affine in Λ: ξ = c + G Λ with
 c = ξ_free + ε γ⁻ (m,) [m/s]; ``r`` (m,) [kg] holds the prox factors (equal on T1, T2).
-Every kernel works in place and allocates nothing. Each returns the largest scaled change
-max_i |Λ_i^new − Λ_i| / r_i [m/s], the natural-map residual of the rows it visited.
-The plain-numpy reference, built on the laws' ``project``, is in the tests.
+Every kernel works in place and allocates nothing. The sweeps return the largest scaled
+change max_i |Λ_i^new − Λ_i| / r_i [m/s] of a sweep, the natural-map residual of the rows
+as they were visited. The plain-numpy references of the sweeps, built on the laws'
+``project``, are in the tests.
 """
 
 from __future__ import annotations
@@ -19,15 +20,21 @@ from numba import njit
 BILATERAL = 0
 UNILATERAL = 1
 COULOMB = 2
+ROUNDING = 8.0 * 2.0 ** -52   # 8 x machine epsilon of float64
+ADAPT_WINDOW = 50             # sweeps between the checks for progress of prox_iterate
+MAX_HALVINGS = 20             # of the r-factors in one prox_iterate (r >= 1e-6 r0)
 
 
 @njit(cache=True)
 def _row_velocity(G, c, lam, i):
-    """ξ_i = c_i + Σ_j G_ij Λ_j."""
+    """(ξ_i = c_i + Σ_j G_ij Λ_j, its scale |c_i| + Σ_j |G_ij Λ_j|) [m/s]."""
     s = c[i]
+    a = abs(c[i])
     for j in range(lam.shape[0]):
-        s += G[i, j] * lam[j]
-    return s
+        t = G[i, j] * lam[j]
+        s += t
+        a += abs(t)
+    return s, a
 
 
 @njit(cache=True)
@@ -50,9 +57,12 @@ def _finite(x):
 
 @njit(cache=True)
 def velocities(G, c, lam, xi):
-    """ξ = c + G Λ into ``xi`` (m,)."""
+    """ξ = c + G Λ into ``xi`` (m,); returns the scale max_i (|c_i| + Σ_j |G_ij Λ_j|) [m/s]."""
+    scale = 0.0
     for i in range(lam.shape[0]):
-        xi[i] = _row_velocity(G, c, lam, i)
+        xi[i], a = _row_velocity(G, c, lam, i)
+        scale = max(scale, a)
+    return scale
 
 
 @njit(cache=True)
@@ -88,47 +98,88 @@ def gauss_seidel_sweep(G, c, r, kinds, offsets, mu, lam):
 
     Each row's ξ_i uses the newest Λ; in a Coulomb entry the normal row goes first and
     the tangential pair then uses the new Λ_N both in ξ_T and in the disk radius μ Λ_N.
+    Returns (scaled change, max_i (|c_i| + Σ_j |G_ij Λ_j|) over the rows as visited).
     """
     change = 0.0
+    scale = 0.0
     for k in range(kinds.shape[0]):
         o = offsets[k]
-        z = lam[o] - r[o] * _row_velocity(G, c, lam, o)
+        xi, a = _row_velocity(G, c, lam, o)
+        scale = max(scale, a)
+        z = lam[o] - r[o] * xi
         if kinds[k] != BILATERAL:
             z = max(z, 0.0)
         change = max(change, abs(z - lam[o]) / r[o])
         lam[o] = z
         if kinds[k] == COULOMB:
-            xi1 = _row_velocity(G, c, lam, o + 1)
-            xi2 = _row_velocity(G, c, lam, o + 2)
+            xi1, a1 = _row_velocity(G, c, lam, o + 1)
+            xi2, a2 = _row_velocity(G, c, lam, o + 2)
+            scale = max(scale, a1, a2)
             z1, z2 = _disk(lam[o + 1] - r[o + 1] * xi1, lam[o + 2] - r[o + 2] * xi2, mu[k] * z)
             change = max(change, abs(z1 - lam[o + 1]) / r[o + 1],
                          abs(z2 - lam[o + 2]) / r[o + 2])
             lam[o + 1] = z1
             lam[o + 2] = z2
-    return change
+    return change, scale
 
 
 @njit(cache=True)
-def prox_iterate(G, c, r, kinds, offsets, mu, lam, xi, jacobi, tol_v, max_iter):
-    """Sweep until the scaled change and then the natural residual are <= ``tol_v`` [m/s].
+def threshold(tol, c_ref, m, v_terms):
+    """tol · c_ref + ROUNDING · (m + 1) · v_terms [m/s] (see :func:`prox_iterate`)."""
+    return tol * c_ref + ROUNDING * (m + 1) * v_terms
 
-    ``xi`` (m,) is a work array. Returns (sweeps, residual, converged); the residual is
-    the natural-map residual of the returned Λ (one extra G Λ per check).
+
+@njit(cache=True)
+def prox_iterate(G, c, r, kinds, offsets, mu, lam, xi, r_work, jacobi, tol, max_iter):
+    """Sweep until the scaled change and then the natural residual are <= the threshold
+
+        tol · max_i |c_i| + ROUNDING · (m + 1) · max_i (|c_i| + Σ_j |G_ij Λ_j|)   [m/s],
+
+    the requested accuracy of the velocities plus a bound of the rounding error of
+    ξ = c + G Λ (Higham 2002, eq. 3.5, times 8), which dominates when large impulses
+    cancel (a stack of very different masses). The bound's scale comes from the sweep
+    for the change and from the final Λ for the residual.
+
+    The sweeps use the factors ``r_work`` (m,), initialized from ``r``. With friction
+    the prox map can be expansive and the iteration cycle: when the change is no
+    smaller than ADAPT_WINDOW sweeps before, ``r_work`` is halved (at most MAX_HALVINGS
+    times; the r-factor reduction of MBSim, after M. Förg, dissertation TU München
+    2007, p. 80 ff.). Frictionless problems converge without it (projected SOR) and keep
+    their r. The residual is always measured with ``r``. ``xi`` (m,) is a work array.
+    Returns (sweeps, residual [m/s], converged); the residual is the natural-map
+    residual of the returned Λ (one extra G Λ per check).
     """
-    residual = math.inf
+    m = c.shape[0]
+    c_ref = 0.0
+    for i in range(m):
+        c_ref = max(c_ref, abs(c[i]))
+        r_work[i] = r[i]
+    halvings_left = 0
+    for k in range(kinds.shape[0]):
+        if kinds[k] == COULOMB:
+            halvings_left = MAX_HALVINGS
+    window_change = math.inf
     for it in range(1, max_iter + 1):
         if jacobi:
-            velocities(G, c, lam, xi)
-            change = prox_step(xi, r, kinds, offsets, mu, lam, True)
+            v_terms = velocities(G, c, lam, xi)
+            change = prox_step(xi, r_work, kinds, offsets, mu, lam, True)
         else:
-            change = gauss_seidel_sweep(G, c, r, kinds, offsets, mu, lam)
+            change, v_terms = gauss_seidel_sweep(G, c, r_work, kinds, offsets, mu, lam)
         if not _finite(lam):
             return it, math.inf, False
-        if change <= tol_v:
-            velocities(G, c, lam, xi)
+        if halvings_left > 0 and it % ADAPT_WINDOW == 0:
+            if change >= (1.0 - 1e-12) * window_change:   # no progress: cycling
+                for i in range(m):
+                    r_work[i] *= 0.5
+                halvings_left -= 1
+                window_change = math.inf
+            else:
+                window_change = change
+        if change <= threshold(tol, c_ref, m, v_terms):
+            v_terms = velocities(G, c, lam, xi)
             residual = prox_step(xi, r, kinds, offsets, mu, lam, False)
-            if residual <= tol_v:
+            if residual <= threshold(tol, c_ref, m, v_terms):
                 return it, residual, True
-    velocities(G, c, lam, xi)
+    v_terms = velocities(G, c, lam, xi)
     residual = prox_step(xi, r, kinds, offsets, mu, lam, False)
-    return max_iter, residual, residual <= tol_v
+    return max_iter, residual, residual <= threshold(tol, c_ref, m, v_terms)

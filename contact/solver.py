@@ -18,25 +18,29 @@ Methods (:class:`ProxSolver`):
   2008, ch. 12); for a Coulomb contact r_T = α / λ_max(G_TT) on both tangential rows, so
   that the disk projection stays isotropic. Converges for α in (0, 2) on frictionless
   and bilateral problems with G positive definite (projected SOR, Cryer 1971); with
-  friction convergence is usual but not guaranteed.
+  friction the iteration can cycle, and then halves its r until it converges
+  (:func:`contact._kernels.prox_iterate`); convergence is usual, not guaranteed.
 * ``"jacobi"``: all contacts from the same Λ, r_i = α / (G_ii ρ) with ρ a Gershgorin
   bound of λ_max(D^-1/2 G D^-1/2), D = diag(G), so that the iteration contracts for
   frictionless problems (Studer 2009, sec. 6.2).
 * ``"newton"``: a semismooth Newton method on the Fischer–Burmeister reformulation
   φ(Λ_i, r_i ξ_i) = sqrt(Λ_i² + r_i² ξ_i²) − Λ_i − r_i ξ_i = 0 of the unilateral rows
   and r_i ξ_i = 0 of the bilateral rows, r_i = 1 / G_ii, with an Armijo line search on
-  ½|Φ|² and a gradient step when the Newton direction is no descent (De Luca, Facchinei
-  & Kanzow 1996; Acary & Brogliato 2008, ch. 12). Local convergence is quadratic and does
+  ½|Φ|² (the Newton direction H d = −Φ is a descent direction, ∇Ψᵀd = −|Φ|²; a singular
+  H falls back to least squares and then to the gradient; De Luca, Facchinei & Kanzow
+  1996; Acary & Brogliato 2008, ch. 12). Local convergence is quadratic and does
   not degrade with the conditioning of G (large mass ratios), where the prox iterations
   slow down. It covers :class:`~contact.laws.UnilateralNewtonImpact` and
   :class:`~contact.laws.Bilateral` contacts; a problem with friction raises ModelError
   (use a prox method).
 
-Convergence: with v_ref = max|ξ_free + ε γ⁻| [m/s], an iteration stops when the scaled
-change max_i |ΔΛ_i| / r_i and then the natural-map residual max_i |Λ_i −
-prox(Λ − r ξ)_i| / r_i [m/s] (zero exactly at a solution, for any r > 0) are both
-<= ``tol`` · v_ref. Without convergence the last iterate comes back with
-``converged=False``; the integrator decides.
+Convergence: an iteration stops when the scaled change max_i |ΔΛ_i| / r_i (prox
+methods) and the natural-map residual max_i |Λ_i − prox(Λ − r ξ)_i| / r_i [m/s] (zero
+exactly at a solution, for any r > 0) are below ``tol`` · max|c| (c = ξ_free + ε γ⁻)
+plus a bound of the rounding error of ξ = c + G Λ, 8 ε (m + 1) max_i (|c_i| + Σ_j
+|G_ij Λ_j|) (:func:`contact._kernels.prox_iterate`), which dominates when large
+impulses cancel, as in a stack of very different masses. Without convergence the last
+iterate comes back with ``converged=False``; the integrator decides.
 """
 
 from __future__ import annotations
@@ -54,7 +58,6 @@ from .laws import Bilateral, UnilateralCoulombContact, UnilateralNewtonImpact
 METHODS = ("gauss-seidel", "jacobi", "newton")
 ARMIJO_SIGMA = 1e-4          # sufficient decrease of the merit ½|Φ|²
 ARMIJO_MIN_STEP = 1e-12      # smallest line-search step before giving up
-DESCENT_RHO, DESCENT_P = 1e-10, 2.1   # gradient step unless ∇Ψᵀd <= −ρ|d|^p (De Luca et al.)
 TINY_DIAGONAL = 1e-14        # G_ii below this times max G_jj: row touches no mass
 
 
@@ -155,7 +158,7 @@ class ProxSolver:
     relaxation : float in (0, 2)
         α of the automatic r of the prox methods.
     tol : float > 0
-        Relative tolerance of the residual [-] (times v_ref, module docstring).
+        Relative tolerance of the velocities [-] (times max|ξ_free + ε γ⁻|, module docstring).
     max_iter : int >= 1 or None
         Most sweeps or Newton steps; None: 10000 sweeps, 100 Newton steps.
     """
@@ -198,22 +201,20 @@ class ProxSolver:
         """
         cs = contacts if isinstance(contacts, ContactSet) else ContactSet(contacts)
         G, xi_free, gamma_pre, lam = _checked(cs, G, xi_free, gamma_pre, lam0)
+        if self.method == "newton" and cs.frictional:
+            raise ModelError("ProxSolver: method 'newton' covers unilateral and bilateral "
+                             "contacts only; use 'gauss-seidel' with friction")
         c = xi_free + cs.restitution * gamma_pre
-        v_ref = float(np.max(np.abs(c), initial=0.0))
-        if v_ref == 0.0:               # Λ = 0 solves every law
+        if not np.any(c):               # Λ = 0 solves every law
             lam[:] = 0.0
             return ContactSolution(lam, xi_free.copy(), 0, 0.0, True)
-        tol_v = self.tol * v_ref
         if self.method == "newton":
-            if cs.frictional:
-                raise ModelError("ProxSolver: method 'newton' covers unilateral and bilateral "
-                                 "contacts only; use 'gauss-seidel' with friction")
-            it, residual, converged = self._newton(cs, G, c, _diagonal(G) ** -1.0, lam, tol_v)
+            it, residual, converged = self._newton(cs, G, c, _diagonal(G) ** -1.0, lam)
         else:
             r = self._prox_factors(cs, G)
             it, residual, converged = kern.prox_iterate(
                 G, c, r, cs.kinds, cs.entry_offsets, cs.mu, lam, np.empty(cs.m),
-                self.method == "jacobi", tol_v, self.max_iter)
+                np.empty(cs.m), self.method == "jacobi", self.tol, self.max_iter)
         return ContactSolution(lam, xi_free + G @ lam, int(it), float(residual),
                                bool(converged))
 
@@ -233,7 +234,7 @@ class ProxSolver:
             r[t:t + 2] = alpha / max(lam_max, d[t], d[t + 1])
         return r
 
-    def _newton(self, cs, G, c, r, lam, tol_v):
+    def _newton(self, cs, G, c, r, lam):
         """Fischer–Burmeister semismooth Newton (module docstring); Λ in place."""
         unilateral = np.zeros(cs.m, dtype=bool)
         unilateral[cs.entry_offsets[cs.kinds == kern.UNILATERAL]] = True
@@ -242,16 +243,17 @@ class ProxSolver:
         xi = np.empty(cs.m)
 
         def merit(lam):
-            kern.velocities(G, c, lam, xi)
+            v_terms = kern.velocities(G, c, lam, xi)
             b = r * xi
             norm = np.hypot(lam, b)
             phi = np.where(unilateral, norm - lam - b, b)
-            return phi, b, norm
+            return phi, b, norm, v_terms
 
-        phi, b, norm = merit(lam)
+        c_ref = float(np.max(np.abs(c)))
+        phi, b, norm, v_terms = merit(lam)
         for it in range(self.max_iter + 1):
             residual = kern.prox_step(xi, r, cs.kinds, cs.entry_offsets, cs.mu, lam, False)
-            if residual <= tol_v:
+            if residual <= kern.threshold(self.tol, c_ref, cs.m, v_terms):
                 return it, residual, True
             if it == self.max_iter:
                 break
@@ -265,19 +267,19 @@ class ProxSolver:
                 d = np.linalg.solve(H, -phi)
             except np.linalg.LinAlgError:
                 d = np.linalg.lstsq(H, -phi, rcond=None)[0]
-            if not np.all(np.isfinite(d)) or grad @ d > -DESCENT_RHO * np.linalg.norm(d) ** DESCENT_P:
+            if not (np.all(np.isfinite(d)) and grad @ d < 0.0):   # lstsq gave no descent
                 d = -grad
             psi, slope, step = 0.5 * phi @ phi, grad @ d, 1.0
             while True:
                 trial = lam + step * d
-                phi_t, b_t, norm_t = merit(trial)
+                phi_t, b_t, norm_t, v_t = merit(trial)
                 if 0.5 * phi_t @ phi_t <= psi + ARMIJO_SIGMA * step * slope:
                     break
                 step *= 0.5
                 if step < ARMIJO_MIN_STEP:
                     return it, residual, False
             lam[:] = trial
-            phi, b, norm = phi_t, b_t, norm_t
+            phi, b, norm, v_terms = phi_t, b_t, norm_t, v_t
         return self.max_iter, residual, False
 
 
