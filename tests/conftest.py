@@ -2,6 +2,7 @@
 
 import pytest
 
+from preprocess import Material, build_body
 from preprocess.geometry import box
 
 
@@ -19,3 +20,11 @@ def small_box_tet4():
 @pytest.fixture(scope="session")
 def small_box_tet10():
     return box(1.0, 0.5, 2.0, 0.5, order=2)
+
+
+@pytest.fixture(scope="session")
+def thesis_beam_data():
+    """The thesis's 250 x 50 x 50 mm beam (Sec. 5.2: ρ = 920 kg/m³, E = 50 MPa, ν = 0.3),
+    structured tet4 (10 x 4 x 4 divisions, every face a node grid), free-free, 12 modes."""
+    return build_body(box(0.25, 0.05, 0.05, None, order=1, divisions=(10, 4, 4)), Material(920.0, 5e7, 0.3),
+                      n_modes=12)

@@ -16,7 +16,6 @@ from contours import (Contour1sNeutralFFR, Contour2sNeutralFFR, FlexibleBand, Fl
 from ffrmbs.errors import ModelError
 from mbs import FlexibleBodyFFR, PointMass, RigidBody, System, ground_frame
 from mbs.rotations import quat_from_rotvec, quat_to_matrix
-from preprocess import Material, box, build_body
 from validation.bench.common import moving_state
 
 L, H, W = 0.25, 0.05, 0.05
@@ -27,8 +26,7 @@ class World:
     """One System: an FFR beam, a point mass, a rigid ball and a rigid slab, with their
     contours; ``set(q, u)`` updates every contour from the global state."""
 
-    def __init__(self):
-        data = build_body(box(L, H, W, None, order=1, divisions=(10, 4, 4)), Material(920.0, 5e7, 0.3), n_modes=8)
+    def __init__(self, data):
         self.system = s = System()
         self.beam = s.add(FlexibleBodyFFR(data, modes=8, name="beam"))
         self.mass = s.add(PointMass(0.3, name="mass"))
@@ -74,8 +72,8 @@ class World:
 
 
 @pytest.fixture(scope="module")
-def world():
-    return World()
+def world(thesis_beam_data):
+    return World(thesis_beam_data)
 
 
 def check_derivatives(world, kin, q, u, tol_t=1e-6, tol_u=1e-7, gap=lambda k: k.g_N,

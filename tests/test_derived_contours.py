@@ -12,16 +12,14 @@ from contours.derived import offset_frame
 from ffrmbs.errors import ModelError
 from mbs import FlexibleBodyFFR, PointMass, RigidBody, ground_frame
 from mbs.rotations import quat_from_rotvec
-from preprocess import Material, box, build_body
 from validation.bench.common import moving_state
 
 L, H, W = 0.25, 0.05, 0.05
 
 
 @pytest.fixture(scope="module")
-def beam():
-    data = build_body(box(L, H, W, None, order=1, divisions=(10, 4, 4)), Material(920.0, 5e7, 0.3), n_modes=8)
-    return FlexibleBodyFFR(data, modes=8)
+def beam(thesis_beam_data):
+    return FlexibleBodyFFR(thesis_beam_data, modes=8)
 
 
 @pytest.fixture(scope="module")

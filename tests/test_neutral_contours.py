@@ -19,9 +19,8 @@ L, H, W = 0.25, 0.05, 0.05
 
 
 @pytest.fixture(scope="module")
-def beam_data():
-    """The thesis's 250 x 50 x 50 mm beam (Sec. 5.2), structured tet4, free-free, 12 modes."""
-    return build_body(box(L, H, W, None, order=1, divisions=(10, 4, 4)), Material(920.0, 5e7, 0.3), n_modes=12)
+def beam_data(thesis_beam_data):
+    return thesis_beam_data
 
 
 @pytest.fixture(scope="module")
