@@ -98,6 +98,21 @@ def akantu_run(mesh, data, loads: StepLoads, t_out, follower):
         load_forces=forces, t_end=t_out[-1], output_times=t_out, follower=follower)
 
 
+def akantu_reference(result, make_loads, t_out, follower, n_modes=30):
+    """The free report beam with ``n_modes`` modes, its loads ``make_loads(mesh)`` and
+    Akantu's run of the scene at ``t_out``: (mesh, data, loads, peer result dict). Without
+    Akantu: None, with the skip noted in ``result``. Warms up our kernels first."""
+    from validation.peers import akantu_dynamics
+
+    if not akantu_dynamics.available():
+        result.skipped.append("akantu: skipped: akantu not installed (pip install '.[peers]')")
+        return None
+    warm_up()
+    mesh, data = beam(n_modes=n_modes)
+    loads = make_loads(mesh)
+    return mesh, data, loads, akantu_run(mesh, data, loads, t_out, follower)
+
+
 def rms_error(u, u_ref) -> tuple[np.ndarray, float]:
     """RMS error over the nodes as a fraction of the reference's RMS displacement (report
     Fig. 17, 19): per output time (n_t,) and over the whole history (one number)."""

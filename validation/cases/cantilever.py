@@ -11,7 +11,6 @@ static solve (deflection rows), CPU seconds.
 
 from __future__ import annotations
 
-import numpy as np
 
 from preprocess import Material, box, build_body, face_load, solve_static
 from validation import CaseResult, make_row, timed

@@ -25,7 +25,7 @@ import numpy as np
 
 from mbs import DistributedForce, FlexibleBodyFFR, System
 from preprocess import box, build_body, face_load
-from validation import CaseResult, make_row, timed
+from validation import CaseResult, make_row
 from validation.cases.cantilever import MATERIAL, REPORT_MESH_SIZE
 
 NAME = "ffr_free_flight"

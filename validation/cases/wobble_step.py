@@ -130,7 +130,7 @@ def run(quick: bool) -> CaseResult:
                  "|---|---|---|---|---|"]
     _durations(result, quick, durations)
     result.notes.append("Cost independent of the simulated time since the last load change: a pulse "
-                        f"𝓕 = ω² on [0, 2^-7 s), then free vibration, evaluated at 1024 times in "
+                        "𝓕 = ω² on [0, 2^-7 s), then free vibration, evaluated at 1024 times in "
                         "[T, T + 0.125 s] (StepResponse build + evaluation; median CPU per run). At "
                         "T = 1e6 s the arguments ω(t − t_k) ~ 1e9 rad take libm's slow argument "
                         "reduction, so sin and cos themselves cost more; the recursion does not.\n\n"
