@@ -35,7 +35,7 @@ def bending_state(body, tip):
     u0 = body.data.u0
     end = np.flatnonzero(np.isclose(u0[:, 0], L))
     j = end[np.argmin(np.linalg.norm(u0[end, 1:] - (H / 2, W / 2), axis=1))]
-    phi = body.phi.reshape(-1, 3, body.n_modes)[j]          # (3, n_f)
+    phi = body.phi_nodes[j]                                 # (3, n_f)
     q_f = np.zeros(body.n_modes)
     q_f[:2] = np.linalg.lstsq(phi[1:, :2], np.array([tip, 0.0]), rcond=None)[0]
     return q_f, j
@@ -109,7 +109,7 @@ def main(argv=None, out=sys.stdout):
     on_contour = np.array([[contour.position(e, x) for x in params_xi] for e in params_eta])
     at_nodes = body.node_positions(q, contour.nodes.ravel()).reshape(on_contour.shape)
     max_distance = float(np.linalg.norm(on_contour - at_nodes, axis=-1).max())
-    tip = body.phi.reshape(-1, 3, body.n_modes)[tip_node] @ q_f
+    tip = body.phi_nodes[tip_node] @ q_f
 
     draw(body, contour, q, args.out)
     print(f"{data.n_nodes} nodes, {body.n_modes} clamped modes; contour 'y1' through "

@@ -68,7 +68,7 @@ class FlexibleBodyFFR(FloatingFrameBody):
         self.K_ff = self.phi.T @ (data.stiffness @ self.phi)
         self.K_ff = 0.5 * (self.K_ff + self.K_ff.T)
         self.D_ff = self._damping(rayleigh, modal_damping)
-        self._phi_nodes = self.phi.reshape(data.n_nodes, 3, self.n_modes)
+        self.phi_nodes = self.phi.reshape(data.n_nodes, 3, self.n_modes)  # (N, 3, n_f) view of phi
 
     @classmethod
     def from_file(cls, path, modes=None, units="si", **kw) -> "FlexibleBodyFFR":
@@ -97,7 +97,7 @@ class FlexibleBodyFFR(FloatingFrameBody):
         the local material rotation."""
         if not 0 <= j < self.data.n_nodes:
             raise ModelError(f"{self.name}: node {j} outside 0..{self.data.n_nodes - 1}")
-        return Frame(self, self.data.u0[j], self._phi_nodes[j], orientation, name or f"node {j}")
+        return Frame(self, self.data.u0[j], self.phi_nodes[j], orientation, name or f"node {j}")
 
     def node_group(self, name: str) -> np.ndarray:
         """0-based node indices of the named group of the body file."""
@@ -150,6 +150,6 @@ class FlexibleBodyFFR(FloatingFrameBody):
     def node_positions(self, q, nodes=None, t=0.0) -> np.ndarray:
         """Inertial positions (k, 3) [m] of ``nodes`` (all if None), eq. 2.24."""
         idx = slice(None) if nodes is None else np.asarray(nodes)
-        ub = self.data.u0[idx] + self._phi_nodes[idx] @ q[self._f]
+        ub = self.data.u0[idx] + self.phi_nodes[idx] @ q[self._f]
         R, A, *_ = self._frame(q, None, t)
         return R + ub @ A.T

@@ -2,6 +2,7 @@
 
 import pytest
 
+from mbs import FlexibleBodyFFR
 from preprocess import Material, build_body
 from preprocess.geometry import box
 
@@ -28,3 +29,10 @@ def thesis_beam_data():
     structured tet4 (10 x 4 x 4 divisions, every face a node grid), free-free, 12 modes."""
     return build_body(box(0.25, 0.05, 0.05, None, order=1, divisions=(10, 4, 4)), Material(920.0, 5e7, 0.3),
                       n_modes=12)
+
+
+@pytest.fixture(scope="module")
+def thesis_beam(thesis_beam_data):
+    """A free FFR body of the thesis's beam with its first 8 modes (one per test module:
+    a body joins at most one System)."""
+    return FlexibleBodyFFR(thesis_beam_data, modes=8)

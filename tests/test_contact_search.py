@@ -11,7 +11,7 @@ from contact.search import Contact1sSearch, Contact2sSearch
 from contours import (Contour1sNeutralFFR, Contour2sNeutralFFR, FlexibleCylinder, PlaneContour, PointContour,
                       SphereContour)
 from ffrmbs.errors import ModelError
-from mbs import FlexibleBodyFFR, PointMass, ground_frame
+from mbs import PointMass, ground_frame
 from mbs.rotations import quat_from_rotvec, quat_to_matrix
 from validation.bench.common import moving_state
 
@@ -19,8 +19,8 @@ L, H, W = 0.25, 0.05, 0.05
 
 
 @pytest.fixture(scope="module")
-def beam(thesis_beam_data):
-    return FlexibleBodyFFR(thesis_beam_data, modes=8)
+def beam(thesis_beam):
+    return thesis_beam
 
 
 @pytest.fixture(scope="module")

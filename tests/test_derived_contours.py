@@ -10,7 +10,7 @@ from contours import (Contour1sNeutralFFR, FlexibleBand, FlexibleCylinder, Plane
                       SphereContour)
 from contours.derived import offset_frame
 from ffrmbs.errors import ModelError
-from mbs import FlexibleBodyFFR, PointMass, RigidBody, ground_frame
+from mbs import PointMass, RigidBody, ground_frame
 from mbs.rotations import quat_from_rotvec
 from validation.bench.common import moving_state
 
@@ -18,8 +18,8 @@ L, H, W = 0.25, 0.05, 0.05
 
 
 @pytest.fixture(scope="module")
-def beam(thesis_beam_data):
-    return FlexibleBodyFFR(thesis_beam_data, modes=8)
+def beam(thesis_beam):
+    return thesis_beam
 
 
 @pytest.fixture(scope="module")

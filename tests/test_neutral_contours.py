@@ -59,7 +59,7 @@ def test_linear_update_equals_per_step_interpolation_of_the_nodal_fields(beam, t
     top.update(q, u)
     grid = beam.data.u0[top.nodes]
     interp = SurfaceInterpolation.from_grid(grid, (3, 3), (False, False))
-    ub_nodes = grid + beam._phi_nodes[top.nodes] @ q[7:]
+    ub_nodes = grid + beam.phi_nodes[top.nodes] @ q[7:]
     P_ub = interp.control_points(ub_nodes)
     P_r = interp.control_points(nodal_positions(beam, q, top.nodes))
     e, x = interp.eta, interp.xi

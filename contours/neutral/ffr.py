@@ -62,7 +62,7 @@ class Contour1sNeutralFFR(_FFRProducts, Contour1sNeutralFactory):
         nodes = check_node_matrix(np.asarray(nodes).reshape(1, -1), body.data.n_nodes)[0]
         self.nodes = nodes
         interp = Interpolation1D.from_points(body.data.u0[nodes], degree, closed, method)
-        phi = body.phi.reshape(body.data.n_nodes, 3, body.n_modes)[nodes]
+        phi = body.phi_nodes[nodes]
         super().__init__(body, CurveSpace(interp), body.data.u0[nodes], phi, normal, name)
 
     @classmethod
@@ -107,7 +107,7 @@ class Contour2sNeutralFFR(_FFRProducts, Contour2sNeutralFactory):
         self.nodes = O
         grid = data.u0[O]
         interp = SurfaceInterpolation.from_grid(grid, as_pair(degree, "degree"), as_pair(closed, "closed"), method)
-        phi = body.phi.reshape(data.n_nodes, 3, body.n_modes)[O]
+        phi = body.phi_nodes[O]
         super().__init__(body, SurfaceSpace(interp), grid, phi, 1 if outward is None else outward, name)
         if outward is None:
             self.sign = self._outward_sign()

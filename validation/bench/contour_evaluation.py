@@ -121,7 +121,7 @@ def measure(kind, body, divisions, batches, batch, rng):
     pts = [tuple(map(float, p)) for p in pts]
     nodes = np.asarray(contour.nodes)
     u0_nodes = body.data.u0[nodes]                                           # grid + (3,)
-    phi_nodes = body.phi.reshape(body.data.n_nodes, 3, body.n_modes)[nodes]  # grid + (3, n_f)
+    phi_nodes = body.phi_nodes[nodes]  # grid + (3, n_f)
     q_fs = [body.elastic_coordinates(q) for q, _ in states]
     space = contour.space
 
