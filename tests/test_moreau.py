@@ -41,6 +41,7 @@ def test_bouncing_ball_matches_the_analytic_impacts_and_never_gains_energy(e):
     E = res.energy["kinetic"] + res.energy["potential"]
     assert (E - E[0]).max() < 1e-10 * E[0]
     assert z.min() > -v1 * dt                                   # penetration at most one step's travel
+    assert 0.0 < res.stats["max_penetration"] < v1 * dt and res.stats["closed_contacts"] > 0
 
 
 def test_zeno_bounce_comes_to_rest_without_sinking():

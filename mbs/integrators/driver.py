@@ -55,6 +55,10 @@ class Integrator:
     def options(self) -> dict:
         return {}
 
+    def diagnostics(self) -> dict:
+        """Counters the integrator keeps over the run (merged into ``Result.stats``)."""
+        return {}
+
     def start(self, t, q, u):
         raise NotImplementedError
 
@@ -120,8 +124,8 @@ class Integrator:
         except SimulationError as err:
             err.result = res.truncated(recorded)
             err.result.stats.update(steps=steps, newton_iterations=self.iterations,
-                                    cpu_s=time.process_time() - cpu0)
+                                    cpu_s=time.process_time() - cpu0, **self.diagnostics())
             raise
         res.stats.update(steps=steps, newton_iterations=self.iterations,
-                         cpu_s=time.process_time() - cpu0, wall_s=time.perf_counter() - wall0)
+                         cpu_s=time.process_time() - cpu0, wall_s=time.perf_counter() - wall0, **self.diagnostics())
         return res

@@ -55,9 +55,13 @@ class MoreauTimeStepping(Integrator):
     def options(self):
         return {"theta": self.theta, "solver": self.solver.method}
 
+    def diagnostics(self):
+        """Closed-contact steps summed over contacts, contact-solver iterations, largest
+        penetration max(0, −g_N) at a midpoint [m]."""
+        return dict(self.stats)
+
     def start(self, t, q, u):
         self.t, self.q, self.u = t, q.copy(), u.copy()
-        self.K, self.D = self.system.tangents(t, q, u)
 
     def _update_contours(self, t, q, u):
         for contour in self.contours:
@@ -82,8 +86,9 @@ class MoreauTimeStepping(Integrator):
                 if not c.set_valued:
                     c.add_forces(h)
                 self.stats["max_penetration"] = max(self.stats["max_penetration"], c.penetration)
+        K, D = sys.tangents(t_m, q_m, self.u)  # elastic, damping and link (spring) tangents at the midpoint
         th = self.theta
-        M_hat = M + th * dt * self.D + th * dt * dt * self.K
+        M_hat = M + th * dt * D + th * dt * dt * K
         factor = scipy.linalg.cho_factor(M_hat, check_finite=False)
         u_free = self.u + scipy.linalg.cho_solve(factor, dt * h, check_finite=False)
         m = sys.n_c + sum(c.dim for c in closed)
