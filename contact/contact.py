@@ -15,7 +15,6 @@ The integrator updates every contour once per step before ``detect``.
 
 from __future__ import annotations
 
-import numpy as np
 
 from ffrmbs.errors import ModelError
 
@@ -44,7 +43,6 @@ class Contact:
         self.dim = law.dim if self.set_valued else 0
         self.closed = False
         self.force_N = 0.0
-        self._W = np.zeros((0, 0))
 
     def bodies(self):
         return [c.body for c in self.contours() if c.body is not None]
@@ -71,20 +69,17 @@ class Contact:
             k.W_T(out[:, 1:])
 
     def add_forces(self, h) -> None:
-        """Single-valued law: h += W_N F_N (+ W_T F_T) at the located contact."""
+        """Single-valued law: h += W_N F_N (+ W_T F_T) at the located contact, body block
+        by body block."""
         k = self.kinematics
         self.force_N = float(self.law.force(k.g_N, k.gd_N)) if self.closed else 0.0
         if self.force_N == 0.0:
             return
-        if self._W.shape[0] != h.shape[0]:
-            self._W = np.zeros((h.shape[0], 3))
-        W = self._W
-        W[:] = 0.0
-        k.W_N(W[:, 0])
-        h += self.force_N * W[:, 0]
-        if self.friction is not None:
-            k.W_T(W[:, 1:])
-            h += W[:, 1:] @ self.friction.force(k.gd_T, self.force_N)
+        F_T = self.friction.force(k.gd_T, self.force_N) if self.friction is not None else None
+        for s, w_N, w_T in k.local_blocks():
+            h[s] += self.force_N * w_N
+            if F_T is not None:
+                h[s] += w_T @ F_T
 
 
 class CurveConstraint:

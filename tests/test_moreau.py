@@ -7,7 +7,8 @@ import pytest
 
 from contact.contact import Contact
 from contact.kinematics import ContactKinematicsPointPlane, ContactKinematicsSpherePlane
-from contact.laws import UnilateralCoulombContact, UnilateralNewtonImpact
+from contact.laws import (LinearRegularizedUnilateralConstraint, RegularizedCoulombFriction,
+                          UnilateralCoulombContact, UnilateralNewtonImpact)
 from contours import PlaneContour, PointContour, SphereContour
 from ffrmbs.errors import ModelError
 from mbs import PointMass, System, ground_frame
@@ -68,6 +69,23 @@ def test_block_slides_with_coulomb_deceleration_and_sticks(v0):
     assert np.allclose(res.u[res.t > t_stop + dt, 0], 0.0, atol=1e-9)
     assert np.isclose(res.q[-1, 0], v0 ** 2 / (2 * mu * G), atol=v0 * dt)
     assert np.abs(res.q[:, 2]).max() < 1e-12
+
+
+def test_regularized_contact_settles_at_the_static_penetration_and_slides_at_mu_g():
+    """Penalty law k, critical damping: at rest g_N = −m g / k; regularized Coulomb
+    friction decelerates a sliding point at μ g while |v| > v_eps."""
+    m, k, mu, v0 = 1.0, 1e5, 0.3, 1.0
+    system = System(gravity=(0, 0, -G))
+    block = system.add(PointMass(m, position=(0, 0, 0.01), velocity=(v0, 0, 0)))
+    kin = ContactKinematicsPointPlane(PointContour(block.point), PlaneContour(ground_frame()))
+    law = LinearRegularizedUnilateralConstraint(k, 2.0 * np.sqrt(k * m))
+    system.add(Contact(kin, law, friction=RegularizedCoulombFriction(mu, 1e-4)))
+    res = system.simulate(0.6, 1e-4, integrator="moreau")
+    assert np.isclose(res.q[-1, 2], -m * G / k, rtol=1e-6)
+    t_land = np.sqrt(2 * 0.01 / G)
+    sliding = (res.t > t_land + 0.06) & (res.u[:, 0] > 0.05)   # landing transient decayed (ω t > 19)
+    assert sliding.sum() > 100
+    assert np.allclose(np.diff(res.u[sliding, 0]) / 1e-4, -mu * G, rtol=1e-3)
 
 
 def test_bad_options():
