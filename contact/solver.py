@@ -184,7 +184,7 @@ class ProxSolver:
         self.method, self.r, self.relaxation = method, r, relaxation
         self.tol, self.max_iter = tol, int(max_iter)
 
-    def solve(self, contacts, G, xi_free, gamma_pre, lam0=None) -> ContactSolution:
+    def solve(self, contacts, G, xi_free, gamma_pre, lam0=None, validate=True) -> ContactSolution:
         """Impulses Λ of one time step.
 
         Parameters
@@ -198,9 +198,16 @@ class ProxSolver:
             Pre-step relative velocities γ⁻ (restitution).
         lam0 : array (m,) [N s], optional
             Warm start, e.g. the previous step's Λ of the same contacts; zero by default.
+        validate : bool
+            False skips the checks of shapes and finiteness (for an integrator that
+            assembles consistent float arrays itself; ``lam0`` is then required and is
+            overwritten with Λ).
         """
         cs = contacts if isinstance(contacts, ContactSet) else ContactSet(contacts)
-        G, xi_free, gamma_pre, lam = _checked(cs, G, xi_free, gamma_pre, lam0)
+        if validate:
+            G, xi_free, gamma_pre, lam = _checked(cs, G, xi_free, gamma_pre, lam0)
+        else:
+            lam = lam0
         if self.method == "newton" and cs.frictional:
             raise ModelError("ProxSolver: method 'newton' covers unilateral and bilateral "
                              "contacts only; use 'gauss-seidel' with friction")

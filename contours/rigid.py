@@ -47,11 +47,16 @@ class _FrameContour(Contour):
             self._J_R[:] = f.J_R(q, t)
 
     def _fill_offset(self, point, d, velocity, jacobians):
-        """Velocity and Jacobians of the point at inertial offset d from the frame origin."""
+        """Velocity and Jacobians of the point at inertial offset d from the frame origin
+        (None: the origin itself)."""
         if velocity:
-            point.v[:] = self._v + np.cross(self._w, d)
+            point.v[:] = self._v
+            if d is not None:
+                point.v += np.cross(self._w, d)
         if jacobians:
-            point.J_T[:] = self._J_T - np.cross(d[:, None], self._J_R, axis=0)
+            point.J_T[:] = self._J_T
+            if d is not None:
+                point.J_T -= np.cross(d[:, None], self._J_R, axis=0)
             point.J_R[:] = self._J_R
 
 
@@ -71,7 +76,7 @@ class PointContour(_FrameContour):
         point.derivs[:] = 0.0
         point.derivs[VALUE] = self._r
         point.frame[:] = self._A
-        self._fill_offset(point, np.zeros(3), velocity, jacobians)
+        self._fill_offset(point, None, velocity, jacobians)
         return point
 
     def bounding_box(self):
