@@ -1,0 +1,133 @@
+"""The point mass dropped on a clamped flexible beam (thesis Sec. 5.2, Fig. 5.3).
+
+- Beam 250 x 50 x 50 mm, ρ = 920 kg/m³ (the thesis's 9.2e-10 t/mm³), E = 50 MPa,
+  ν = 0.3, initially at rest. The thesis leaves the support implicit; **we clamp the
+  face x = 0** (its frame-fixed FFR body of Sec. 5.1) and fix the body frame in space,
+  so the reduced model is the FE model projected on its clamped modes.
+- FE model: a structured tet4 mesh of 10 x 4 x 4 divisions (275 nodes, every face a
+  node grid, a node at (250, 50, 25) mm: the thesis's "node 19"), all 750 clamped modes
+  by a dense eigensolve, so the sweeps choose any number of modes and the reference
+  can take them all.
+- Point mass 0.5 kg at (235, 52, 25) mm (setup A, on the beam's middle plane z = 25 mm)
+  or (235, 52, 40) mm (setup B), velocity (0, −0.2, 0) m/s; no gravity (thesis
+  Sec. 5.2.1).
+- Contact: the point against a 2s neutral contour on the top face y = 50 mm
+  (``contour="2s"``, the thesis's Contour2sNeutralLinearExternalFFR) or a
+  ``FlexibleBand`` 50 mm wide on the top face's centre line (``contour="band"``, thesis
+  Table 5.3), with a set-valued Newton impact law (``law="impact"``, e) or a linear
+  penalty law (``law="penalty"``, k [N/m], d [N s/m]).
+
+The body data are preprocessed on first use and cached (:func:`default_beam_data`).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from contact import (Contact, ContactKinematicsPointContour2s, LinearRegularizedUnilateralConstraint,
+                     UnilateralNewtonImpact)
+from contours import Contour1sNeutralFFR, Contour2sNeutralFFR, FlexibleBand, PointContour
+from ffrmbs.errors import ModelError
+from mbs import FlexibleBodyFFR, PointMass, PrescribedFrameMotion, System
+
+LENGTH, HEIGHT, WIDTH = 0.25, 0.05, 0.05          # [m] along x, y, z
+DENSITY, YOUNG, POISSON = 920.0, 5e7, 0.3         # [kg/m³], [Pa], [-]
+DIVISIONS = (10, 4, 4)                            # structured tet4, element edges per axis
+MASS, VELOCITY = 0.5, (0.0, -0.2, 0.0)            # [kg], [m/s]
+SETUPS = {"A": (0.235, 0.052, 0.025), "B": (0.235, 0.052, 0.040)}   # initial positions [m]
+NODE_19 = (0.25, 0.05, 0.025)                     # the thesis's output node [m]
+PENALTY_K = 1e7                                   # [N/m], the thesis's soft contact
+
+
+def cache_dir() -> Path:
+    """Where preprocessed default bodies are kept: ``$FFRMBS_CACHE`` or ``~/.cache/ffrmbs``."""
+    root = os.environ.get("FFRMBS_CACHE") or Path.home() / ".cache" / "ffrmbs"
+    return Path(root)
+
+
+def _recipe() -> dict:
+    return {"scene": "point_mass_beam", "size": [LENGTH, HEIGHT, WIDTH], "divisions": list(DIVISIONS),
+            "material": [DENSITY, YOUNG, POISSON], "clamp": "x0", "modes": "all", "version": 1}
+
+
+def default_beam_data(log=None):
+    """The beam's body data with all its clamped modes, preprocessed once and cached in
+    :func:`cache_dir` under a hash of the recipe (a changed recipe gets a new entry)."""
+    from preprocess import Material, build_body, read_body, write_body
+    from preprocess.geometry import box
+    from preprocess.modes import all_modes
+
+    recipe = _recipe()
+    key = hashlib.sha256(json.dumps(recipe, sort_keys=True).encode()).hexdigest()[:12]
+    path = cache_dir() / f"point_mass_beam-{key}"
+    if (path / "body.h5").exists():
+        return read_body(path / "body.h5")
+    if log:
+        log(f"preprocessing the default beam (once; cached in {path})")
+    mesh = box(LENGTH, HEIGHT, WIDTH, None, order=1, divisions=DIVISIONS)
+    data = build_body(mesh, Material(DENSITY, YOUNG, POISSON), n_modes=1, clamp="x0", params=recipe)
+    data.eigenvalues, data.phi = all_modes(data.stiffness, data.masses, data.node_groups["x0"])
+    data.params["n_modes"] = data.phi.shape[1]
+    write_body(path, data)
+    return read_body(path / "body.h5")
+
+
+def node_at(data, point) -> int:
+    """Index of the node at ``point`` [m] (to 1e-9 m), else a ModelError."""
+    d = np.linalg.norm(data.u0 - np.asarray(point, dtype=float), axis=1)
+    j = int(np.argmin(d))
+    if d[j] > 1e-9:
+        raise ModelError(f"no node at {point} m (nearest {d[j]:.3g} m away)")
+    return j
+
+
+@dataclass
+class Scene:
+    """A built scene: the System and what its outputs read."""
+
+    system: System
+    beam: FlexibleBodyFFR
+    mass: PointMass
+    contact: Contact
+    node: int                     # index of node 19
+
+    def outputs(self):
+        """Point-mass y position [m] and velocity [m/s], node 19's displacement [m]."""
+        mass, beam, j = self.mass, self.beam, self.node
+        return {"y": lambda t, q, u: q[mass.q_slice][1],
+                "vy": lambda t, q, u: u[mass.u_slice][1],
+                "node19": lambda t, q, u: beam.phi_nodes[j] @ q[beam.q_slice]}
+
+
+def build(setup="A", modes=20, law="impact", e=0.0, k=PENALTY_K, d=0.0, contour="2s", data=None) -> Scene:
+    """Setup ``"A"`` or ``"B"`` with ``modes`` (int, or "all"), ``law`` "impact"
+    (coefficient of restitution e) or "penalty" (k [N/m], d [N s/m]), ``contour`` "2s"
+    or "band"; ``data`` the beam's body data (default: :func:`default_beam_data`)."""
+    if setup not in SETUPS:
+        raise ModelError(f"setup must be one of {sorted(SETUPS)}, not {setup!r}")
+    data = default_beam_data() if data is None else data
+    n = data.n_modes if modes == "all" else int(modes)
+    system = System()
+    beam = system.add(FlexibleBodyFFR(data, modes=n, frame=PrescribedFrameMotion.fixed(), name="beam"))
+    mass = system.add(PointMass(MASS, position=SETUPS[setup], velocity=VELOCITY, name="point mass"))
+    if contour == "2s":
+        surface = Contour2sNeutralFFR(beam, "y1")
+    elif contour == "band":
+        axis = Contour1sNeutralFFR.along_line(beam, (0.0, HEIGHT, WIDTH / 2), (1, 0, 0), normal=(0, 1, 0), degree=4)
+        surface = FlexibleBand(axis, width=WIDTH, offset=0.0)
+    else:
+        raise ModelError(f"contour must be '2s' or 'band', not {contour!r}")
+    if law == "impact":
+        force_law = UnilateralNewtonImpact(e)
+    elif law == "penalty":
+        force_law = LinearRegularizedUnilateralConstraint(k, d)
+    else:
+        raise ModelError(f"law must be 'impact' or 'penalty', not {law!r}")
+    contact = system.add(Contact(ContactKinematicsPointContour2s(PointContour(mass.point), surface), force_law))
+    return Scene(system, beam, mass, contact, node_at(data, NODE_19))
