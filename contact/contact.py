@@ -30,6 +30,7 @@ class Contact:
     ``friction`` only with a single-valued normal law."""
 
     is_contact = True
+    unilateral = True
 
     def __init__(self, kinematics: ContactKinematics, law, friction=None, name="contact"):
         if not isinstance(law, SET_VALUED + (LinearRegularizedUnilateralConstraint,)):
@@ -87,6 +88,7 @@ class CurveConstraint:
 
     is_contact = True
     set_valued = True
+    unilateral = False
     dim = 2
 
     def __init__(self, kinematics: PointOnCurveConstraint, name="on curve"):

@@ -220,8 +220,10 @@ class System:
                  energies=False, q0=None, u0=None, breakpoints=(), **options):
         """Integrate from t = 0 to ``t_end`` [s] with step ``dt`` [s].
 
-        ``integrator``: "generalized-alpha" (implicit, default; option ``rho_inf``) or
-        "rk4" (explicit; option ``baumgarte``). ``t_out``: output times (default: every
+        ``integrator``: "generalized-alpha" (implicit, default; option ``rho_inf``),
+        "rk4" (explicit; option ``baumgarte``), "moreau" (time-stepping for contacts and
+        impacts; options ``theta``, ``solver``, ``trace``) or "moreau-adaptive" (step
+        doubling; ``dt`` the largest step; options ``atol``, ``rtol``, ``dt_min``). ``t_out``: output times (default: every
         step); the integrator lands exactly on each. ``outputs``: {name: Frame (its
         position is recorded) or callable(t, q, u) -> array}. ``energies``: also record
         kinetic and potential energy. ``breakpoints``: times [s] where loads jump, added to

@@ -16,12 +16,12 @@ from mbs import PointMass, System, ground_frame
 G, H0, R = 9.81, 1.0, 0.1
 
 
-def bouncing_ball(e, t_end, dt):
+def bouncing_ball(e, t_end, dt, integrator="moreau", **options):
     system = System(gravity=(0, 0, -G))
     ball = system.add(PointMass(1.0, position=(0, 0, H0 + R)))
     kin = ContactKinematicsSpherePlane(SphereContour(ball.point, R), PlaneContour(ground_frame()))
     system.add(Contact(kin, UnilateralNewtonImpact(e)))
-    return system.simulate(t_end, dt, integrator="moreau", energies=True)
+    return system.simulate(t_end, dt, integrator=integrator, energies=True, **options)
 
 
 @pytest.mark.parametrize("e", [0.0, 0.7, 1.0])
@@ -88,8 +88,57 @@ def test_regularized_contact_settles_at_the_static_penetration_and_slides_at_mu_
     assert np.allclose(np.diff(res.u[sliding, 0]) / 1e-4, -mu * G, rtol=1e-3)
 
 
+@pytest.mark.parametrize("atol", [1e-5, 1e-7])
+def test_adaptive_steps_shrink_at_the_impact_and_bound_penetration_and_timing_by_atol(atol):
+    """Free flight under gravity is exact for the midpoint scheme, so the step grows to
+    dt; the impact at t1 = sqrt(2 H0 / g) makes it shrink until the penetration stays
+    within gap_tol = atol; the rebound apex then misses (e v1)² / 2g by at most about the
+    mistimed travel."""
+    e = 0.7
+    v1 = np.sqrt(2 * G * H0)
+    t1 = v1 / G
+    res = bouncing_ball(e, 0.8, 1e-2, integrator="moreau-adaptive", atol=atol, t_out=[0.4, 0.8], trace=True)
+    tr = res.trace
+    assert set(tr) == {"t", "dt", "closed", "penetration", "iterations", "residual", "energy"}
+    assert len(tr["t"]) == res.stats["steps"] and np.isclose(tr["dt"].sum(), 0.8, rtol=1e-12)
+    near = np.abs(tr["t"] - t1) < 1e-3
+    assert tr["dt"][near].min() < 100 * atol / v1 and tr["dt"][tr["t"] < 0.4].min() == pytest.approx(1e-2)
+    # gap control bounds the depth at step ends by gap_tol; the midpoint of the impact
+    # step may lie up to that step's travel deeper
+    i = np.argmax(tr["closed"] > 0)
+    assert res.stats["max_penetration"] <= atol + v1 * tr["dt"][i] and res.stats["rejected_steps"] > 0
+    assert tr["dt"][i] < 100 * atol / v1
+    first = tr["t"][i]
+    assert abs(first - t1) < 100 * atol / v1                    # impact located to the controlled step
+    apex = (e * v1) ** 2 / (2 * G)
+    assert np.isclose(res.q[-1, 2] - R, apex - 0.5 * G * (0.8 - t1 - e * v1 / G) ** 2, atol=50 * atol)
+    E = tr["energy"]
+    assert np.diff(E).max() < 1e-12 * E[0]                      # never gains energy
+
+
+def test_adaptive_is_cheaper_than_the_fixed_step_of_equal_impact_accuracy():
+    fixed = bouncing_ball(1.0, 1.0, 1e-5, t_out=[1.0])
+    adaptive = bouncing_ball(1.0, 1.0, 1e-2, integrator="moreau-adaptive", atol=1e-5, t_out=[1.0])
+    v1 = np.sqrt(2 * G * H0)
+    z_exact = H0 - 0.5 * G * (1.0 - 2 * v1 / G) ** 2           # e = 1: the second fall, from H0
+    assert abs(adaptive.q[-1, 2] - R - z_exact) < 1e-4 and abs(fixed.q[-1, 2] - R - z_exact) < 1e-4
+    assert adaptive.stats["steps"] * 3 < fixed.stats["steps"] / 10
+
+
+def test_trace_of_the_fixed_step_records_every_step():
+    res = bouncing_ball(0.0, 0.6, 1e-3, trace=True, t_out=[0.6])
+    tr = res.trace
+    assert len(tr["t"]) == 600 and np.allclose(tr["dt"], 1e-3)
+    t1 = np.sqrt(2 * H0 / G)
+    assert np.all(tr["closed"][tr["t"] < t1 - 1e-3] == 0) and np.all(tr["closed"][tr["t"] > t1 + 1e-3] == 1)
+    assert tr["penetration"].max() == res.stats["max_penetration"]
+    assert bouncing_ball(0.0, 0.1, 1e-3).trace == {}
+
+
 def test_bad_options():
     system = System()
     system.add(PointMass(1.0))
     with pytest.raises(ModelError, match="theta"):
         system.simulate(0.1, 0.01, integrator="moreau", theta=0.2)
+    with pytest.raises(ModelError, match="atol"):
+        system.simulate(0.1, 0.01, integrator="moreau-adaptive", atol=0.0)

@@ -17,9 +17,10 @@ from ffrmbs.errors import ModelError
 
 from .explicit import RK4
 from .generalized_alpha import GeneralizedAlpha
-from .moreau import MoreauTimeStepping
+from .moreau import AdaptiveMoreauTimeStepping, MoreauTimeStepping
 
-INTEGRATORS = {"generalized-alpha": GeneralizedAlpha, "rk4": RK4, "moreau": MoreauTimeStepping}
+INTEGRATORS = {"generalized-alpha": GeneralizedAlpha, "rk4": RK4, "moreau": MoreauTimeStepping,
+               "moreau-adaptive": AdaptiveMoreauTimeStepping}
 
 
 def integrator_class(name):

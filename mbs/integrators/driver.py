@@ -44,13 +44,34 @@ class StepFailure(Exception):
 
 class Integrator:
     """Base class: subclasses implement ``start(t, q, u)`` and ``step(h)`` on ``self.t``,
-    ``self.q``, ``self.u`` and count Newton iterations in ``self.iterations``."""
+    ``self.q``, ``self.u`` and count Newton iterations in ``self.iterations``; accepted
+    steps are counted in ``self.steps``. :meth:`advance` takes equal steps; step-size
+    controlled integrators override it."""
 
     name = "integrator"
 
     def __init__(self, system):
         self.system = system
         self.iterations = 0
+        self.steps = 0
+
+    def advance(self, end, dt):
+        """Step from ``self.t`` to ``end`` [s] in ceil((end − t)/dt) equal steps."""
+        gap = end - self.t
+        k = math.ceil(gap / dt - 1e-9) if gap > 1e-14 * max(1.0, abs(end)) else 0
+        for _ in range(k):
+            self.step(gap / k)
+            self.accepted(gap / k)
+
+    def accepted(self, h):
+        """Book an accepted step of size ``h``; a NaN or infinite state stops the run."""
+        self.steps += 1
+        if not (np.all(np.isfinite(self.q)) and np.all(np.isfinite(self.u))):
+            raise SimulationError(self.t, self.steps, "the state became NaN or infinite")
+
+    def trace(self) -> dict:
+        """Per-step records {name: (steps,) array} when the integrator keeps them, else {}."""
+        return {}
 
     def options(self) -> dict:
         return {}
@@ -83,7 +104,7 @@ class Integrator:
         sys.normalize(q)
         cpu0, wall0 = time.process_time(), time.perf_counter()
         self.start(0.0, q, u)
-        steps, recorded = 0, 0
+        recorded = 0
 
         def record(i):
             res.t[i], res.q[i], res.u[i] = self.t, self.q, self.u
@@ -102,19 +123,13 @@ class Integrator:
             for target in landings:
                 is_break = target in breaks
                 end = target - 1e-12 * max(1.0, abs(target)) if is_break else target
-                gap = end - self.t
-                k = math.ceil(gap / dt - 1e-9) if gap > 1e-14 * max(1.0, abs(target)) else 0
-                for _ in range(k):
-                    try:
-                        self.step(gap / k)
-                    except StepFailure as failure:
-                        raise SimulationError(self.t, steps + 1, str(failure)) from None
-                    except np.linalg.LinAlgError as failure:
-                        raise SimulationError(self.t, steps + 1, f"singular system matrix ({failure}); "
-                                              "a rotation singularity or a redundant constraint?") from None
-                    steps += 1
-                    if not (np.all(np.isfinite(self.q)) and np.all(np.isfinite(self.u))):
-                        raise SimulationError(self.t, steps, "the state became NaN or infinite")
+                try:
+                    self.advance(end, dt)
+                except StepFailure as failure:
+                    raise SimulationError(self.t, self.steps + 1, str(failure)) from None
+                except np.linalg.LinAlgError as failure:
+                    raise SimulationError(self.t, self.steps + 1, f"singular system matrix ({failure}); "
+                                          "a rotation singularity or a redundant constraint?") from None
                 if is_break:
                     self.start(target, self.q, self.u)
                 self.t = target
@@ -123,9 +138,11 @@ class Integrator:
                     recorded += 1
         except SimulationError as err:
             err.result = res.truncated(recorded)
-            err.result.stats.update(steps=steps, newton_iterations=self.iterations,
+            err.result.stats.update(steps=self.steps, newton_iterations=self.iterations,
                                     cpu_s=time.process_time() - cpu0, **self.diagnostics())
+            err.result.trace = self.trace()
             raise
-        res.stats.update(steps=steps, newton_iterations=self.iterations,
+        res.stats.update(steps=self.steps, newton_iterations=self.iterations,
                          cpu_s=time.process_time() - cpu0, wall_s=time.perf_counter() - wall0, **self.diagnostics())
+        res.trace = self.trace()
         return res

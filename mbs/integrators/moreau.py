@@ -16,8 +16,27 @@ One step of size Δt (DESIGN, "the data flow of one Moreau step"):
 
 Options: ``theta`` (0.5..1, default 1: the damped implicit Euler on the elastic
 forces, unconditionally stable; 0.5 conserves elastic energy), ``solver`` (a ProxSolver
-or its method name), ``tol``. Non-convergence of the contact problem stops the run with
-a SimulationError naming the residual.
+or its method name), ``tol``, ``trace`` (True: per-step records in ``Result.trace``:
+t, dt [s], closed contacts, largest penetration [m], solver iterations and residual
+[m/s], total energy [J]). Non-convergence of the contact problem stops the run with a
+SimulationError naming the residual.
+
+:class:`AdaptiveMoreauTimeStepping` ("moreau-adaptive") controls the step size by step
+doubling, like MBSim's ``AutoTimeSteppingSSCIntegrator``: each step of size H is also
+taken as two steps of H/2; the difference of the positions, weighted by
+``atol + rtol |q|``, estimates the local error of the (accepted) half-step solution.
+Gap control: a set-valued unilateral contact detected only at a midpoint can end a step
+already penetrating, and then both solutions agree; so the growth of the largest
+penetration max(0, −g_N) at the step's end over its start, divided by ``gap_tol`` [m]
+(default ``atol``), also enters e. A penetration that merely persists (a resting contact
+keeps the depth at which it closed) does not.
+A step is accepted when that weighted error e <= 1 and the next H is
+H · min(2, max(0.2, 0.9 e^(−1/2))) (first order in the positions across impacts);
+a rejected step is retaken with the smaller H. An impact inside a step separates the
+two solutions by about the approach velocity times the mistimed interval, so the step
+shrinks around contact closing and grows again in free flight and steady contact.
+``dt`` of ``simulate`` is the initial and largest step; ``dt_min`` the smallest (a step
+at dt_min is accepted whatever its error and counted in ``forced_steps``).
 """
 
 from __future__ import annotations
@@ -31,13 +50,15 @@ from ffrmbs.errors import ModelError
 
 from .driver import Integrator, StepFailure
 
+TRACE_KEYS = ("t", "dt", "closed", "penetration", "iterations", "residual", "energy")
+
 
 class MoreauTimeStepping(Integrator):
     """Moreau's midpoint time-stepping (module docstring)."""
 
     name = "moreau"
 
-    def __init__(self, system, theta=1.0, solver="gauss-seidel", tol=1e-10, max_iter=2000):
+    def __init__(self, system, theta=1.0, solver="gauss-seidel", tol=1e-10, max_iter=2000, trace=False):
         super().__init__(system)
         if not 0.5 <= theta <= 1.0:
             raise ModelError(f"theta must lie in [0.5, 1], got {theta}")
@@ -52,6 +73,8 @@ class MoreauTimeStepping(Integrator):
         self.stats = {"closed_contacts": 0, "solver_iterations": 0, "max_penetration": 0.0}
         self._lam = {}
         self._sets = {}
+        self._last = [0, 0.0, 0, 0.0]     # this step: most closed contacts, penetration, iterations, residual
+        self._trace = {key: [] for key in TRACE_KEYS} if trace else None
 
     def options(self):
         return {"theta": self.theta, "solver": self.solver.method}
@@ -63,6 +86,20 @@ class MoreauTimeStepping(Integrator):
 
     def start(self, t, q, u):
         self.t, self.q, self.u = t, q.copy(), u.copy()
+
+    def accepted(self, h):
+        super().accepted(h)
+        if self._trace is not None:
+            sys = self.system
+            energy = sys.kinetic_energy(self.t, self.q, self.u) + sys.potential_energy(self.t, self.q)
+            for key, value in zip(TRACE_KEYS, (self.t, h, *self._last, energy)):
+                self._trace[key].append(value)
+        self._last[:] = 0, 0.0, 0, 0.0
+
+    def trace(self):
+        if self._trace is None:
+            return {}
+        return {key: np.array(values) for key, values in self._trace.items()}
 
     def _update_contours(self, t, q, u):
         for contour in self.contours:
@@ -79,6 +116,7 @@ class MoreauTimeStepping(Integrator):
         sys.normalize(q_m)
         M, h = sys.mass_and_h(t_m, q_m, self.u)
         closed = []
+        last = self._last            # summed over the sub-steps of one accepted step
         if self.contacts:
             self._update_contours(t_m, q_m, self.u)
             for c in self.contacts:
@@ -86,7 +124,8 @@ class MoreauTimeStepping(Integrator):
                     closed.append(c)
                 if not c.set_valued:
                     c.add_forces(h)
-                self.stats["max_penetration"] = max(self.stats["max_penetration"], c.penetration)
+                last[1] = max(last[1], c.penetration)
+            self.stats["max_penetration"] = max(self.stats["max_penetration"], last[1])
         K, D = sys.tangents(t_m, q_m, self.u)  # elastic, damping and link (spring) tangents at the midpoint
         th = self.theta
         M_hat = M + th * dt * D + th * dt * dt * K
@@ -121,9 +160,12 @@ class MoreauTimeStepping(Integrator):
                 raise StepFailure(f"contact problem not solved: residual {sol.residual:.3g} m/s after "
                                   f"{sol.iterations} iterations ({len(closed)} closed contacts)")
             self.stats["solver_iterations"] += sol.iterations
+            last[2] += sol.iterations
+            last[3] = max(last[3], sol.residual)
             self._store(closed, sol.lam)
             self.u = u_free + MW @ sol.lam
         self.stats["closed_contacts"] += len(closed)
+        last[0] = max(last[0], len(closed))
         self.q = sys.increment(q_m, 0.5 * dt * self.u)
         sys.normalize(self.q)
         self.t += dt
@@ -156,3 +198,94 @@ class MoreauTimeStepping(Integrator):
             self._lam[id(c)] = lam[i:i + c.dim].copy()
             i += c.dim
 
+
+
+class AdaptiveMoreauTimeStepping(MoreauTimeStepping):
+    """Moreau time-stepping with step-size control by step doubling (module docstring).
+
+    Parameters (besides MoreauTimeStepping's)
+    ----------
+    atol : float > 0
+        Absolute tolerance of the positions q per step [m, or the unit of each
+        coordinate: rad-like for quaternions, kg^½ m for modal coordinates].
+    rtol : float >= 0
+        Relative tolerance [-].
+    dt_min : float > 0
+        Smallest step [s].
+    """
+
+    name = "moreau-adaptive"
+
+    def __init__(self, system, atol=1e-6, rtol=1e-4, dt_min=1e-9, gap_tol=None, **options):
+        super().__init__(system, **options)
+        gap_tol = atol if gap_tol is None else gap_tol
+        if not (atol > 0 and rtol >= 0 and dt_min > 0 and gap_tol > 0):
+            raise ModelError(f"need atol > 0, rtol >= 0, dt_min > 0 and gap_tol > 0, got {atol}, {rtol}, "
+                             f"{dt_min}, {gap_tol}")
+        self.atol, self.rtol, self.dt_min, self.gap_tol = float(atol), float(rtol), float(dt_min), float(gap_tol)
+        self.unilateral = [c for c in self.contacts if c.set_valued and c.unilateral]
+        self.h_next = None
+        self._pen = 0.0
+        self.stats.update(rejected_steps=0, forced_steps=0, smallest_dt=np.inf, largest_dt=0.0)
+
+    def options(self):
+        return {**super().options(), "atol": self.atol, "rtol": self.rtol, "dt_min": self.dt_min,
+                "gap_tol": self.gap_tol}
+
+    def start(self, t, q, u):
+        super().start(t, q, u)
+        self._pen = self._penetration()
+
+    def _penetration(self) -> float:
+        """Largest penetration [m] of the set-valued unilateral contacts at (t, q, u)."""
+        if not self.unilateral:
+            return 0.0
+        self._update_contours(self.t, self.q, self.u)
+        pen = 0.0
+        for c in self.unilateral:
+            c.detect()
+            pen = max(pen, c.penetration)
+        return pen
+
+    def _save(self):
+        return (self.t, self.q.copy(), self.u.copy(), dict(self._lam), dict(self.stats))
+
+    def _restore(self, saved):
+        self.t, q, u, lam, stats = saved
+        self.q, self.u, self._lam, self.stats = q.copy(), u.copy(), dict(lam), dict(stats)
+        self._last[:] = 0, 0.0, 0, 0.0
+
+    def advance(self, end, dt):
+        """Controlled steps of at most ``dt`` from ``self.t`` to exactly ``end``."""
+        h = dt if self.h_next is None else min(self.h_next, dt)
+        while end - self.t > 1e-14 * max(1.0, abs(end)):
+            rest = end - self.t
+            h = h_ctrl = min(max(h, self.dt_min), dt)
+            if h >= rest:
+                h = rest
+            elif h > 0.5 * rest:                      # avoid a sliver before ``end``
+                h = 0.5 * rest
+            saved = self._save()
+            self.step(h)
+            q_full = self.q
+            self._restore(saved)
+            self.step(0.5 * h)
+            self.step(0.5 * h)
+            dq = np.abs(self.q - q_full)
+            err = float(np.max(dq / (self.atol + self.rtol * np.abs(self.q)))) if dq.size else 0.0
+            pen = self._penetration()
+            err = max(err, (pen - self._pen) / self.gap_tol)
+            factor = 2.0 if err == 0.0 else min(2.0, max(0.2, 0.9 * err ** -0.5))
+            if err <= 1.0 or h <= self.dt_min * (1 + 1e-12):
+                if err > 1.0:
+                    self.stats["forced_steps"] += 1
+                self.stats["smallest_dt"] = min(self.stats["smallest_dt"], h)
+                self.stats["largest_dt"] = max(self.stats["largest_dt"], h)
+                self.accepted(h)
+                self._pen = pen
+                self.h_next = max(h * factor, h_ctrl)        # landing on ``end`` does not shrink H
+            else:
+                self._restore(saved)
+                self.stats["rejected_steps"] += 1
+                self.h_next = h * factor
+            h = self.h_next
