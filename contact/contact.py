@@ -11,13 +11,22 @@
 
 :class:`CurveConstraint` keeps a point on a curve (bilateral, 2 rows; thesis Sec. 5.3).
 The integrator updates every contour once per step before ``detect``.
+
+Broad phase (:mod:`contact.broad_phase`): ``detect`` first compares the two contours'
+bounding boxes, each grown by ``margin`` [m]; only overlapping pairs reach the search.
+The margin must exceed the deepest penetration the scene can produce in one step (a
+point below a flat contour lies outside its unpadded box); the default is a tenth of
+the largest edge of contour 2's box at construction (for a plane, whose box is
+infinite, the test always passes), and ``margin=None`` turns the broad phase off.
 """
 
 from __future__ import annotations
 
+import numpy as np
 
 from ffrmbs.errors import ModelError
 
+from .broad_phase import overlapping
 from .kinematics import ContactKinematics, PointOnCurveConstraint
 from .laws import (Bilateral, LinearRegularizedUnilateralConstraint, RegularizedCoulombFriction,
                    UnilateralCoulombContact, UnilateralNewtonImpact)
@@ -32,7 +41,7 @@ class Contact:
     is_contact = True
     unilateral = True
 
-    def __init__(self, kinematics: ContactKinematics, law, friction=None, name="contact"):
+    def __init__(self, kinematics: ContactKinematics, law, friction=None, name="contact", margin="auto"):
         if not isinstance(law, SET_VALUED + (LinearRegularizedUnilateralConstraint,)):
             raise ModelError(f"{name}: unsupported contact law {law!r}")
         if friction is not None and not (isinstance(friction, RegularizedCoulombFriction)
@@ -44,6 +53,9 @@ class Contact:
         self.dim = law.dim if self.set_valued else 0
         self.closed = False
         self.force_N = 0.0
+        self.margin = _auto_margin(kinematics.contour2) if isinstance(margin, str) and margin == "auto" else margin
+        if self.margin is not None and not self.margin >= 0.0:
+            raise ModelError(f"{name}: margin must be >= 0 [m], 'auto' or None, got {margin!r}")
 
     def bodies(self):
         return [c.body for c in self.contours() if c.body is not None]
@@ -59,6 +71,10 @@ class Contact:
     def detect(self) -> bool:
         """Locate the contact on the updated contours; closed when found and g_N <= 0."""
         k = self.kinematics
+        if self.margin is not None and not overlapping(k.contour1.bounding_box(), k.contour2.bounding_box(),
+                                                       self.margin):
+            self.closed = False
+            return False
         self.closed = bool(k.update(velocity=not self.set_valued, jacobians=True)) and k.g_N <= 0.0
         return self.closed
 
@@ -81,6 +97,13 @@ class Contact:
             h[s] += self.force_N * w_N
             if F_T is not None:
                 h[s] += w_T @ F_T
+
+
+def _auto_margin(contour) -> float:
+    """A tenth of the largest finite edge of the contour's bounding box [m] (0 if none)."""
+    edges = np.ptp(contour.bounding_box(), axis=0)
+    edges = edges[np.isfinite(edges)]
+    return 0.1 * float(edges.max()) if edges.size else 0.0
 
 
 class CurveConstraint:

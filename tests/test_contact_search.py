@@ -227,3 +227,26 @@ def test_broad_phase_keeps_the_overlapping_pairs():
     below = PointContour(ground_frame((0.0, 0.0, 0.012)))
     assert BroadPhase([(below, ball)]).candidates() == []
     assert BroadPhase([(below, ball)], margin=0.005).candidates() == [(below, ball)]
+
+
+def test_contact_searches_only_pairs_the_broad_phase_keeps():
+    """The default margin is a tenth of contour 2's largest box edge: a point 0.3 m from a
+    sphere of radius 0.03 (margin 0.006 m) is never searched; within the margin it is,
+    and so is every pair with the broad phase off."""
+    from contact import Contact, ContactKinematicsPointContour2s, UnilateralNewtonImpact
+
+    ball = SphereContour(ground_frame((0.0, 0.0, 0.05)), 0.03)
+
+    def searched(z, **kw):
+        mass = PointMass(1.0, position=(0.0, 0.0, z))
+        kin = ContactKinematicsPointContour2s(PointContour(mass.point), ball)
+        contact = Contact(kin, UnilateralNewtonImpact(0.0), **kw)
+        contact.detect()
+        return kin.search.coarse_searches + kin.search.newton_solves
+
+    assert Contact(ContactKinematicsPointContour2s(PointContour(ground_frame()), ball),
+                   UnilateralNewtonImpact(0.0)).margin == pytest.approx(0.006)
+    assert searched(0.35) == 0 and searched(0.35, margin=None) > 0
+    assert searched(0.05 + 0.03 + 0.011) > 0          # 0.011 m above the box: within 2 x 0.006
+    with pytest.raises(ModelError, match="margin"):
+        searched(0.35, margin=-1.0)
