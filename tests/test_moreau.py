@@ -99,7 +99,7 @@ def test_adaptive_steps_shrink_at_the_impact_and_bound_penetration_and_timing_by
     t1 = v1 / G
     res = bouncing_ball(e, 0.8, 1e-2, integrator="moreau-adaptive", atol=atol, t_out=[0.4, 0.8], trace=True)
     tr = res.trace
-    assert set(tr) == {"t", "dt", "closed", "penetration", "iterations", "residual", "energy"}
+    assert set(tr) == {"t", "dt", "closed", "penetration", "iterations", "residual", "impulse_work", "energy"}
     assert len(tr["t"]) == res.stats["steps"] and np.isclose(tr["dt"].sum(), 0.8, rtol=1e-12)
     near = np.abs(tr["t"] - t1) < 1e-3
     assert tr["dt"][near].min() < 100 * atol / v1 and tr["dt"][tr["t"] < 0.4].min() == pytest.approx(1e-2)
@@ -132,6 +132,12 @@ def test_trace_of_the_fixed_step_records_every_step():
     t1 = np.sqrt(2 * H0 / G)
     assert np.all(tr["closed"][tr["t"] < t1 - 1e-3] == 0) and np.all(tr["closed"][tr["t"] > t1 + 1e-3] == 1)
     assert tr["penetration"].max() == res.stats["max_penetration"]
+    # energy balance: under constant gravity the midpoint step changes kinetic plus
+    # potential energy by exactly Λ (γ⁺ + γ⁻)/2; e = 0 takes out the ½ m v² of the approach
+    # (m = 1, v ≈ sqrt(2 g H0) to one step's g dt)
+    E0 = G * (H0 + R)
+    assert np.isclose(tr["energy"][-1] - E0, tr["impulse_work"].sum(), rtol=1e-9)
+    assert np.isclose(tr["impulse_work"].sum(), -G * H0, rtol=2 * 1e-3 * G / np.sqrt(2 * G * H0))
     assert bouncing_ball(0.0, 0.1, 1e-3).trace == {}
 
 

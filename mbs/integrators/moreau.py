@@ -18,7 +18,8 @@ Options: ``theta`` (0.5..1, default 1: the damped implicit Euler on the elastic
 forces, unconditionally stable; 0.5 conserves elastic energy), ``solver`` (a ProxSolver
 or its method name), ``tol``, ``trace`` (True: per-step records in ``Result.trace``:
 t, dt [s], closed contacts, largest penetration [m], solver iterations and residual
-[m/s], total energy [J]). Non-convergence of the contact problem stops the run with a
+[m/s], the work of the impulses Λᵀ (γ⁺ + γ⁻)/2 [J] (contacts and joints; the energy the
+impact laws take out), total energy [J]). Non-convergence of the contact problem stops the run with a
 SimulationError naming the residual.
 
 :class:`AdaptiveMoreauTimeStepping` ("moreau-adaptive") controls the step size by step
@@ -50,7 +51,7 @@ from ffrmbs.errors import ModelError
 
 from .driver import Integrator, StepFailure
 
-TRACE_KEYS = ("t", "dt", "closed", "penetration", "iterations", "residual", "energy")
+TRACE_KEYS = ("t", "dt", "closed", "penetration", "iterations", "residual", "impulse_work", "energy")
 
 
 class MoreauTimeStepping(Integrator):
@@ -73,7 +74,8 @@ class MoreauTimeStepping(Integrator):
         self.stats = {"closed_contacts": 0, "solver_iterations": 0, "max_penetration": 0.0}
         self._lam = {}
         self._sets = {}
-        self._last = [0, 0.0, 0, 0.0]     # this step: most closed contacts, penetration, iterations, residual
+        self._last = [0, 0.0, 0, 0.0, 0.0]  # this step: most closed contacts, penetration, iterations,
+                                            # residual; impulse work
         self._trace = {key: [] for key in TRACE_KEYS} if trace else None
 
     def options(self):
@@ -94,7 +96,7 @@ class MoreauTimeStepping(Integrator):
             energy = sys.kinetic_energy(self.t, self.q, self.u) + sys.potential_energy(self.t, self.q)
             for key, value in zip(TRACE_KEYS, (self.t, h, *self._last, energy)):
                 self._trace[key].append(value)
-        self._last[:] = 0, 0.0, 0, 0.0
+        self._last[:] = 0, 0.0, 0, 0.0, 0.0
 
     def trace(self):
         if self._trace is None:
@@ -162,6 +164,7 @@ class MoreauTimeStepping(Integrator):
             self.stats["solver_iterations"] += sol.iterations
             last[2] += sol.iterations
             last[3] = max(last[3], sol.residual)
+            last[4] += 0.5 * float(sol.lam @ (sol.gamma_plus + gamma_pre))
             self._store(closed, sol.lam)
             self.u = u_free + MW @ sol.lam
         self.stats["closed_contacts"] += len(closed)
@@ -253,7 +256,7 @@ class AdaptiveMoreauTimeStepping(MoreauTimeStepping):
     def _restore(self, saved):
         self.t, q, u, lam, stats = saved
         self.q, self.u, self._lam, self.stats = q.copy(), u.copy(), dict(lam), dict(stats)
-        self._last[:] = 0, 0.0, 0, 0.0
+        self._last[:] = 0, 0.0, 0, 0.0, 0.0
 
     def advance(self, end, dt):
         """Controlled steps of at most ``dt`` from ``self.t`` to exactly ``end``."""
