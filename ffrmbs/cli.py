@@ -5,7 +5,7 @@ Subcommands
 ``preprocess``  mesh -> FE model -> modes -> body files (thesis Sec. 4.2.1 text files and body.h5)
 ``info``        summary of a body (text-file directory or HDF5 file)
 ``validate``    validation cases: error against run time (see ../DESIGN.md)
-``run``         the main job on the embedded default scene
+``run``         the main job: the point mass dropped on the flexible beam (thesis Sec. 5.2)
 
 Errors the user can cause (:class:`ffrmbs.errors.FfrmbsError`) are printed as one
 line ``ffrmbs: error: …`` and exit with status 2, without a traceback.
@@ -70,20 +70,13 @@ def cmd_validate(args):
 
 
 def cmd_run(args):
-    """Main job. Until contact scenes exist (issue 6): preprocess the embedded default beam."""
-    from validation.cases import cantilever as beam  # the report's beam, defined once
+    """Main job: the point mass dropped on the flexible beam (:mod:`ffrmbs.main_job`)."""
+    from ffrmbs.main_job import JobSettings, run_job
 
-    mat, h = beam.MATERIAL, beam.REPORT_MESH_SIZE
-    print(f"default scene: the report's 1 x 1 x {beam.L:g} m steel beam, clamped at z = 0, "
-          f"tet10, mesh size {h} m")
-    t0, c0 = time.perf_counter(), time.process_time()
-    body = _preprocess(f"box:1,1,{beam.L:g}", DEFAULT_MODES, "z0", "si", mat.density, mat.young,
-                       mat.poisson, 2, h, args.out)
-    omega1 = body.frequencies()[0][0]
-    accuracy = ", ".join(f"{(omega1 / ref - 1) * 100:+.2f} % against {name} ({ref:.2f} rad/s)"
-                         for name, (ref, _) in beam.references().items())
-    print(f"accuracy: first bending frequency {omega1:.2f} rad/s, {accuracy}")
-    print(f"cost: {time.perf_counter() - t0:.2f} s wall, {time.process_time() - c0:.2f} s CPU")
+    settings = JobSettings(setup=args.setup, modes=args.modes, law=args.law, e=args.e, contour=args.contour,
+                           t_end=args.t_end, dt=args.dt, check=not args.no_check)
+    run_job(settings, args.out, log=print)
+    print(f"wrote {args.out}/point_mass_beam.h5 and {args.out}/point_mass_beam.png")
 
 
 def build_parser():
@@ -119,8 +112,17 @@ def build_parser():
     val.add_argument("--out", required=True, help="output directory")
     val.set_defaults(func=cmd_validate)
 
-    run = sub.add_parser("run", help="run the main job on the embedded default scene")
-    run.add_argument("--out", default=None, help="also write the body files here")
+    run = sub.add_parser("run", help="the main job: a point mass dropped on a flexible beam (thesis Sec. 5.2)")
+    run.add_argument("--out", default="ffrmbs-run", help="output directory (default: ffrmbs-run)")
+    run.add_argument("--setup", choices=("A", "B"), default="A", help="initial position of the point mass")
+    run.add_argument("--modes", type=int, default=20, help="elastic modes of the beam (1..750)")
+    run.add_argument("--law", choices=("impact", "penalty"), default="impact",
+                     help="set-valued Newton impact or linear penalty k = 1e7 N/m")
+    run.add_argument("--e", type=float, default=0.0, help="coefficient of restitution of the impact law")
+    run.add_argument("--contour", choices=("2s", "band"), default="2s", help="top-face contour")
+    run.add_argument("--t-end", type=float, default=0.1, help="simulated time [s]")
+    run.add_argument("--dt", type=float, default=1e-5, help="time step [s]")
+    run.add_argument("--no-check", action="store_true", help="skip the second run at dt/2 (error estimate)")
     run.set_defaults(func=cmd_run)
     return p
 

@@ -1,5 +1,6 @@
 """The command line: preprocess -> files -> info, clear one-line errors, the main job."""
 
+import json
 import subprocess
 import sys
 
@@ -75,8 +76,35 @@ def test_preprocess_missing_mesh_file(tmp_path):
     assert res.returncode == 2 and "none.msh" in res.stderr and "not found" in res.stderr
 
 
-def test_main_job_prints_the_default_beam_modes():
-    res = ffrmbs("run")
+def test_main_job_runs_the_point_mass_on_the_beam(tmp_path):
+    """``ffrmbs run`` with no scene argument: setup A of thesis Sec. 5.2. Independent
+    checks: the point mass falls 2 mm at 0.2 m/s, so the contact closes at 10 ms; before
+    it the mass moves uniformly; the energy balance closes; files are written."""
+    import h5py
+
+    res = ffrmbs("run", "--out", str(tmp_path / "out"))
     assert res.returncode == 0, res.stderr
-    first = next(line for line in res.stdout.splitlines() if line.strip().startswith("1 "))
-    assert float(first.split()[1]) == pytest.approx(197.6, rel=2e-3)
+    text = res.stdout
+    for key in ("contact: closed in", "maximum penetration", "energy: initial 0.01 J", "accuracy", "cost:"):
+        assert key in text
+    with h5py.File(tmp_path / "out" / "point_mass_beam.h5") as f:
+        t, y, vy = f["t"][()], f["y"][()], f["vy"][()]
+        summary = json.loads(f.attrs["summary"])
+        assert f["node19"].shape == (t.size, 3) and f["trace/closed"].size == 10000
+    first_close = summary["contact_intervals_s"][0][0]
+    assert abs(first_close - 0.010) <= 1e-5
+    before = t < 0.0099
+    assert np.allclose(y[before], 0.052 - 0.2 * t[before], atol=1e-12) and np.all(vy[before] == -0.2)
+    e = summary["energy_J"]
+    assert e["initial"] == pytest.approx(0.5 * 0.5 * 0.2 ** 2) and abs(e["residual"]) < 1e-3 * e["initial"]
+    assert e["impulse_work"] < 0 and 0 < summary["max_penetration_m"] <= 0.2 * 1e-5
+    assert (tmp_path / "out" / "point_mass_beam.png").stat().st_size > 10_000
+
+
+def test_contact_intervals_from_a_trace():
+    from ffrmbs.main_job import contact_intervals
+
+    t = np.arange(1, 11) * 0.1
+    closed = np.array([0, 1, 1, 0, 0, 1, 0, 0, 1, 1])
+    assert np.allclose(contact_intervals(t, np.full(10, 0.1), closed), [(0.1, 0.3), (0.5, 0.6), (0.8, 1.0)])
+    assert contact_intervals(t, np.full(10, 0.1), np.zeros(10)) == []
