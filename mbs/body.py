@@ -24,6 +24,7 @@ class Body:
 
     nq: int
     nu: int
+    constant_mass = False   # True when M does not depend on q or t (Moreau then factors once)
 
     def __init__(self, name: str):
         self.name = name

@@ -48,6 +48,7 @@ class PrescribedFrameMotion:
 
     translation: Callable
     rotation: Callable
+    at_rest: bool = False      # True for :meth:`fixed`: no frame velocity or acceleration ever
 
     @classmethod
     def fixed(cls, R=(0.0, 0.0, 0.0), A=None) -> "PrescribedFrameMotion":
@@ -55,7 +56,7 @@ class PrescribedFrameMotion:
         R = np.asarray(R, dtype=float)
         A = np.eye(3) if A is None else np.asarray(A, dtype=float)
         zero = np.zeros(3)
-        return cls(lambda t: (R, zero, zero), lambda t: (A, zero, zero))
+        return cls(lambda t: (R, zero, zero), lambda t: (A, zero, zero), at_rest=True)
 
 
 class FloatingFrameBody(Body):
@@ -70,6 +71,7 @@ class FloatingFrameBody(Body):
     def __init__(self, name, n_modes, frame="free", rotation="quaternion"):
         super().__init__(name)
         self.n_modes = n_modes
+        self._M_rest = None
         if isinstance(frame, PrescribedFrameMotion):
             self.motion, self.param = frame, None
             self.nq = self.nu = n_modes
@@ -90,6 +92,11 @@ class FloatingFrameBody(Body):
         self.u_init = np.zeros(self.nu)
         if self.param is not None:
             self.q_init[self._r] = self.param.coordinates(np.eye(3))
+
+    @property
+    def constant_mass(self) -> bool:
+        """A prescribed frame leaves M = M_ff = Φᵀ M Φ, constant (thesis eq. 2.69)."""
+        return self.motion is not None
 
     @property
     def is_free(self) -> bool:
@@ -224,8 +231,10 @@ class FloatingFrameBody(Body):
 
     def mass_and_h(self, q, u, t=0.0):
         """(M, h) at one state, sharing the shape-integral pass (module docstring)."""
-        _, A, _, w, T, Tdu, a, wd = self._frame(q, u, t)
         q_f, qd_f = q[self._f], u[self._fu]
+        if self.motion is not None and self.motion.at_rest:
+            return self.mass_matrix(q, t), self.h(q, u, t)
+        _, A, _, w, T, Tdu, a, wd = self._frame(q, u, t)
         Mb, Q = self._dynamics(A, q_f, w, qd_f)
         if self.motion is not None:
             h = Q[6:] - Mb[6:, :3] @ a - Mb[6:, 3:6] @ wd
@@ -242,9 +251,16 @@ class FloatingFrameBody(Body):
         return M, h
 
     def mass_matrix(self, q, t=0.0):
+        if self.motion is not None and self.motion.at_rest:
+            if self._M_rest is None:    # frame at rest: M = m_ff, constant (thesis eq. 2.69)
+                _, A, *_ = self._frame(q, None, t)
+                self._M_rest = self._dynamics(A, q[self._f], np.zeros(3), np.zeros(self.n_modes))[0][6:, 6:]
+            return self._M_rest.copy()
         return self.mass_and_h(q, np.zeros(self.nu), t)[0]
 
     def h(self, q, u, t=0.0):
+        if self.motion is not None and self.motion.at_rest:    # Q_v = 0 with the frame at rest (eq. 4.2)
+            return -self._elastic(q[self._f], u[self._fu]) if self.n_modes else np.zeros(self.nu)
         return self.mass_and_h(q, u, t)[1]
 
     def _generalized_momentum(self, q, u, t):

@@ -39,7 +39,10 @@ def add_torque(frame, q, t, torque, h):
 
 
 class ForceElement:
-    """A link that contributes smooth generalized forces."""
+    """A link that contributes smooth generalized forces; ``has_tangents`` is True for
+    elements that override :meth:`add_tangents`."""
+
+    has_tangents = False
 
     def bodies(self):
         """The bodies this element acts on (the System checks they were added)."""

@@ -30,6 +30,7 @@ def _check_nonnegative(value, what) -> float:
 
 
 class SpringDamper(ForceElement):
+
     """A linear spring-damper along the line between two frames' points (module docstring).
 
     Parameters
@@ -49,6 +50,8 @@ class SpringDamper(ForceElement):
     raised — except for an undamped spring of zero free length, whose force k d needs no
     direction.
     """
+
+    has_tangents = True
 
     def __init__(self, frame1: Frame, frame2: Frame, stiffness, damping=0.0, *, free_length):
         if frame1.body is None and frame2.body is None:

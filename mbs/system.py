@@ -132,6 +132,13 @@ class System:
         for f in self.forces:
             f.add_forces(t, q, u, out)
 
+    @property
+    def constant_iteration_matrix(self) -> bool:
+        """True when M, the bodies' tangents K and D and the links' (none) do not change:
+        every body has a constant mass matrix (point masses, FFR bodies on a prescribed
+        frame) and no force element has tangents."""
+        return all(b.constant_mass for b in self.bodies) and not any(f.has_tangents for f in self.forces)
+
     def tangents(self, t, q, u):
         """(K_t, D_t) (nu, nu): constant elastic and damping tangents plus link tangents,
         for the iteration matrix of implicit integrators."""

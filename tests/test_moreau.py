@@ -148,3 +148,41 @@ def test_bad_options():
         system.simulate(0.1, 0.01, integrator="moreau", theta=0.2)
     with pytest.raises(ModelError, match="atol"):
         system.simulate(0.1, 0.01, integrator="moreau-adaptive", atol=0.0)
+
+
+def test_constant_iteration_matrix_is_factored_once_with_the_same_result(thesis_beam_data):
+    """A point mass dropped on a frame-fixed FFR beam: M, K, D are constant, so Moreau
+    factors M̂ once per step size; the states equal those of the general path (M̂ formed
+    and factored every step) to rounding."""
+    from contact import ContactKinematicsPointContour2s
+    from contours import Contour2sNeutralFFR
+    from mbs import FlexibleBodyFFR, PrescribedFrameMotion, SpringDamper
+
+    def scene():
+        system = System()
+        beam = system.add(FlexibleBodyFFR(thesis_beam_data, modes=8, frame=PrescribedFrameMotion.fixed()))
+        mass = system.add(PointMass(0.5, position=(0.2, 0.0502, 0.025), velocity=(0.0, -0.2, 0.0)))
+        kin = ContactKinematicsPointContour2s(PointContour(mass.point), Contour2sNeutralFFR(beam, "y1"))
+        system.add(Contact(kin, UnilateralNewtonImpact(0.5)))
+        return system, beam, mass
+
+    system, beam, mass = scene()
+    assert system.constant_iteration_matrix
+    fast = system.simulate(2e-3, 1e-5, integrator="moreau", theta=0.5, trace=True)
+    slow_system = scene()[0]
+    from mbs.integrators.moreau import MoreauTimeStepping
+
+    class EveryStep(MoreauTimeStepping):
+        def __init__(self, system, **kw):
+            super().__init__(system, **kw)
+            self._constant = False
+
+    slow = slow_system.simulate(2e-3, 1e-5, integrator=EveryStep, theta=0.5)
+    assert fast.trace["closed"].sum() >= 3                                  # the contact acted
+    assert np.allclose(fast.q, slow.q, rtol=0, atol=1e-12 * np.abs(slow.q).max())
+    assert np.allclose(fast.u, slow.u, rtol=0, atol=1e-10 * np.abs(slow.u).max())
+    system.add(SpringDamper(beam.node(0), mass.point, 10.0, free_length=0.1))
+    assert not system.constant_iteration_matrix
+    free = System()
+    free.add(FlexibleBodyFFR(thesis_beam_data, modes=4))
+    assert not free.constant_iteration_matrix

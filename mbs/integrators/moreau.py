@@ -3,7 +3,9 @@
 One step of size Δt (DESIGN, "the data flow of one Moreau step"):
 
 1. q_m = q_k ⊕ (Δt/2) u_k;
-2. M, h at (t_m, q_m, u_k); single-valued contact forces join h;
+2. M, h at (t_m, q_m, u_k); single-valued contact forces join h (when M and the
+   tangents are constant — point masses, frame-fixed FFR bodies, no springs — only h,
+   and M̂ below is factored once per step size);
 3. the contours of the contacts update at q_m (each once);
 4. contacts located; a unilateral contact is closed where g_N(q_m) <= 0;
 5. bilateral joints (velocity level, C_q u⁺ + g_t = 0) and closed contacts form
@@ -74,6 +76,8 @@ class MoreauTimeStepping(Integrator):
         self.stats = {"closed_contacts": 0, "solver_iterations": 0, "max_penetration": 0.0}
         self._lam = {}
         self._sets = {}
+        self._constant = system.constant_iteration_matrix   # factor M̂ once per step size
+        self._factors = {}
         self._last = [0, 0.0, 0, 0.0, 0.0]  # this step: most closed contacts, penetration, iterations,
                                             # residual; impulse work
         self._trace = {key: [] for key in TRACE_KEYS} if trace else None
@@ -116,7 +120,10 @@ class MoreauTimeStepping(Integrator):
         t_m = self.t + 0.5 * dt
         q_m = sys.increment(self.q, 0.5 * dt * self.u)
         sys.normalize(q_m)
-        M, h = sys.mass_and_h(t_m, q_m, self.u)
+        if self._constant:
+            h = sys.h(t_m, q_m, self.u)
+        else:
+            M, h = sys.mass_and_h(t_m, q_m, self.u)
         closed = []
         last = self._last            # summed over the sub-steps of one accepted step
         if self.contacts:
@@ -128,12 +135,15 @@ class MoreauTimeStepping(Integrator):
                     c.add_forces(h)
                 last[1] = max(last[1], c.penetration)
             self.stats["max_penetration"] = max(self.stats["max_penetration"], last[1])
-        K, D = sys.tangents(t_m, q_m, self.u)  # elastic, damping and link (spring) tangents at the midpoint
-        th = self.theta
-        M_hat = M + th * dt * D + th * dt * dt * K
-        factor, info = dpotrf(M_hat, lower=True, overwrite_a=True)
-        if info != 0:
-            raise StepFailure(f"M + θΔt D + θΔt² K is not positive definite (LAPACK dpotrf info {info})")
+        if self._constant:
+            key = float(f"{dt:.12e}")            # steps landing on output times differ by rounding
+            factor = self._factors.get(key)
+            if factor is None:
+                if len(self._factors) > 8:       # step-size control: keep the latest few
+                    self._factors.clear()
+                factor = self._factors[key] = self._factor(t_m, q_m, sys.mass_matrix(t_m, q_m), dt)
+        else:
+            factor = self._factor(t_m, q_m, M, dt)
         u_free = self.u + dpotrs(factor, dt * h, lower=True)[0]
         m = sys.n_c + sum(c.dim for c in closed)
         if m == 0:
@@ -172,6 +182,16 @@ class MoreauTimeStepping(Integrator):
         self.q = sys.increment(q_m, 0.5 * dt * self.u)
         sys.normalize(self.q)
         self.t += dt
+
+    def _factor(self, t_m, q_m, M, dt):
+        """Cholesky factor of M̂ = M + θΔt D + θΔt² K with the tangents at the midpoint."""
+        K, D = self.system.tangents(t_m, q_m, self.u)  # elastic, damping and link (spring) tangents
+        th = self.theta
+        M_hat = M + th * dt * D + th * dt * dt * K
+        factor, info = dpotrf(M_hat, lower=True, overwrite_a=True)
+        if info != 0:
+            raise StepFailure(f"M + θΔt D + θΔt² K is not positive definite (LAPACK dpotrf info {info})")
+        return factor
 
     def _contact_set(self, closed, laws):
         """The ContactSet of this active set, built once per set of closed contacts."""
