@@ -4,7 +4,9 @@
 :mod:`contact.laws`:
 
 * set-valued (``UnilateralNewtonImpact``, ``UnilateralCoulombContact``): the contact is
-  closed when g_N(q_m) <= 0 at the Moreau midpoint; it then adds ``dim`` rows to the
+  closed when g_N(q_m) <= ``closing_tol`` at the Moreau midpoint (default 1e-12 m: a
+  resting contact whose gap is zero only to rounding, e.g. on an inclined plane, stays
+  closed instead of opening for a step and letting the body fall); it then adds ``dim`` rows to the
   contact problem, W = [w_N] or [w_N, w_T1, w_T2] (thesis eq. 3.1, 4.1);
 * single-valued (``LinearRegularizedUnilateralConstraint``, optionally with
   ``RegularizedCoulombFriction``): a force W_N F_N + W_T F_T added to h.
@@ -41,7 +43,8 @@ class Contact:
     is_contact = True
     unilateral = True
 
-    def __init__(self, kinematics: ContactKinematics, law, friction=None, name="contact", margin="auto"):
+    def __init__(self, kinematics: ContactKinematics, law, friction=None, name="contact", margin="auto",
+                 closing_tol=1e-12):
         if not isinstance(law, SET_VALUED + (LinearRegularizedUnilateralConstraint,)):
             raise ModelError(f"{name}: unsupported contact law {law!r}")
         if friction is not None and not (isinstance(friction, RegularizedCoulombFriction)
@@ -53,6 +56,9 @@ class Contact:
         self.dim = law.dim if self.set_valued else 0
         self.closed = False
         self.force_N = 0.0
+        if not closing_tol >= 0.0:
+            raise ModelError(f"{name}: closing_tol must be >= 0 [m], got {closing_tol!r}")
+        self.closing_tol = float(closing_tol)
         self.margin = _auto_margin(kinematics.contour2) if isinstance(margin, str) and margin == "auto" else margin
         if self.margin is not None and not self.margin >= 0.0:
             raise ModelError(f"{name}: margin must be >= 0 [m], 'auto' or None, got {margin!r}")
@@ -75,7 +81,7 @@ class Contact:
                                                        self.margin):
             self.closed = False
             return False
-        self.closed = bool(k.update(velocity=not self.set_valued, jacobians=True)) and k.g_N <= 0.0
+        self.closed = bool(k.update(velocity=not self.set_valued, jacobians=True)) and k.g_N <= self.closing_tol
         return self.closed
 
     def jacobian(self, out) -> None:

@@ -174,10 +174,6 @@ def test_sliding_stops_within_a_h2_over_8_and_stays(rows, motion):
             assert r["error"] <= r["config"]["atol"]
 
 
-@pytest.mark.xfail(strict=True, reason="library defect: a contact closes only where g_N(q_m) <= 0 exactly; on a "
-                   "tilted plane the sticking block's position drifts outward by rounding (~1e-20 m), the "
-                   "contact opens for a whole step and the block falls and slides by ~g h² (see the "
-                   "contact_friction notes)")
 def test_block_sticks_exactly_on_a_tilted_plane(rows):
     """Same mechanics as the tilted-gravity scene: the block must not move at all."""
     for r in select(_set_valued(rows, "tilted plane"), motion="stick"):

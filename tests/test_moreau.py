@@ -186,3 +186,13 @@ def test_constant_iteration_matrix_is_factored_once_with_the_same_result(thesis_
     free = System()
     free.add(FlexibleBodyFFR(thesis_beam_data, modes=4))
     assert not free.constant_iteration_matrix
+
+
+def test_adaptive_lands_on_output_times_without_sliver_steps():
+    """Free fall is exact for the midpoint step, so nothing limits the step: 1 s at a
+    largest step of 1e-2 s takes 100 steps, none shortened by the rounding of the rest."""
+    system = System(gravity=(0, 0, -G))
+    system.add(PointMass(1.0))
+    res = system.simulate(1.0, 1e-2, integrator="moreau-adaptive", atol=1e-3, rtol=0.0, trace=True)
+    assert res.stats["steps"] == 100 and res.trace["dt"].min() == pytest.approx(1e-2)
+    assert np.isclose(res.q[-1, 2], -0.5 * G, rtol=1e-12)

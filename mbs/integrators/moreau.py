@@ -284,7 +284,7 @@ class AdaptiveMoreauTimeStepping(MoreauTimeStepping):
         while end - self.t > 1e-14 * max(1.0, abs(end)):
             rest = end - self.t
             h = h_ctrl = min(max(h, self.dt_min), dt)
-            if h >= rest:
+            if h >= rest * (1.0 - 1e-9):              # within rounding of ``end``: land on it
                 h = rest
             elif h > 0.5 * rest:                      # avoid a sliver before ``end``
                 h = 0.5 * rest
