@@ -270,7 +270,12 @@ class FloatingFrameBody(Body):
         return R, A, uf, self._dynamics(A, q[self._f], w, uf[6:])[0] @ uf
 
     def kinetic_energy(self, q, u, t=0.0):
-        """T = ½ ū̇ᵀ M̄ ū̇ over the full frame and elastic velocities [J] (thesis eq. 2.43)."""
+        """T = ½ ū̇ᵀ M̄ ū̇ over the full frame and elastic velocities [J] (thesis eq. 2.43);
+        with the frame at rest ½ q̇_fᵀ m_ff q̇_f."""
+        if self.motion is not None and self.motion.at_rest:
+            if self._M_rest is None:
+                self.mass_matrix(q, t)
+            return 0.5 * u @ (self._M_rest @ u)
         _, _, uf, Mu = self._generalized_momentum(q, u, t)
         return 0.5 * uf @ Mu
 

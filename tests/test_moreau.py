@@ -181,6 +181,10 @@ def test_constant_iteration_matrix_is_factored_once_with_the_same_result(thesis_
     assert fast.trace["closed"].sum() >= 3                                  # the contact acted
     assert np.allclose(fast.q, slow.q, rtol=0, atol=1e-12 * np.abs(slow.q).max())
     assert np.allclose(fast.u, slow.u, rtol=0, atol=1e-10 * np.abs(slow.u).max())
+    u_f = fast.u[-1, beam.u_slice]                       # kinetic energy: brute-force sum over nodes
+    v_nodes = beam.phi_nodes @ u_f
+    T_nodes = 0.5 * np.sum(thesis_beam_data.masses * np.sum(v_nodes ** 2, axis=1))
+    assert np.isclose(beam.kinetic_energy(fast.q[-1, beam.q_slice], u_f), T_nodes, rtol=1e-12)
     system.add(SpringDamper(beam.node(0), mass.point, 10.0, free_length=0.1))
     assert not system.constant_iteration_matrix
     free = System()
