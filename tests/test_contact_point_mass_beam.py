@@ -4,7 +4,6 @@ harness: energy balance of every set-valued run, the contact closing at the anal
 
 import math
 
-import numpy as np
 import pytest
 
 from validation.cases import contact_point_mass_beam as case
