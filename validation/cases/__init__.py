@@ -3,4 +3,5 @@
 CASE_MODULES = ["cantilever", "complex_beam", "ffr_frequencies", "ffr_free_flight", "wobble_step", "wobble_energy",
                 "wobble_shear", "wobble_effective_mass",
                 "wobble_rotation", "wobble_complex", "wobble_case_study", "wobble_decoupling",
-                "wobble_boundary", "contact_bounce", "contact_friction", "contact_point_mass_beam"]
+                "wobble_boundary", "contact_bounce", "contact_friction", "contact_point_mass_beam",
+                "contact_sliding_ball"]
