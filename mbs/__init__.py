@@ -5,9 +5,11 @@ Public API (model scripts use only these)::
     from mbs import System, FlexibleBodyFFR, RigidBody, PointMass, Joint, Force, SpringDamper
 
 A System holds bodies (``FlexibleBodyFFR``, ``RigidBody``, ``PointMass``), force elements
-(``Force``, ``Torque``, ``DistributedForce``, ``NodalForces``, ``SpringDamper``; gravity
-is the System's own) and constraints (``Joint``); ``System.simulate`` integrates with
-generalized-α (implicit) or RK4 (explicit) and returns a ``Result``.
+(``Force``, ``Torque``, ``DistributedForce``, ``NodalForces``, ``SpringDamper``,
+``MovingContourForce``; gravity is the System's own), constraints (``Joint``) and
+contacts (:mod:`contact`); ``System.simulate`` integrates with generalized-α (implicit),
+RK4 (explicit) or Moreau time-stepping (contacts, impacts; fixed or adaptive step) and
+returns a ``Result``.
 """
 
 from .body import Body, Frame, ground_frame
@@ -15,11 +17,12 @@ from .flexible_body import FlexibleBodyFFR
 from .floating_frame import PrescribedFrameMotion
 from .joints import Joint
 from .loads import DistributedForce, Force, NodalForces, Tabulated, Torque, read_force_file, write_force_file
+from .moving_force import MovingContourForce
 from .result import Result
 from .rigid_body import PointMass, RigidBody
 from .springs import SpringDamper
 from .system import System
 
-__all__ = ["Body", "DistributedForce", "FlexibleBodyFFR", "Force", "Frame", "Joint", "NodalForces",
+__all__ = ["Body", "DistributedForce", "FlexibleBodyFFR", "Force", "Frame", "Joint", "MovingContourForce", "NodalForces",
            "PointMass", "PrescribedFrameMotion", "Result", "RigidBody", "SpringDamper", "System",
            "Tabulated", "Torque", "ground_frame", "read_force_file", "write_force_file"]
