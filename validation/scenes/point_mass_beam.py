@@ -17,16 +17,13 @@
   Table 5.3), with a set-valued Newton impact law (``law="impact"``, e) or a linear
   penalty law (``law="penalty"``, k [N/m], d [N s/m]).
 
-The body data are preprocessed on first use and cached (:func:`default_beam_data`).
+The body data are preprocessed on first use and cached (:func:`default_beam_data`,
+:mod:`validation.scenes.cache`).
 """
 
 from __future__ import annotations
 
-import hashlib
-import json
-import os
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
@@ -35,6 +32,8 @@ from contact import (Contact, ContactKinematicsPointContour2s, LinearRegularized
 from contours import Contour1sNeutralFFR, Contour2sNeutralFFR, FlexibleBand, PointContour
 from ffrmbs.errors import ModelError
 from mbs import FlexibleBodyFFR, PointMass, PrescribedFrameMotion, System
+
+from .cache import cached_body
 
 LENGTH, HEIGHT, WIDTH = 0.25, 0.05, 0.05          # [m] along x, y, z
 DENSITY, YOUNG, POISSON = 920.0, 5e7, 0.3         # [kg/m³], [Pa], [-]
@@ -45,37 +44,26 @@ NODE_19 = (0.25, 0.05, 0.025)                     # the thesis's output node [m]
 PENALTY_K = 1e7                                   # [N/m], the thesis's soft contact
 
 
-def cache_dir() -> Path:
-    """Where preprocessed default bodies are kept: ``$FFRMBS_CACHE`` or ``~/.cache/ffrmbs``."""
-    root = os.environ.get("FFRMBS_CACHE") or Path.home() / ".cache" / "ffrmbs"
-    return Path(root)
-
-
 def _recipe() -> dict:
     return {"scene": "point_mass_beam", "size": [LENGTH, HEIGHT, WIDTH], "divisions": list(DIVISIONS),
             "material": [DENSITY, YOUNG, POISSON], "clamp": "x0", "modes": "all", "version": 1}
 
 
 def default_beam_data(log=None):
-    """The beam's body data with all its clamped modes, preprocessed once and cached in
-    :func:`cache_dir` under a hash of the recipe (a changed recipe gets a new entry)."""
-    from preprocess import Material, build_body, read_body, write_body
-    from preprocess.geometry import box
-    from preprocess.modes import all_modes
+    """The beam's body data with all its clamped modes, preprocessed once and cached
+    (:func:`validation.scenes.cache.cached_body`)."""
+    def build():
+        from preprocess import Material, build_body
+        from preprocess.geometry import box
+        from preprocess.modes import all_modes
 
-    recipe = _recipe()
-    key = hashlib.sha256(json.dumps(recipe, sort_keys=True).encode()).hexdigest()[:12]
-    path = cache_dir() / f"point_mass_beam-{key}"
-    if (path / "body.h5").exists():
-        return read_body(path / "body.h5")
-    if log:
-        log(f"preprocessing the default beam (once; cached in {path})")
-    mesh = box(LENGTH, HEIGHT, WIDTH, None, order=1, divisions=DIVISIONS)
-    data = build_body(mesh, Material(DENSITY, YOUNG, POISSON), n_modes=1, clamp="x0", params=recipe)
-    data.eigenvalues, data.phi = all_modes(data.stiffness, data.masses, data.node_groups["x0"])
-    data.params["n_modes"] = data.phi.shape[1]
-    write_body(path, data)
-    return read_body(path / "body.h5")
+        mesh = box(LENGTH, HEIGHT, WIDTH, None, order=1, divisions=DIVISIONS)
+        data = build_body(mesh, Material(DENSITY, YOUNG, POISSON), n_modes=1, clamp="x0", params=_recipe())
+        data.eigenvalues, data.phi = all_modes(data.stiffness, data.masses, data.node_groups["x0"])
+        data.params["n_modes"] = data.phi.shape[1]
+        return data
+
+    return cached_body(_recipe(), build, log)
 
 
 def node_at(data, point) -> int:

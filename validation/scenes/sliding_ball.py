@@ -42,8 +42,6 @@ and cached (:func:`default_beam_data`, like
 
 from __future__ import annotations
 
-import hashlib
-import json
 from dataclasses import dataclass
 
 import numpy as np
@@ -54,7 +52,7 @@ from ffrmbs.errors import ModelError
 from mbs import FlexibleBodyFFR, Force, PointMass, PrescribedFrameMotion, System
 from mbs.moving_force import MovingContourForce
 
-from .point_mass_beam import cache_dir
+from .cache import cached_body
 
 LENGTH, HEIGHT, WIDTH = 1.5, 0.05, 0.05           # [m] along x, y, z
 DENSITY, YOUNG, POISSON = 920.0, 5e7, 0.3         # [kg/m³], [Pa], [-]
@@ -77,23 +75,16 @@ def _recipe() -> dict:
 
 def default_beam_data(log=None):
     """The beam's body data with its first :data:`STORED_MODES` clamped modes,
-    preprocessed once and cached in :func:`~validation.scenes.point_mass_beam.cache_dir`
-    under a hash of the recipe."""
-    from preprocess import Material, build_body, read_body, write_body
-    from preprocess.geometry import box
+    preprocessed once and cached (:func:`validation.scenes.cache.cached_body`)."""
+    def build():
+        from preprocess import Material, build_body
+        from preprocess.geometry import box
 
-    recipe = _recipe()
-    key = hashlib.sha256(json.dumps(recipe, sort_keys=True).encode()).hexdigest()[:12]
-    path = cache_dir() / f"sliding_ball-{key}"
-    if (path / "body.h5").exists():
-        return read_body(path / "body.h5")
-    if log:
-        log(f"preprocessing the sliding-ball beam (once; cached in {path})")
-    mesh = box(LENGTH, HEIGHT, WIDTH, None, order=ORDER, divisions=DIVISIONS)
-    data = build_body(mesh, Material(DENSITY, YOUNG, POISSON), n_modes=STORED_MODES, clamp="x0",
-                      params=recipe)
-    write_body(path, data)
-    return read_body(path / "body.h5")
+        mesh = box(LENGTH, HEIGHT, WIDTH, None, order=ORDER, divisions=DIVISIONS)
+        return build_body(mesh, Material(DENSITY, YOUNG, POISSON), n_modes=STORED_MODES, clamp="x0",
+                          params=_recipe())
+
+    return cached_body(_recipe(), build, log)
 
 
 def axis_nodes(data) -> np.ndarray:

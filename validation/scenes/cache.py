@@ -1,0 +1,33 @@
+"""Preprocessed body data of the built-in scenes, made once and cached on disk.
+
+Entries live in ``$FFRMBS_CACHE`` or ``~/.cache/ffrmbs``, one directory per scene and
+hash of its recipe (geometry, mesh, material, modes, version), so a changed recipe gets
+a new entry and an old one is never read by mistake. Writing goes through
+:func:`preprocess.write_body`, which leaves no half-written file.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+from pathlib import Path
+
+
+def cache_dir() -> Path:
+    """``$FFRMBS_CACHE`` or ``~/.cache/ffrmbs``."""
+    return Path(os.environ.get("FFRMBS_CACHE") or Path.home() / ".cache" / "ffrmbs")
+
+
+def cached_body(recipe: dict, build, log=None):
+    """The body data for ``recipe`` (a JSON-able dict with a ``"scene"`` name): read from
+    the cache, or made by ``build()`` (returning BodyData), written and read back."""
+    from preprocess import read_body, write_body
+
+    key = hashlib.sha256(json.dumps(recipe, sort_keys=True).encode()).hexdigest()[:12]
+    path = cache_dir() / f"{recipe['scene']}-{key}"
+    if not (path / "body.h5").exists():
+        if log:
+            log(f"preprocessing the {recipe['scene']} body (once; cached in {path})")
+        write_body(path, build())
+    return read_body(path / "body.h5")
