@@ -72,6 +72,17 @@ class BodyData:
             return np.zeros(0, dtype=np.int64)
         return np.unique(self.surface_triangles)
 
+    def node_at(self, point, tol=1e-9) -> int:
+        """Index of the node at ``point`` (3,) [m] in the body frame, within ``tol`` [m];
+        a ModelError names the nearest node's distance otherwise."""
+        from ffrmbs.errors import ModelError
+
+        d = np.linalg.norm(self.u0 - np.asarray(point, dtype=float), axis=1)
+        j = int(np.argmin(d))
+        if d[j] > tol:
+            raise ModelError(f"no node at {tuple(point)} m (nearest {d[j]:.3g} m away)")
+        return j
+
     def modal_eigenvalues(self) -> np.ndarray:
         """ω² of each mode [rad²/s²].
 

@@ -400,3 +400,12 @@ def test_write_body_failure_leaves_nothing_half_written(tmp_path, monkeypatch):
     with pytest.raises(OSError):
         write_body(tmp_path / "fresh", old)
     assert list((tmp_path / "fresh").iterdir()) == []
+
+
+def test_node_at_finds_a_grid_node_and_names_the_miss(thesis_beam_data):
+    from ffrmbs.errors import ModelError
+
+    j = thesis_beam_data.node_at((0.25, 0.05, 0.025))       # the thesis's node 19 on the 10 x 4 x 4 grid
+    assert np.allclose(thesis_beam_data.u0[j], (0.25, 0.05, 0.025), atol=1e-12)
+    with pytest.raises(ModelError, match="nearest 0.001"):
+        thesis_beam_data.node_at((0.25, 0.05, 0.026))

@@ -142,7 +142,7 @@ def test_moving_force_is_the_mode_shapes_at_the_point(data):
     for t, x in ((1.0, 0.5), (2.9, 1.45)):
         h = np.zeros(system.nu)
         scene.load.add_forces(t, q, u, h)
-        j = sb.node_at(data, (x, sb.AXIS[1], sb.AXIS[2]))
+        j = data.node_at((x, sb.AXIS[1], sb.AXIS[2]))
         assert np.allclose(h[beam.u_slice], beam.phi_nodes[j].T @ [0.0, -0.3, 0.0], rtol=1e-9, atol=1e-14)
         assert np.isclose(scene.load.point(t, q).r[0], x, atol=1e-12)
     with pytest.raises(ModelError, match="left the contour"):

@@ -25,8 +25,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numpy as np
-
 from contact import (Contact, ContactKinematicsPointContour2s, LinearRegularizedUnilateralConstraint,
                      UnilateralNewtonImpact)
 from contours import Contour1sNeutralFFR, Contour2sNeutralFFR, FlexibleBand, PointContour
@@ -64,15 +62,6 @@ def default_beam_data(log=None):
         return data
 
     return cached_body(_recipe(), build, log)
-
-
-def node_at(data, point) -> int:
-    """Index of the node at ``point`` [m] (to 1e-9 m), else a ModelError."""
-    d = np.linalg.norm(data.u0 - np.asarray(point, dtype=float), axis=1)
-    j = int(np.argmin(d))
-    if d[j] > 1e-9:
-        raise ModelError(f"no node at {point} m (nearest {d[j]:.3g} m away)")
-    return j
 
 
 @dataclass
@@ -118,4 +107,4 @@ def build(setup="A", modes=20, law="impact", e=0.0, k=PENALTY_K, d=0.0, contour=
     else:
         raise ModelError(f"law must be 'impact' or 'penalty', not {law!r}")
     contact = system.add(Contact(ContactKinematicsPointContour2s(PointContour(mass.point), surface), force_law))
-    return Scene(system, beam, mass, contact, node_at(data, NODE_19))
+    return Scene(system, beam, mass, contact, data.node_at(NODE_19))

@@ -93,15 +93,6 @@ def axis_nodes(data) -> np.ndarray:
     return node_line(data.u0, AXIS, (1.0, 0.0, 0.0))
 
 
-def node_at(data, point) -> int:
-    """Index of the node at ``point`` [m] (to 1e-9 m), else ModelError."""
-    d = np.linalg.norm(data.u0 - np.asarray(point, dtype=float), axis=1)
-    j = int(np.argmin(d))
-    if d[j] > 1e-9:
-        raise ModelError(f"no node at {point} m (nearest {d[j]:.3g} m away)")
-    return j
-
-
 def bending_modes(data, direction=1):
     """(indices, ω [rad/s]) of the stored modes dominated by displacement along
     ``direction`` (1: y-bending): more than half the modal mass Σ m_j φ_jd² there."""
@@ -179,7 +170,7 @@ def build_bent(tip_force, speed, x_start=0.1, modes=20, degree=DEGREE, data=None
     system = System()
     n = data.n_modes if modes == "all" else int(modes)
     beam = FlexibleBodyFFR(data, modes=n, frame=PrescribedFrameMotion.fixed(), name="beam")
-    tip = node_at(data, (LENGTH, AXIS[1], AXIS[2]))
+    tip = data.node_at((LENGTH, AXIS[1], AXIS[2]))
     q_f = np.linalg.solve(beam.K_ff, beam.phi_nodes[tip][1] * float(tip_force))
     beam.set_initial(q_f=q_f)
     system.add(beam)
@@ -238,5 +229,5 @@ def build_moving_load(force, speed, x0=0.0, modes=20, degree=DEGREE, data=None) 
     eta0, deta_dx = eta_at(axis, 0.0), (eta_at(axis, LENGTH) - eta_at(axis, 0.0)) / LENGTH
     load = system.add(MovingContourForce(axis, lambda t: eta0 + deta_dx * (x0 + speed * t),
                                          (0.0, float(force), 0.0)))
-    return MovingLoadScene(system, beam, axis, load, node_at(data, (LENGTH, AXIS[1], AXIS[2])),
-                           node_at(data, (LENGTH / 2, AXIS[1], AXIS[2])))
+    return MovingLoadScene(system, beam, axis, load, data.node_at((LENGTH, AXIS[1], AXIS[2])),
+                           data.node_at((LENGTH / 2, AXIS[1], AXIS[2])))
