@@ -8,7 +8,8 @@ import math
 import pytest
 
 from validation.cases import contact_bounce, contact_friction
-from validation.harness import run_validation
+
+from case_rows import quick_rows_by_case, select
 
 CASES = (contact_bounce, contact_friction)
 G = 9.81
@@ -18,18 +19,7 @@ V1 = math.sqrt(2.0 * G * contact_bounce.H)      # impact speed of the first impa
 @pytest.fixture(scope="module")
 def rows(tmp_path_factory):
     """{case name: rows} of one quick harness run of both cases."""
-    out = tmp_path_factory.mktemp("contact")
-    all_rows = run_validation(out, quick=True, cases=CASES, progress=None)
-    assert (out / "results.json").exists() and (out / "report.md").exists()
-    by_case = {}
-    for row in all_rows:
-        by_case.setdefault(row["case"], []).append(row)
-    return by_case
-
-
-def select(rows, **config):
-    """The rows whose config (or row) matches every key of ``config``."""
-    return [r for r in rows if all(r["config"].get(k, r.get(k)) == v for k, v in config.items())]
+    return quick_rows_by_case(tmp_path_factory.mktemp("contact"), CASES)
 
 
 def one(rows, **config):

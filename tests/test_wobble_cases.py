@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from validation.cases import wobble_boundary, wobble_energy, wobble_shear, wobble_step
-from validation.harness import run_validation
+
+from case_rows import quick_rows_by_case, select
 
 CASES = (wobble_step, wobble_energy, wobble_shear, wobble_boundary)
 
@@ -17,18 +18,7 @@ CASES = (wobble_step, wobble_energy, wobble_shear, wobble_boundary)
 @pytest.fixture(scope="module")
 def rows(tmp_path_factory):
     """{case name: rows} of one quick harness run of the four cases."""
-    out = tmp_path_factory.mktemp("wobble")
-    all_rows = run_validation(out, quick=True, cases=CASES, progress=None)
-    assert (out / "results.json").exists() and (out / "report.md").exists()
-    by_case = {}
-    for row in all_rows:
-        by_case.setdefault(row["case"], []).append(row)
-    return by_case
-
-
-def select(rows, **config):
-    """The rows whose config (or row) matches every key of ``config``."""
-    return [r for r in rows if all(r["config"].get(k, r.get(k)) == v for k, v in config.items())]
+    return quick_rows_by_case(tmp_path_factory.mktemp("wobble"), CASES)
 
 
 def test_harness_accepts_all_four(rows):
