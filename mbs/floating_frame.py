@@ -94,6 +94,12 @@ class FloatingFrameBody(Body):
             self.q_init[self._r] = self.param.coordinates(np.eye(3))
 
     @property
+    def frame_at_rest(self) -> bool:
+        """True for a frame fixed in space (:meth:`PrescribedFrameMotion.fixed`): Q_v = 0
+        and M = m_ff, so h and the kinetic energy skip the shape-integral pass."""
+        return self.motion is not None and self.motion.at_rest
+
+    @property
     def constant_mass(self) -> bool:
         """A prescribed frame leaves M = M_ff = Φᵀ M Φ, constant (thesis eq. 2.69)."""
         return self.motion is not None
@@ -232,7 +238,7 @@ class FloatingFrameBody(Body):
     def mass_and_h(self, q, u, t=0.0):
         """(M, h) at one state, sharing the shape-integral pass (module docstring)."""
         q_f, qd_f = q[self._f], u[self._fu]
-        if self.motion is not None and self.motion.at_rest:
+        if self.frame_at_rest:
             return self.mass_matrix(q, t), self.h(q, u, t)
         _, A, _, w, T, Tdu, a, wd = self._frame(q, u, t)
         Mb, Q = self._dynamics(A, q_f, w, qd_f)
@@ -251,7 +257,7 @@ class FloatingFrameBody(Body):
         return M, h
 
     def mass_matrix(self, q, t=0.0):
-        if self.motion is not None and self.motion.at_rest:
+        if self.frame_at_rest:
             if self._M_rest is None:    # frame at rest: M = m_ff, constant (thesis eq. 2.69)
                 _, A, *_ = self._frame(q, None, t)
                 self._M_rest = self._dynamics(A, q[self._f], np.zeros(3), np.zeros(self.n_modes))[0][6:, 6:]
@@ -259,7 +265,7 @@ class FloatingFrameBody(Body):
         return self.mass_and_h(q, np.zeros(self.nu), t)[0]
 
     def h(self, q, u, t=0.0):
-        if self.motion is not None and self.motion.at_rest:    # Q_v = 0 with the frame at rest (eq. 4.2)
+        if self.frame_at_rest:    # Q_v = 0 with the frame at rest (eq. 4.2)
             return -self._elastic(q[self._f], u[self._fu]) if self.n_modes else np.zeros(self.nu)
         return self.mass_and_h(q, u, t)[1]
 
@@ -272,7 +278,7 @@ class FloatingFrameBody(Body):
     def kinetic_energy(self, q, u, t=0.0):
         """T = ½ ū̇ᵀ M̄ ū̇ over the full frame and elastic velocities [J] (thesis eq. 2.43);
         with the frame at rest ½ q̇_fᵀ m_ff q̇_f."""
-        if self.motion is not None and self.motion.at_rest:
+        if self.frame_at_rest:
             if self._M_rest is None:
                 self.mass_matrix(q, t)
             return 0.5 * u @ (self._M_rest @ u)

@@ -77,7 +77,7 @@ class MoreauTimeStepping(Integrator):
         self._lam = {}
         self._sets = {}
         self._constant = system.constant_iteration_matrix   # factor M̂ once per step size
-        self._factors = {}
+        self._factors = []                  # (step size, Cholesky factor of M̂)
         self._last = [0, 0.0, 0, 0.0, 0.0]  # this step: most closed contacts, penetration, iterations,
                                             # residual; impulse work
         self._trace = {key: [] for key in TRACE_KEYS} if trace else None
@@ -136,12 +136,14 @@ class MoreauTimeStepping(Integrator):
                 last[1] = max(last[1], c.penetration)
             self.stats["max_penetration"] = max(self.stats["max_penetration"], last[1])
         if self._constant:
-            key = float(f"{dt:.12e}")            # steps landing on output times differ by rounding
-            factor = self._factors.get(key)
-            if factor is None:
+            for step, factor in self._factors:   # steps landing on output times differ by rounding
+                if abs(step - dt) <= 1e-12 * dt:
+                    break
+            else:
                 if len(self._factors) > 8:       # step-size control: keep the latest few
                     self._factors.clear()
-                factor = self._factors[key] = self._factor(t_m, q_m, sys.mass_matrix(t_m, q_m), dt)
+                factor = self._factor(t_m, q_m, sys.mass_matrix(t_m, q_m), dt)
+                self._factors.append((dt, factor))
         else:
             factor = self._factor(t_m, q_m, M, dt)
         u_free = self.u + dpotrs(factor, dt * h, lower=True)[0]
