@@ -58,6 +58,11 @@ class Body:
     def elastic_energy(self, q) -> float:
         return 0.0
 
+    def bounding_sphere(self, q, t=0.0):
+        """(centre (3,) [m], radius [m]) of a sphere holding every point of the body at
+        (q, t), or None when the body cannot say (then its contacts are never pruned)."""
+        return None
+
     def stiffness_tangent(self) -> np.ndarray | None:
         """Constant −∂h/∂q in velocity-increment coordinates (nu, nu), or None."""
         return None
@@ -96,6 +101,7 @@ class Frame:
         self.phi = np.zeros((3, n_f)) if phi is None else np.asarray(phi, dtype=float).reshape(3, n_f)
         self.A_rel = np.eye(3) if orientation is None else np.asarray(orientation, dtype=float)
         self.name = name
+        self.node_index = None      # the FE node a flexible body's node frame sits on
 
     @property
     def is_ground(self) -> bool:

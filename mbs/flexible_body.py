@@ -48,7 +48,9 @@ class FlexibleBodyFFR(FloatingFrameBody):
     data : BodyData
         The preprocessed body (SI units).
     modes : None, int or sequence of int
-        All modes, the first n, or an explicit 0-based list.
+        All modes, the first n, or an explicit 0-based list. With None the scene planner
+        (:mod:`mbs.plan`) may solve the body on the modes that hold most of the loads'
+        effective mass (report eq. 36); a number or a list fixes them.
     frame : "free" or PrescribedFrameMotion
     rotation : "quaternion" (default) or "cardan"
     rayleigh : (α [1/s], β [s]) or None
@@ -61,6 +63,8 @@ class FlexibleBodyFFR(FloatingFrameBody):
     def __init__(self, data: BodyData, modes=None, frame="free", rotation="quaternion",
                  rayleigh=None, modal_damping=None, name="flexible"):
         self.data = data
+        self.modes_fixed = modes is not None      # None: all modes, which the planner may reduce
+        self.rayleigh, self.modal_damping = rayleigh, modal_damping
         self.mode_indices = select_modes(data.n_modes, modes)
         super().__init__(name, len(self.mode_indices), frame, rotation)
         self.phi = np.ascontiguousarray(data.phi[:, self.mode_indices])
@@ -68,7 +72,12 @@ class FlexibleBodyFFR(FloatingFrameBody):
         self.K_ff = self.phi.T @ (data.stiffness @ self.phi)
         self.K_ff = 0.5 * (self.K_ff + self.K_ff.T)
         self.D_ff = self._damping(rayleigh, modal_damping)
+        self.damped = bool(self.D_ff.any())       # zero damping: D q̇_f is not evaluated
         self.phi_nodes = self.phi.reshape(data.n_nodes, 3, self.n_modes)  # (N, 3, n_f) view of phi
+        lo, hi = data.u0.min(axis=0), data.u0.max(axis=0)
+        self._box_centre = 0.5 * (lo + hi)
+        self._box_radius = float(np.linalg.norm(data.u0 - self._box_centre, axis=1).max())
+        self._phi_reach = np.linalg.norm(self.phi_nodes, axis=1).max(axis=0) if self.n_modes else np.zeros(0)
 
     @classmethod
     def from_file(cls, path, modes=None, units="si", **kw) -> "FlexibleBodyFFR":
@@ -97,7 +106,9 @@ class FlexibleBodyFFR(FloatingFrameBody):
         the local material rotation."""
         if not 0 <= j < self.data.n_nodes:
             raise ModelError(f"{self.name}: node {j} outside 0..{self.data.n_nodes - 1}")
-        return Frame(self, self.data.u0[j], self.phi_nodes[j], orientation, name or f"node {j}")
+        frame = Frame(self, self.data.u0[j], self.phi_nodes[j], orientation, name or f"node {j}")
+        frame.node_index = j
+        return frame
 
     def node_group(self, name: str) -> np.ndarray:
         """0-based node indices of the named group of the body file."""
@@ -130,7 +141,7 @@ class FlexibleBodyFFR(FloatingFrameBody):
         return M, Q
 
     def _elastic(self, q_f, qdot_f):
-        return self.K_ff @ q_f + self.D_ff @ qdot_f
+        return self.K_ff @ q_f + self.D_ff @ qdot_f if self.damped else self.K_ff @ q_f
 
     def elastic_energy(self, q) -> float:
         """½ q_fᵀ K_ff q_f [J]."""
@@ -146,6 +157,12 @@ class FlexibleBodyFFR(FloatingFrameBody):
         D = np.zeros((self.nu, self.nu))
         D[self._fu, self._fu] = self.D_ff
         return D
+
+    def bounding_sphere(self, q, t=0.0):
+        """Centre R + A c and radius max_j |ū0_j − c| + Σ_k max_j |Φ_jk| |q_f,k| (c the
+        centre of the nodes' box): holds every node whatever the deformation, O(n_f)."""
+        R, A, *_ = self._frame(q, None, t)
+        return R + A @ self._box_centre, self._box_radius + self._phi_reach @ np.abs(q[self._f])
 
     def node_positions(self, q, nodes=None, t=0.0) -> np.ndarray:
         """Inertial positions (k, 3) [m] of ``nodes`` (all if None), eq. 2.24."""

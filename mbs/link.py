@@ -56,6 +56,11 @@ class ForceElement:
         """Stored energy [J] (springs, gravity); 0 for non-conservative elements."""
         return 0.0
 
+    def step_loads(self):
+        """The element as nodal step loads (:class:`mbs.modal.StepLoads`) on its one body,
+        or None (the default: not expressible, e.g. a spring or a callable load)."""
+        return None
+
     def breakpoints(self):
         """Times [s] where the element's force jumps (step loads); the integrators stop
         just before each and restart there (``System.simulate``)."""

@@ -125,6 +125,21 @@ def _jumps(function):
     return ()
 
 
+def _step_table(value):
+    """(times (n_t,), values (n_t, 3)) of a constant force or a step :class:`Tabulated`
+    (report eq. 9: each row holds from its time on), None for anything else."""
+    if isinstance(value, Tabulated):
+        if value.kind != "step" or value.value_shape != (3,):
+            return None
+        times, values = value.times, value.values
+        if value.hold_first and times[0] > 0.0:
+            times, values = np.concatenate(([0.0], times)), np.concatenate((values[:1], values))
+        return times, values
+    if callable(value):
+        return None
+    return np.zeros(1), np.array(value, dtype=float).reshape(1, 3)
+
+
 def _vector_function(value, what):
     """A callable t -> (3,) array from a constant (3,), a callable or a :class:`Tabulated`."""
     if isinstance(value, Tabulated):
@@ -168,7 +183,10 @@ class Force(ForceElement):
                              "frame; a load there does nothing — apply it to a body's frame")
         self.frame = frame
         self.force = _vector_function(force, type(self).__name__)
+        self._table = _step_table(force)
         self.frame_fixed = bool(frame_fixed)
+        self._nodes = None if getattr(frame, "node_index", None) is None else (np.array([frame.node_index]),
+                                                                              np.ones(1))
 
     def bodies(self):
         return [self.frame.body]
@@ -185,6 +203,18 @@ class Force(ForceElement):
 
     def breakpoints(self):
         return _jumps(self.force)
+
+    def step_loads(self):
+        """The load as nodal step loads (:class:`mbs.modal.StepLoads`, report eq. 9) for the
+        planner's modal solvers, or None when it is not one: a callable force, a linear
+        table, or a point that is not a node."""
+        if self._table is None or self._nodes is None:
+            return None
+        from .modal import StepLoads
+
+        (times, values), (nodes, weights) = self._table, self._nodes
+        return StepLoads(times, nodes, values[:, None, :] * weights[None, :, None],
+                         "body" if self.frame_fixed else "inertial")
 
 
 class Torque(ForceElement):
@@ -255,6 +285,7 @@ class DistributedForce(Force):
         frame = Frame(body, weights @ body.data.u0[nodes],
                       np.einsum("j,jcf->cf", weights, phi_nodes[nodes]), name="load centre")
         super().__init__(frame, force, frame_fixed)
+        self._nodes = nodes, weights
 
 
 # --- force files (report Appendix A) ----------------------------------------------------
@@ -416,6 +447,7 @@ class NodalForces(ForceElement):
             raise ModelError(f"NodalForces: forces must have shape ({self.times.size}, {n}, 3) "
                              f"for {self.times.size} times and {n} nodes, got {forces.shape}")
         self.frame_fixed = bool(frame_fixed)
+        self.forces = forces
         u0 = forces.transpose(0, 2, 1) @ body.data.u0                          # (n_t, 3, 3)
         phi = np.tensordot(forces, body.phi.reshape(n, 3, n_f), axes=([1], [0]))  # (n_t, 3, 3, n_f)
         self._excess = forces.sum(axis=1) - 1.0          # W_k − 1 per row (n_t, 3)
@@ -434,6 +466,12 @@ class NodalForces(ForceElement):
 
     def breakpoints(self):
         return tuple(self.times)
+
+    def step_loads(self):
+        """The forces as :class:`mbs.modal.StepLoads` (the planner's modal solvers)."""
+        from .modal import StepLoads
+
+        return StepLoads.from_nodal(self.times, self.forces, "body" if self.frame_fixed else "inertial")
 
     def add_forces(self, t, q, u, h):
         r = step_index(self.times, t)

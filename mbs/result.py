@@ -14,7 +14,8 @@ class Result:
     t (n,) [s]; q (n, nq); u (n, nu); outputs {name: (n, ...)}; energy {"kinetic",
     "potential"} (n,) [J] when requested; stats: steps, Newton iterations, CPU and wall
     seconds of the integration, integrator name and options; trace: per-step records
-    {name: (steps,)} of integrators asked for them (Moreau's ``trace=True``), else {}.
+    {name: (steps,)} of integrators asked for them (Moreau's ``trace=True``), else {};
+    plan: the printed scene plan of a planned run (:mod:`mbs.plan`), else "".
     """
 
     t: np.ndarray
@@ -24,6 +25,7 @@ class Result:
     energy: dict = field(default_factory=dict)
     stats: dict = field(default_factory=dict)
     trace: dict = field(default_factory=dict)
+    plan: str = ""
 
     def __getitem__(self, name):
         return self.outputs[name]
@@ -32,7 +34,7 @@ class Result:
         """The first ``n`` samples (what a diverging run computed before it stopped)."""
         return Result(self.t[:n], self.q[:n], self.u[:n],
                       {k: v[:n] for k, v in self.outputs.items()},
-                      {k: v[:n] for k, v in self.energy.items()}, dict(self.stats), dict(self.trace))
+                      {k: v[:n] for k, v in self.energy.items()}, dict(self.stats), dict(self.trace), self.plan)
 
     def total_energy(self) -> np.ndarray:
         return self.energy["kinetic"] + self.energy["potential"]

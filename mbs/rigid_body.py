@@ -83,6 +83,9 @@ class PointMass(Body):
     def kinetic_energy(self, q, u, t=0.0):
         return 0.5 * self.mass * u @ u
 
+    def bounding_sphere(self, q, t=0.0):
+        return q, 0.0
+
     def linear_momentum(self, q, u, t=0.0):
         return self.mass * u
 

@@ -17,6 +17,8 @@ Example::
 
 from __future__ import annotations
 
+import logging
+
 import numpy as np
 import scipy.linalg
 
@@ -38,6 +40,8 @@ class System:
         self.ground = ground_frame()
         self.nq = self.nu = self.n_c = 0
         self._com = []
+        self._idle = ()     # bodies a planned run solves apart (mbs.plan), left out of the equations
+        self._idle_forces = ()
 
     # --- building -----------------------------------------------------------------------
     def add(self, item):
@@ -83,34 +87,66 @@ class System:
 
     def qdot(self, q, u):
         """q̇ = Y(q) u (thesis eq. 3.1a)."""
-        out = np.empty(self.nq)
-        for b in self.bodies:
+        out = np.empty(self.nq) if not self._idle else np.zeros(self.nq)
+        for b in self._active():
             out[b.q_slice] = b.qdot(q[b.q_slice], u[b.u_slice])
         return out
 
     def increment(self, q, du):
-        """q ⊕ Δu, exact for rotations (exponential map)."""
-        out = np.empty(self.nq)
-        for b in self.bodies:
+        """q ⊕ Δu, exact for rotations (exponential map); idle bodies keep their q."""
+        out = np.empty(self.nq) if not self._idle else q.copy()
+        for b in self._active():
             out[b.q_slice] = b.increment(q[b.q_slice], du[b.u_slice])
         return out
 
     def normalize(self, q):
-        for b in self.bodies:
+        for b in self._active():
             b.normalize(q[b.q_slice])
+
+    # --- planned runs -------------------------------------------------------------------
+    def plan(self, t_end, tolerance=None, outputs=None):
+        """The scene plan for a run to ``t_end`` [s] (:mod:`mbs.plan`): per body the
+        cheapest formulation within ``tolerance`` [m] (default 1e-6, shared half and half
+        by neglected coupling and dropped modes) and what it leaves out; ``outputs`` the
+        requested outputs. ``print(system.plan(1.0))`` shows it."""
+        from .plan import TOLERANCE, make_plan
+
+        return make_plan(self, t_end, TOLERANCE if tolerance is None else tolerance, outputs)
+
+    def leave_out(self, bodies=(), forces=()):
+        """Leave ``bodies`` and ``forces`` out of M, h, the tangents and the increments
+        (identity mass block, zero force) until the next call; ``leave_out()`` restores
+        all. A planned run leaves out the bodies it solves apart."""
+        self._idle, self._idle_forces = tuple(bodies), tuple(forces)
+
+    @property
+    def leaving_out(self) -> tuple:
+        """The bodies :meth:`leave_out` currently leaves out."""
+        return self._idle
+
+    def _active(self):
+        return [b for b in self.bodies if b not in self._idle] if self._idle else self.bodies
+
+    def _active_forces(self):
+        return [f for f in self.forces if f not in self._idle_forces] if self._idle_forces else self.forces
+
+    def _idle_identity(self, M):
+        for b in self._idle:
+            M[b.u_slice, b.u_slice] = np.eye(b.nu)
 
     # --- dynamics -----------------------------------------------------------------------
     def mass_matrix(self, t, q):
         """Block-diagonal M (nu, nu) [kg, kg m, kg m²]."""
         M = np.zeros((self.nu, self.nu))
-        for b in self.bodies:
+        for b in self._active():
             M[b.u_slice, b.u_slice] = b.mass_matrix(q[b.q_slice], t)
+        self._idle_identity(M)
         return M
 
     def h(self, t, q, u):
         """Smooth generalized forces h (nu,): bodies' Q_v − K q − D u, gravity, links."""
-        out = np.empty(self.nu)
-        for b in self.bodies:
+        out = np.empty(self.nu) if not self._idle else np.zeros(self.nu)
+        for b in self._active():
             out[b.u_slice] = b.h(q[b.q_slice], u[b.u_slice], t)
         self._add_external(t, q, u, out)
         return out
@@ -118,9 +154,10 @@ class System:
     def mass_and_h(self, t, q, u):
         """(M, h) in one pass over the bodies (what an implicit step needs per iteration)."""
         M = np.zeros((self.nu, self.nu))
-        out = np.empty(self.nu)
-        for b in self.bodies:
+        out = np.empty(self.nu) if not self._idle else np.zeros(self.nu)
+        for b in self._active():
             M[b.u_slice, b.u_slice], out[b.u_slice] = b.mass_and_h(q[b.q_slice], u[b.u_slice], t)
+        self._idle_identity(M)
         self._add_external(t, q, u, out)
         return M, out
 
@@ -128,8 +165,9 @@ class System:
         """Gravity and force elements into ``out``."""
         if self.gravity.any():
             for b, com in zip(self.bodies, self._com):
-                add_point_force(com, q, t, b.mass * self.gravity, out)
-        for f in self.forces:
+                if b not in self._idle:
+                    add_point_force(com, q, t, b.mass * self.gravity, out)
+        for f in self._active_forces():
             f.add_forces(t, q, u, out)
 
     @property
@@ -137,20 +175,20 @@ class System:
         """True when M, the bodies' tangents K and D and the links' (none) do not change:
         every body has a constant mass matrix (point masses, FFR bodies on a prescribed
         frame) and no force element has tangents."""
-        return all(b.constant_mass for b in self.bodies) and not any(f.has_tangents for f in self.forces)
+        return all(b.constant_mass for b in self._active()) and not any(f.has_tangents for f in self._active_forces())
 
     def tangents(self, t, q, u):
         """(K_t, D_t) (nu, nu): constant elastic and damping tangents plus link tangents,
         for the iteration matrix of implicit integrators."""
         K = np.zeros((self.nu, self.nu))
         D = np.zeros((self.nu, self.nu))
-        for b in self.bodies:
+        for b in self._active():
             Kb, Db = b.stiffness_tangent(), b.damping_tangent()
             if Kb is not None:
                 K[b.u_slice, b.u_slice] += Kb
             if Db is not None:
                 D[b.u_slice, b.u_slice] += Db
-        for f in self.forces:
+        for f in self._active_forces():
             f.add_tangents(t, q, u, K, D)
         return K, D
 
@@ -224,7 +262,7 @@ class System:
 
     # --- simulation ---------------------------------------------------------------------
     def simulate(self, t_end, dt, integrator="generalized-alpha", t_out=None, outputs=None,
-                 energies=False, q0=None, u0=None, breakpoints=(), **options):
+                 energies=False, q0=None, u0=None, breakpoints=(), plan=True, tolerance=None, **options):
         """Integrate from t = 0 to ``t_end`` [s] with step ``dt`` [s].
 
         ``integrator``: "generalized-alpha" (implicit, default; option ``rho_inf``),
@@ -238,6 +276,13 @@ class System:
         just before each and restarts there. Returns a :class:`~mbs.result.Result`; a diverging
         run raises :class:`~ffrmbs.errors.SimulationError` whose ``result`` holds what
         was computed up to then.
+
+        ``plan`` (default True): plan the scene first (:meth:`plan`, :mod:`mbs.plan`;
+        logged on the "ffrmbs.plan" logger and kept in ``Result.plan``) and solve the
+        bodies it assigns to exact modal propagation or SimpleRB apart from the
+        integrator, within ``tolerance`` [m]; a :class:`~mbs.plan.Plan` from
+        :meth:`plan` is used as given; ``plan=False`` integrates every body with
+        ``integrator`` and updates every contour each step.
         """
         from .integrators import integrator_class
 
@@ -245,6 +290,13 @@ class System:
             q_init, u_init = self.initial_state()
             q0 = q_init if q0 is None else np.asarray(q0, dtype=float)
             u0 = u_init if u0 is None else np.asarray(u0, dtype=float)
+        the_plan = None
+        if plan is True:
+            the_plan = self.plan(t_end, tolerance, outputs=outputs)
+        elif plan:
+            the_plan = plan
+        if the_plan is not None:
+            logging.getLogger("ffrmbs.plan").info("%s", the_plan)
         return integrator_class(integrator)(self, **options).run(
             q0, u0, t_end, dt, t_out, outputs or {}, energies,
-            set(breakpoints).union(*(f.breakpoints() for f in self.forces)))
+            set(breakpoints).union(*(f.breakpoints() for f in self.forces)), the_plan)

@@ -55,6 +55,7 @@ class Integrator:
         self.system = system
         self.iterations = 0
         self.steps = 0
+        self.plan = None        # the scene plan of a planned run (mbs.plan), set by run()
 
     def advance(self, end, dt):
         """Step from ``self.t`` to ``end`` [s] in ceil((end − t)/dt) equal steps."""
@@ -87,7 +88,7 @@ class Integrator:
     def step(self, h):
         raise NotImplementedError
 
-    def run(self, q0, u0, t_end, dt, t_out, outputs, energies, breakpoints=()):
+    def run(self, q0, u0, t_end, dt, t_out, outputs, energies, breakpoints=(), plan=None):
         """Integrate and sample (see ``System.simulate``). At each breakpoint t_b the
         integration ends at t_b − 1e-12 max(1, t_b) s, safely below t_b despite rounding
         (so loads that jump at t_b act with their left limit), and restarts at t_b with
@@ -95,11 +96,18 @@ class Integrator:
 
         BLAS runs single-threaded meanwhile: the per-step matrices are small (n_f + 6
         per body), and on this project's 2-core machines OpenBLAS threads made a 753 x 753
-        Cholesky factorization 13 times slower (55 ms against 4 ms)."""
-        with threadpool_limits(limits=1, user_api="blas"):
-            return self._run(q0, u0, t_end, dt, t_out, outputs, energies, breakpoints)
+        Cholesky factorization 13 times slower (55 ms against 4 ms).
 
-    def _run(self, q0, u0, t_end, dt, t_out, outputs, energies, breakpoints):
+        With a ``plan`` (:mod:`mbs.plan`), its modal bodies are solved first at the output
+        times, left out of the integrated equations (their velocities held at zero) and
+        written into the state at each output."""
+        with threadpool_limits(limits=1, user_api="blas"):
+            try:
+                return self._run(q0, u0, t_end, dt, t_out, outputs, energies, breakpoints, plan)
+            finally:
+                self.system.leave_out()
+
+    def _run(self, q0, u0, t_end, dt, t_out, outputs, energies, breakpoints, plan):
         sys = self.system
         times = output_times(t_end, dt, t_out)
         breaks = sorted(float(b) for b in breakpoints if 0.0 < b < t_end)
@@ -112,10 +120,21 @@ class Integrator:
         q, u = np.array(q0, dtype=float), np.array(u0, dtype=float)
         sys.normalize(q)
         cpu0, wall0 = time.process_time(), time.perf_counter()
+        modal = plan.solve_modal(sys, times, q, u, dt) if plan is not None else {}
+        self.plan = plan
+        res.plan = "" if plan is None else str(plan)
+        if modal:
+            sys.leave_out(modal, plan.forces)
+            for b in modal:
+                u[b.u_slice] = 0.0
+        res.stats["modal_cpu_s"] = time.process_time() - cpu0
+        stepping = len(modal) < len(sys.bodies)
         self.start(0.0, q, u)
         recorded = 0
 
         def record(i):
+            for b, (qb, ub) in modal.items():
+                self.q[b.q_slice], self.u[b.u_slice] = qb[i], ub[i]
             res.t[i], res.q[i], res.u[i] = self.t, self.q, self.u
             for name, probe in probes.items():
                 value = np.asarray(probe(self.t, self.q, self.u), dtype=float)
@@ -133,7 +152,8 @@ class Integrator:
                 is_break = target in breaks
                 end = target - 1e-12 * max(1.0, abs(target)) if is_break else target
                 try:
-                    self.advance(end, dt)
+                    if stepping:
+                        self.advance(end, dt)
                 except StepFailure as failure:
                     raise SimulationError(self.t, self.steps + 1, str(failure)) from None
                 except np.linalg.LinAlgError as failure:

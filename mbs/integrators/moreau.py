@@ -49,10 +49,12 @@ from scipy.linalg.lapack import dpotrf, dpotrs
 
 from contact.laws import Bilateral
 from contact.solver import ContactSet, ProxSolver
+from contours import Contour1sNeutralFFR, Contour2sNeutralFFR, PointContour, SphereContour
 from ffrmbs.errors import ModelError
 
 from .driver import Integrator, StepFailure
 
+NEUTRAL_FFR = (Contour1sNeutralFFR, Contour2sNeutralFFR)
 TRACE_KEYS = ("t", "dt", "closed", "penetration", "iterations", "residual", "impulse_work", "energy")
 
 
@@ -73,7 +75,7 @@ class MoreauTimeStepping(Integrator):
             for contour in c.contours():
                 contours[id(contour)] = contour
         self.contours = list(contours.values())
-        self.stats = {"closed_contacts": 0, "solver_iterations": 0, "max_penetration": 0.0}
+        self.stats = {"closed_contacts": 0, "solver_iterations": 0, "max_penetration": 0.0, "pruned_contacts": 0}
         self._lam = {}
         self._sets = {}
         self._constant = system.constant_iteration_matrix   # factor M̂ once per step size
@@ -87,11 +89,14 @@ class MoreauTimeStepping(Integrator):
 
     def diagnostics(self):
         """Closed-contact steps summed over contacts, contact-solver iterations, largest
-        penetration max(0, −g_N) at a midpoint [m]."""
+        penetration max(0, −g_N) at a midpoint [m], contact-steps pruned by a planned run."""
         return dict(self.stats)
 
     def start(self, t, q, u):
         self.t, self.q, self.u = t, q.copy(), u.copy()
+        idle = self.system.leaving_out
+        self._act = None if not idle else np.setdiff1d(
+            np.arange(self.system.nu), np.concatenate([np.arange(self.system.nu)[b.u_slice] for b in idle]))
 
     def accepted(self, h):
         super().accepted(h)
@@ -107,13 +112,31 @@ class MoreauTimeStepping(Integrator):
             return {}
         return {key: np.array(values) for key, values in self._trace.items()}
 
-    def _update_contours(self, t, q, u):
-        for contour in self.contours:
+    def _update_contours(self, t, q, u, contours=None):
+        for contour in self.contours if contours is None else contours:
             body = contour.body
             if body is None:
                 contour.update(None, None, t)
             else:
                 contour.update(q[body.q_slice], u[body.u_slice], t)
+
+    def _live_contacts(self, t, q, u):
+        """The contacts to locate this step, their contours updated. Unplanned: all. Planned
+        (:mod:`mbs.plan`): a unilateral contact only while its two contours' bounding
+        spheres (:func:`contour_sphere`) come within its broad-phase margin; the others
+        are marked open without touching their contours."""
+        if self.plan is None:
+            self._update_contours(t, q, u)
+            return self.contacts
+        live = []
+        for c in self.contacts:
+            if c.unilateral and c.margin is not None and _apart(c, q, t):
+                c.closed = False
+                self.stats["pruned_contacts"] += 1
+            else:
+                live.append(c)
+        self._update_contours(t, q, u, {id(k): k for c in live for k in c.contours()}.values())
+        return live
 
     def step(self, dt):
         sys = self.system
@@ -127,8 +150,7 @@ class MoreauTimeStepping(Integrator):
         closed = []
         last = self._last            # summed over the sub-steps of one accepted step
         if self.contacts:
-            self._update_contours(t_m, q_m, self.u)
-            for c in self.contacts:
+            for c in self._live_contacts(t_m, q_m, self.u):
                 if c.detect() and c.set_valued:
                     closed.append(c)
                 if not c.set_valued:
@@ -146,7 +168,7 @@ class MoreauTimeStepping(Integrator):
                 self._factors.append((dt, factor))
         else:
             factor = self._factor(t_m, q_m, M, dt)
-        u_free = self.u + dpotrs(factor, dt * h, lower=True)[0]
+        u_free = self.u + self._solve(factor, dt * h)
         m = sys.n_c + sum(c.dim for c in closed)
         if m == 0:
             self.u = u_free
@@ -164,7 +186,7 @@ class MoreauTimeStepping(Integrator):
             offset = np.zeros(m)
             if sys.n_c:
                 offset[:sys.n_c] = sys.constraint_velocity_term(t_m, q_m)
-            MW = dpotrs(factor, W, lower=True)[0]
+            MW = self._solve(factor, W)
             G = W.T @ MW
             xi_free = W.T @ u_free + offset
             gamma_pre = W.T @ self.u + offset
@@ -190,10 +212,21 @@ class MoreauTimeStepping(Integrator):
         K, D = self.system.tangents(t_m, q_m, self.u)  # elastic, damping and link (spring) tangents
         th = self.theta
         M_hat = M + th * dt * D + th * dt * dt * K
+        if self._act is not None:
+            M_hat = M_hat[np.ix_(self._act, self._act)]
         factor, info = dpotrf(M_hat, lower=True, overwrite_a=True)
         if info != 0:
             raise StepFailure(f"M + θΔt D + θΔt² K is not positive definite (LAPACK dpotrf info {info})")
         return factor
+
+    def _solve(self, factor, rhs):
+        """M̂⁻¹ rhs for rhs (nu,) or (nu, m); on the active rows only when a planned run left
+        bodies out (zero on theirs: their blocks of M̂ are decoupled from the rest)."""
+        if self._act is None:
+            return dpotrs(factor, rhs, lower=True)[0]
+        out = np.zeros_like(rhs)
+        out[self._act] = dpotrs(factor, rhs[self._act], lower=True)[0]
+        return out
 
     def _contact_set(self, closed, laws):
         """The ContactSet of this active set, built once per set of closed contacts."""
@@ -314,3 +347,28 @@ class AdaptiveMoreauTimeStepping(MoreauTimeStepping):
                 self.stats["rejected_steps"] += 1
                 self.h_next = h * factor
             h = self.h_next
+
+
+def contour_sphere(contour, q, t):
+    """(centre (3,) [m], radius [m]) holding ``contour`` at the global state (q, t), or
+    None: a point or sphere contour about its frame's position; a neutral contour of a
+    flexible body within its body's sphere (:meth:`mbs.body.Body.bounding_sphere`; the
+    interpolant's overshoot beyond the nodes is far below the broad-phase margin);
+    anything else (planes, derived contours) cannot be bounded."""
+    if isinstance(contour, (PointContour, SphereContour)) and contour.body is not None:
+        frame = contour.frame_ref
+        return frame.position(q[contour.body.q_slice], t), getattr(contour, "radius", 0.0)
+    if isinstance(contour, NEUTRAL_FFR):
+        return contour.body.bounding_sphere(q[contour.body.q_slice], t)
+    return None
+
+
+def _apart(contact, q, t) -> bool:
+    """True when the contact's two contours are certainly farther apart than its margin."""
+    s1 = contour_sphere(contact.kinematics.contour1, q, t)
+    s2 = contour_sphere(contact.kinematics.contour2, q, t) if s1 is not None else None
+    if s2 is None:
+        return False
+    d = s1[0] - s2[0]
+    reach = s1[1] + s2[1] + contact.margin
+    return float(d @ d) > reach * reach
