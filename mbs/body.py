@@ -25,6 +25,7 @@ class Body:
     nq: int
     nu: int
     constant_mass = False   # True when M does not depend on q or t (Moreau then factors once)
+    additive = False        # True when q ⊕ Δu = q + Δu (no rotation coordinates)
 
     def __init__(self, name: str):
         self.name = name

@@ -77,6 +77,7 @@ class FlexibleBodyFFR(FloatingFrameBody):
         lo, hi = data.u0.min(axis=0), data.u0.max(axis=0)
         self._box_centre = 0.5 * (lo + hi)
         self._box_radius = float(np.linalg.norm(data.u0 - self._box_centre, axis=1).max())
+        self._rest_centre = None
         self._phi_reach = np.linalg.norm(self.phi_nodes, axis=1).max(axis=0) if self.n_modes else np.zeros(0)
 
     @classmethod
@@ -161,8 +162,13 @@ class FlexibleBodyFFR(FloatingFrameBody):
     def bounding_sphere(self, q, t=0.0):
         """Centre R + A c and radius max_j |ū0_j − c| + Σ_k max_j |Φ_jk| |q_f,k| (c the
         centre of the nodes' box): holds every node whatever the deformation, O(n_f)."""
+        radius = self._box_radius + self._phi_reach @ np.abs(q[self._f])
+        if self.frame_at_rest:
+            if self._rest_centre is None:
+                self._rest_centre = self.point_position(q, Frame(self, self._box_centre), t)
+            return self._rest_centre, radius
         R, A, *_ = self._frame(q, None, t)
-        return R + A @ self._box_centre, self._box_radius + self._phi_reach @ np.abs(q[self._f])
+        return R + A @ self._box_centre, radius
 
     def node_positions(self, q, nodes=None, t=0.0) -> np.ndarray:
         """Inertial positions (k, 3) [m] of ``nodes`` (all if None), eq. 2.24."""

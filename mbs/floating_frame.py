@@ -105,6 +105,11 @@ class FloatingFrameBody(Body):
         return self.motion is not None
 
     @property
+    def additive(self) -> bool:
+        """A prescribed frame leaves q = q_f, so q ⊕ Δu = q + Δu."""
+        return self.motion is not None
+
+    @property
     def is_free(self) -> bool:
         """True for a free frame, False for a prescribed one."""
         return self.motion is None

@@ -59,6 +59,7 @@ class PointMass(Body):
     nq = nu = 3
     n_modes = 0
     constant_mass = True
+    additive = True
 
     def __init__(self, mass, position=(0.0, 0.0, 0.0), velocity=(0.0, 0.0, 0.0), name="point"):
         super().__init__(name)

@@ -93,15 +93,20 @@ class System:
         return out
 
     def increment(self, q, du):
-        """q ⊕ Δu, exact for rotations (exponential map); idle bodies keep their q."""
+        """q ⊕ Δu, exact for rotations (exponential map); idle bodies keep their q
+        (their Δu is zero). One vector sum when no active body has rotation coordinates."""
+        active = self._active()
+        if all(b.additive for b in active):
+            return q + du
         out = np.empty(self.nq) if not self._idle else q.copy()
-        for b in self._active():
+        for b in active:
             out[b.q_slice] = b.increment(q[b.q_slice], du[b.u_slice])
         return out
 
     def normalize(self, q):
         for b in self._active():
-            b.normalize(q[b.q_slice])
+            if not b.additive:
+                b.normalize(q[b.q_slice])
 
     # --- planned runs -------------------------------------------------------------------
     def plan(self, t_end, tolerance=None, outputs=None):
@@ -118,6 +123,7 @@ class System:
         (identity mass block, zero force) until the next call; ``leave_out()`` restores
         all. A planned run leaves out the bodies it solves apart."""
         self._idle, self._idle_forces = tuple(bodies), tuple(forces)
+        self._active_bodies = [b for b in self.bodies if b not in self._idle]
 
     @property
     def leaving_out(self) -> tuple:
@@ -125,7 +131,7 @@ class System:
         return self._idle
 
     def _active(self):
-        return [b for b in self.bodies if b not in self._idle] if self._idle else self.bodies
+        return self._active_bodies if self._idle else self.bodies
 
     def _active_forces(self):
         return [f for f in self.forces if f not in self._idle_forces] if self._idle_forces else self.forces

@@ -94,6 +94,7 @@ class MoreauTimeStepping(Integrator):
 
     def start(self, t, q, u):
         self.t, self.q, self.u = t, q.copy(), u.copy()
+        self._bounds = [(c, *_sphere_pair(c)) for c in self.contacts]
         idle = self.system.leaving_out
         self._act = None if not idle else np.setdiff1d(
             np.arange(self.system.nu), np.concatenate([np.arange(self.system.nu)[b.u_slice] for b in idle]))
@@ -129,8 +130,8 @@ class MoreauTimeStepping(Integrator):
             self._update_contours(t, q, u)
             return self.contacts
         live = []
-        for c in self.contacts:
-            if c.unilateral and c.margin is not None and _apart(c, q, t):
+        for c, s1, s2 in self._bounds:
+            if s2 is not None and _apart(c, s1, s2, q, t):
                 c.closed = False
                 self.stats["pruned_contacts"] += 1
             else:
@@ -349,26 +350,35 @@ class AdaptiveMoreauTimeStepping(MoreauTimeStepping):
             h = self.h_next
 
 
-def contour_sphere(contour, q, t):
-    """(centre (3,) [m], radius [m]) holding ``contour`` at the global state (q, t), or
-    None: a point or sphere contour about its frame's position; a neutral contour of a
-    flexible body within its body's sphere (:meth:`mbs.body.Body.bounding_sphere`; the
-    interpolant's overshoot beyond the nodes is far below the broad-phase margin);
-    anything else (planes, derived contours) cannot be bounded."""
-    if isinstance(contour, (PointContour, SphereContour)) and contour.body is not None:
-        frame = contour.frame_ref
-        return frame.position(q[contour.body.q_slice], t), getattr(contour, "radius", 0.0)
+def contour_sphere(contour):
+    """A function (q, t) -> (centre (3,) [m], radius [m]) of a sphere holding ``contour``
+    at the global state, or None: a point or sphere contour about its frame's position;
+    a neutral contour of a flexible body within its body's sphere
+    (:meth:`mbs.body.Body.bounding_sphere`; the interpolant's overshoot beyond the nodes
+    is far below the broad-phase margin); anything else (planes, derived contours)
+    cannot be bounded."""
+    body = contour.body
+    if isinstance(contour, (PointContour, SphereContour)) and body is not None:
+        frame, radius = contour.frame_ref, getattr(contour, "radius", 0.0)
+        return lambda q, t: (frame.position(q[body.q_slice], t), radius)
     if isinstance(contour, NEUTRAL_FFR):
-        return contour.body.bounding_sphere(q[contour.body.q_slice], t)
+        return lambda q, t: body.bounding_sphere(q[body.q_slice], t)
     return None
 
 
-def _apart(contact, q, t) -> bool:
+def _apart(contact, sphere1, sphere2, q, t) -> bool:
     """True when the contact's two contours are certainly farther apart than its margin."""
-    s1 = contour_sphere(contact.kinematics.contour1, q, t)
-    s2 = contour_sphere(contact.kinematics.contour2, q, t) if s1 is not None else None
-    if s2 is None:
-        return False
-    d = s1[0] - s2[0]
-    reach = s1[1] + s2[1] + contact.margin
+    c1, r1 = sphere1(q, t)
+    c2, r2 = sphere2(q, t)
+    d = c1 - c2
+    reach = r1 + r2 + contact.margin
     return float(d @ d) > reach * reach
+
+
+def _sphere_pair(contact):
+    """(sphere1, sphere2) functions of a prunable contact (unilateral, with a margin, both
+    contours bounded), else (None, None)."""
+    if not (contact.unilateral and contact.margin is not None):
+        return None, None
+    s1, s2 = contour_sphere(contact.kinematics.contour1), contour_sphere(contact.kinematics.contour2)
+    return (s1, s2) if s1 is not None and s2 is not None else (None, None)
