@@ -6,6 +6,7 @@ Subcommands
 ``info``        summary of a body (text-file directory or HDF5 file)
 ``validate``    validation cases: error against run time (see ../DESIGN.md)
 ``run``         the main job: the point mass dropped on the flexible beam (thesis Sec. 5.2)
+``bench``       every benchmark in one process: tables, target verdicts, JSON (validation.bench)
 
 Errors the user can cause (:class:`ffrmbs.errors.FfrmbsError`) are printed as one
 line ``ffrmbs: error: …`` and exit with status 2, without a traceback.
@@ -79,6 +80,19 @@ def cmd_run(args):
     print(f"wrote {args.out}/point_mass_beam.h5 and {args.out}/point_mass_beam.png")
 
 
+def cmd_bench(args):
+    """All benchmarks in one process (:mod:`validation.bench.runner`); a failed one is an error."""
+    from validation.bench.runner import run_benchmarks, split_names
+
+    try:
+        summary = run_benchmarks(args.out, args.quick, split_names(args.only))
+    except ValueError as exc:
+        raise FfrmbsError(str(exc)) from None
+    failed = [name for name, entry in summary["benches"].items() if entry["status"] == "failed"]
+    if failed:
+        raise FfrmbsError(f"benchmark(s) failed: {', '.join(failed)} (see {summary['json']})")
+
+
 def build_parser():
     p = argparse.ArgumentParser(prog="ffrmbs", description=__doc__.split("\n")[0])
     p.add_argument("--version", action="version", version=f"ffrmbs {__version__}")
@@ -124,6 +138,13 @@ def build_parser():
     run.add_argument("--dt", type=float, default=1e-5, help="time step [s]")
     run.add_argument("--no-check", action="store_true", help="skip the second run at dt/2 (error estimate)")
     run.set_defaults(func=cmd_run)
+
+    bench = sub.add_parser("bench", help="run the benchmarks: tables, target verdicts, JSON")
+    bench.add_argument("--out", default="out/bench", help="output directory (default: out/bench)")
+    bench.add_argument("--quick", action="store_true", help="coarse settings of every benchmark")
+    bench.add_argument("--only", action="append", metavar="NAME[,NAME]",
+                       help="run only these benchmarks (comma-separated or repeated)")
+    bench.set_defaults(func=cmd_bench)
     return p
 
 

@@ -15,12 +15,12 @@ def test_tiny_run_writes_one_entry_per_contour_mesh_and_mode_count(tmp_path, cap
                       "--modes", "6", "12", "--out", str(tmp_path)])
     saved = json.loads((tmp_path / "contour_evaluation.json").read_text())
     assert saved == json.loads(json.dumps(doc))
-    assert {"benchmark", "quick", "batches", "batch", "seed", "clock", "machine", "body_build_s", "entries",
+    assert {"benchmark", "quick", "batches", "batch", "seed", "clock", "machine", "body_build_s", "rows", "table",
             "scaling"} <= set(saved)
     assert saved["quick"] is True and saved["batches"] == 2 and saved["batch"] == 3
-    keys = sorted((e["kind"], tuple(e["divisions"]), e["n_f"]) for e in saved["entries"])
+    keys = sorted((e["kind"], tuple(e["divisions"]), e["n_f"]) for e in saved["rows"])
     assert keys == sorted((k, d, n) for k in ("1s", "2s") for d in ((10, 4, 4), (12, 4, 4)) for n in (6, 12))
-    for e in saved["entries"]:
+    for e in saved["rows"]:
         for fn in TIMED:
             assert 0 < e[f"{fn}_us"]["min"] <= e[f"{fn}_us"]["median"]
         assert e["naive_over_update"]["median"] > 0 and e["naive_over_ubar"]["median"] > 0

@@ -13,11 +13,11 @@ def test_quick_run_writes_one_entry_per_size(tmp_path, capsys):
     doc = bench.main(["--quick", "--repeats", "2", "--out", str(tmp_path)])
     saved = json.loads((tmp_path / "ffr_evaluation.json").read_text())
     assert saved == json.loads(json.dumps(doc))
-    assert {"benchmark", "quick", "repeats", "seed", "clock", "machine", "entries", "ratios"} <= set(saved)
+    assert {"benchmark", "quick", "repeats", "seed", "clock", "machine", "rows", "ratios", "table"} <= set(saved)
     assert saved["quick"] is True and saved["repeats"] == 2
-    keys = [(e["n_f"], e["nodes"]) for e in saved["entries"]]
+    keys = [(e["n_f"], e["nodes"]) for e in saved["rows"]]
     assert sorted(keys) == [(n_f, n) for n_f in (10, 30) for n in (500, 5000)]
-    for e in saved["entries"]:
+    for e in saved["rows"]:
         assert set(e) == {"n_f", "nodes", "setup_s", "mass_matrix_us", "h_us"}
         for key in ("mass_matrix_us", "h_us"):
             assert set(e[key]) == {"median", "min"}

@@ -3,6 +3,7 @@ moving state of a floating-frame body."""
 
 from __future__ import annotations
 
+import argparse
 import json
 import os
 import platform
@@ -23,13 +24,26 @@ def machine() -> dict:
 
 
 def write_json(doc: dict, out: str, name: str) -> str:
-    """Write ``doc`` to ``out/name.json``, print and return the path."""
+    """Write ``doc`` to ``out/name.json``, print and return the path (nothing is written
+    when ``doc`` cannot be serialized)."""
+    text = json.dumps(doc, indent=1)
     os.makedirs(out, exist_ok=True)
     path = os.path.join(out, f"{name}.json")
     with open(path, "w") as f:
-        json.dump(doc, f, indent=1)
+        f.write(text)
     print(f"wrote {path}")
     return path
+
+
+def divisions_arg(text) -> tuple:
+    """argparse type of a structured box mesh's divisions "nx,ny,nz" (element edges per axis)."""
+    try:
+        d = tuple(int(x) for x in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"divisions must be three integers like 10,4,4, got {text!r}") from None
+    if len(d) != 3 or min(d) < 1:
+        raise argparse.ArgumentTypeError(f"divisions must be three positive integers like 10,4,4, got {text!r}")
+    return d
 
 
 def moving_state(body, rng, deform=2e-3):

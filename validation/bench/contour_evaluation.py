@@ -64,7 +64,7 @@ from contours import Contour1sNeutralFFR, Contour2sNeutralFFR
 from mbs import FlexibleBodyFFR
 from preprocess import Material, box, build_body
 
-from .common import machine, moving_state, write_json
+from .common import divisions_arg, machine, moving_state, write_json
 
 L, H, W = 0.25, 0.05, 0.05                 # [m], thesis Sec. 5.2
 MATERIAL = Material(920.0, 5e7, 0.3)      # [kg/m³, Pa, -], the thesis's rubber-like beam
@@ -184,7 +184,7 @@ def markdown(doc):
              "+ v, J_T, J_R | update | update + 1st v | ū stage | naive ū re-interp. | naive / update | "
              "naive / ū stage |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
-    for e in doc["entries"]:
+    for e in doc["rows"]:
         cells = " | ".join(f"{e[f'{fn}_us']['median']:.1f} / {e[f'{fn}_us']['min']:.1f}" for fn in FUNCTIONS)
         grid = " x ".join(map(str, e["node_grid"]))
         lines.append(f"| {e['contour']} | {tuple(e['divisions'])} | {e['body_nodes']} | {grid} | "
@@ -202,14 +202,35 @@ def markdown(doc):
     return "\n".join(lines)
 
 
-def _divisions(text):
-    try:
-        d = tuple(int(x) for x in text.split(","))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"divisions must be three integers like 10,4,4, got {text!r}") from None
-    if len(d) != 3 or min(d) < 1:
-        raise argparse.ArgumentTypeError(f"divisions must be three positive integers like 10,4,4, got {text!r}")
-    return d
+def benchmark(quick=False, batches=None, batch=None, divisions=DIVISIONS, modes=MODES, seed=0, log=print) -> dict:
+    """The benchmark's document: one row per contour, mesh and n_f (``rows``), the
+    ``scaling`` rows, the markdown ``table`` and the settings. ``batches``, ``batch``:
+    None takes those of ``QUICK`` or ``FULL``."""
+    sizes = dict(QUICK if quick else FULL)
+    sizes.update({k: v for k, v in (("batches", batches), ("batch", batch)) if v is not None})
+    rng = np.random.default_rng(seed)
+    rows, modal_s = [], {}
+    for div in divisions:
+        start = time.perf_counter()
+        data = build_body(box(L, H, W, None, order=1, divisions=div), MATERIAL, n_modes=max(modes))
+        modal_s[",".join(map(str, div))] = time.perf_counter() - start
+        for n_f in modes:
+            body = FlexibleBodyFFR(data, modes=n_f)
+            for kind in ("2s", "1s"):
+                rows.append(measure(kind, body, div, sizes["batches"], sizes["batch"], rng))
+            log(f"divisions {div}, n_f = {n_f}: done")
+    doc = {"benchmark": "contour_evaluation", "quick": quick, **sizes, "seed": seed,
+           "clock": "time.perf_counter (wall), mean per call over a batch",
+           "beam_m": [L, H, W], "element": "tet4", "modes": "free-free",
+           "machine": machine(),
+           "body_build_s": modal_s, "rows": rows, "scaling": scaling(rows)}
+    doc["table"] = markdown(doc)
+    return doc
+
+
+def run(quick: bool) -> dict:
+    """The benchmark protocol of :mod:`validation.bench.runner`: :func:`benchmark` at its defaults."""
+    return benchmark(quick)
 
 
 def main(argv=None):
@@ -222,36 +243,17 @@ def main(argv=None):
     parser.add_argument("--out", default="bench_out", help="output directory (default ./bench_out)")
     parser.add_argument("--batches", type=int, default=None, help="timed batches per function")
     parser.add_argument("--batch", type=int, default=None, help="calls per batch")
-    parser.add_argument("--divisions", type=_divisions, nargs="+", default=list(DIVISIONS),
+    parser.add_argument("--divisions", type=divisions_arg, nargs="+", default=list(DIVISIONS),
                         help="box mesh divisions, e.g. 10,4,4 40,8,8 (default)")
     parser.add_argument("--modes", type=int, nargs="+", default=list(MODES), help="mode counts n_f (default 20 100)")
     parser.add_argument("--seed", type=int, default=0, help="seed of the points and states")
     args = parser.parse_args(argv)
-    sizes = dict(QUICK if args.quick else FULL)
-    for key in ("batches", "batch"):
-        if getattr(args, key) is not None:
-            sizes[key] = getattr(args, key)
-    if min(sizes.values()) < 1:
+    if any(n is not None and n < 1 for n in (args.batches, args.batch)):
         parser.error("--batches and --batch must be at least 1")
     if min(args.modes) < 1:
         parser.error("--modes must be at least 1")
-    rng = np.random.default_rng(args.seed)
-    entries, modal_s = [], {}
-    for div in args.divisions:
-        start = time.perf_counter()
-        data = build_body(box(L, H, W, None, order=1, divisions=div), MATERIAL, n_modes=max(args.modes))
-        modal_s[",".join(map(str, div))] = time.perf_counter() - start
-        for n_f in args.modes:
-            body = FlexibleBodyFFR(data, modes=n_f)
-            for kind in ("2s", "1s"):
-                entries.append(measure(kind, body, div, sizes["batches"], sizes["batch"], rng))
-            print(f"divisions {div}, n_f = {n_f}: done", flush=True)
-    doc = {"benchmark": "contour_evaluation", "quick": args.quick, **sizes, "seed": args.seed,
-           "clock": "time.perf_counter (wall), mean per call over a batch",
-           "beam_m": [L, H, W], "element": "tet4", "modes": "free-free",
-           "machine": machine(),
-           "body_build_s": modal_s, "entries": entries, "scaling": scaling(entries)}
-    print(markdown(doc))
+    doc = benchmark(args.quick, args.batches, args.batch, args.divisions, args.modes, args.seed)
+    print(doc["table"])
     write_json(doc, args.out, "contour_evaluation")
     return doc
 

@@ -106,10 +106,10 @@ def measure(n_f, node_counts, repeats, rng):
             for n, (_, setup, _, _), m, h in zip(node_counts, bodies, mass, forces)]
 
 
-def ratios(entries, sizes):
+def ratios(rows, sizes):
     """Per n_f, the time of the largest body over that of the smallest, for M and h, of the
     medians and of the minima."""
-    by_key = {(e["n_f"], e["nodes"]): e for e in entries}
+    by_key = {(e["n_f"], e["nodes"]): e for e in rows}
     small, large = min(sizes["nodes"]), max(sizes["nodes"])
     return [{"n_f": n_f, "nodes": [small, large],
              **{fn: {stat: by_key[n_f, large][f"{fn}_us"][stat] / by_key[n_f, small][f"{fn}_us"][stat]
@@ -121,7 +121,7 @@ def markdown(doc):
     """The results as two markdown tables: timings per (n_f, N), and the ratios."""
     lines = ["| n_f | nodes | setup [s] | M median [µs] | M min [µs] | h median [µs] | h min [µs] |",
              "|---|---|---|---|---|---|---|"]
-    for e in doc["entries"]:
+    for e in doc["rows"]:
         m, h = e["mass_matrix_us"], e["h_us"]
         lines.append(f"| {e['n_f']} | {e['nodes']} | {e['setup_s']:.3g} | {m['median']:.1f} | "
                      f"{m['min']:.1f} | {h['median']:.1f} | {h['min']:.1f} |")
@@ -131,6 +131,26 @@ def markdown(doc):
     lines += [f"| {r['n_f']} | {r['mass_matrix']['median']:.2f} | {r['mass_matrix']['min']:.2f} | "
               f"{r['h']['median']:.2f} | {r['h']['min']:.2f} |" for r in doc["ratios"]]
     return "\n".join(lines)
+
+
+def benchmark(quick=False, repeats=1000, seed=0, log=print) -> dict:
+    """The benchmark's document: timings (``rows``), ``ratios``, the markdown ``table`` and
+    the settings; ``quick``: n_f 10, 30 on 500 and 5000 nodes only."""
+    sizes = QUICK if quick else FULL
+    rng = np.random.default_rng(seed)
+    rows = []
+    for n_f in sizes["n_f"]:
+        rows += measure(n_f, sizes["nodes"], repeats, rng)
+        log(f"n_f = {n_f}: done")
+    doc = {"benchmark": "ffr_evaluation", "quick": quick, "repeats": repeats, "seed": seed,
+           "clock": "time.perf_counter (wall)", "machine": machine(), "rows": rows, "ratios": ratios(rows, sizes)}
+    doc["table"] = markdown(doc)
+    return doc
+
+
+def run(quick: bool) -> dict:
+    """The benchmark protocol of :mod:`validation.bench.runner`: :func:`benchmark` at its defaults."""
+    return benchmark(quick)
 
 
 def main(argv=None):
@@ -144,17 +164,8 @@ def main(argv=None):
     args = parser.parse_args(argv)
     if args.repeats < 1:
         parser.error("--repeats must be at least 1")
-    sizes = QUICK if args.quick else FULL
-    rng = np.random.default_rng(args.seed)
-    entries = []
-    for n_f in sizes["n_f"]:
-        entries += measure(n_f, sizes["nodes"], args.repeats, rng)
-        print(f"n_f = {n_f}: done", flush=True)
-    doc = {"benchmark": "ffr_evaluation", "quick": args.quick, "repeats": args.repeats,
-           "seed": args.seed, "clock": "time.perf_counter (wall)",
-           "machine": machine(),
-           "entries": entries, "ratios": ratios(entries, sizes)}
-    print(markdown(doc))
+    doc = benchmark(args.quick, args.repeats, args.seed)
+    print(doc["table"])
     write_json(doc, args.out, "ffr_evaluation")
     return doc
 

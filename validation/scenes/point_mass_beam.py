@@ -42,26 +42,38 @@ NODE_19 = (0.25, 0.05, 0.025)                     # the thesis's output node [m]
 PENALTY_K = 1e7                                   # [N/m], the thesis's soft contact
 
 
-def _recipe() -> dict:
-    return {"scene": "point_mass_beam", "size": [LENGTH, HEIGHT, WIDTH], "divisions": list(DIVISIONS),
-            "material": [DENSITY, YOUNG, POISSON], "clamp": "x0", "modes": "all", "version": 1}
+def _recipe(divisions=DIVISIONS, modes="all") -> dict:
+    return {"scene": "point_mass_beam", "size": [LENGTH, HEIGHT, WIDTH], "divisions": list(divisions),
+            "material": [DENSITY, YOUNG, POISSON], "clamp": "x0", "modes": modes, "version": 1}
 
 
-def default_beam_data(log=None):
-    """The beam's body data with all its clamped modes, preprocessed once and cached
-    (:func:`validation.scenes.cache.cached_body`)."""
+def default_beam_data(log=None, divisions=DIVISIONS, modes="all"):
+    """The beam's body data, preprocessed once and cached
+    (:func:`validation.scenes.cache.cached_body`).
+
+    Default: the 10 x 4 x 4 mesh with all its clamped modes (dense eigensolve).
+    ``divisions`` (nx, ny, nz) meshes the same 250 x 50 x 50 mm beam more finely (nz
+    even, so that node 19 at z = 25 mm is a node); ``modes`` is "all" (dense, at most
+    6000 free DOFs) or the number of lowest clamped modes, found by the sparse
+    shift-invert solver (:func:`preprocess.build_body`) — the way for large meshes.
+    """
+    recipe = _recipe(tuple(divisions), modes)
+
     def build():
         from preprocess import Material, build_body
         from preprocess.geometry import box
         from preprocess.modes import all_modes
 
-        mesh = box(LENGTH, HEIGHT, WIDTH, None, order=1, divisions=DIVISIONS)
-        data = build_body(mesh, Material(DENSITY, YOUNG, POISSON), n_modes=1, clamp="x0", params=_recipe())
+        mesh = box(LENGTH, HEIGHT, WIDTH, None, order=1, divisions=tuple(divisions))
+        material = Material(DENSITY, YOUNG, POISSON)
+        if modes != "all":
+            return build_body(mesh, material, n_modes=int(modes), clamp="x0", params=recipe)
+        data = build_body(mesh, material, n_modes=1, clamp="x0", params=recipe)
         data.eigenvalues, data.phi = all_modes(data.stiffness, data.masses, data.node_groups["x0"])
         data.params["n_modes"] = data.phi.shape[1]
         return data
 
-    return cached_body(_recipe(), build, log)
+    return cached_body(recipe, build, log)
 
 
 @dataclass
