@@ -3,21 +3,23 @@
 Stage 4 of a step (DESIGN.md) starts here: only pairs whose boxes, grown by a margin,
 overlap go on to the search of :mod:`contact.search`. Boxes are the contours'
 ``bounding_box()`` (2, 3) [m] (rows min, max; a plane's is infinite and overlaps
-everything), taken after the caller has updated the contours.
+everything), taken after the caller has updated the contours. The test itself is the
+numba kernel :func:`._detection_kernels.boxes_overlap` (a :class:`~contact.Contact`
+calls it on preallocated boxes).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from ._detection_kernels import boxes_overlap
+
 
 def overlapping(box1, box2, margin=0.0) -> bool:
     """True if the boxes (2, 3) [m] (rows min, max), each grown by ``margin`` [m] on
     every side, overlap: lo1 − m ≤ hi2 + m and lo2 − m ≤ hi1 + m on every axis
     (infinite bounds allowed)."""
-    box1, box2 = np.asarray(box1, dtype=float), np.asarray(box2, dtype=float)
-    m = 2.0 * float(margin)
-    return bool(np.all(box1[0] - m <= box2[1]) and np.all(box2[0] - m <= box1[1]))
+    return bool(boxes_overlap(np.asarray(box1, dtype=float), np.asarray(box2, dtype=float), float(margin)))
 
 
 def _contours(pair):

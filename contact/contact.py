@@ -28,7 +28,7 @@ import numpy as np
 
 from ffrmbs.errors import ModelError
 
-from .broad_phase import overlapping
+from ._detection_kernels import boxes_overlap
 from .kinematics import ContactKinematics, PointOnCurveConstraint
 from .laws import (Bilateral, LinearRegularizedUnilateralConstraint, RegularizedCoulombFriction,
                    UnilateralCoulombContact, UnilateralNewtonImpact)
@@ -62,6 +62,8 @@ class Contact:
         self.margin = _auto_margin(kinematics.contour2) if isinstance(margin, str) and margin == "auto" else margin
         if self.margin is not None and not self.margin >= 0.0:
             raise ModelError(f"{name}: margin must be >= 0 [m], 'auto' or None, got {margin!r}")
+        self.margin = None if self.margin is None else float(self.margin)
+        self._box1, self._box2 = np.zeros((2, 3)), np.zeros((2, 3))
 
     def bodies(self):
         return [c.body for c in self.contours() if c.body is not None]
@@ -77,19 +79,16 @@ class Contact:
     def detect(self) -> bool:
         """Locate the contact on the updated contours; closed when found and g_N <= 0."""
         k = self.kinematics
-        if self.margin is not None and not overlapping(k.contour1.bounding_box(), k.contour2.bounding_box(),
-                                                       self.margin):
+        if self.margin is not None and not boxes_overlap(k.contour1.bounding_box(self._box1),
+                                                         k.contour2.bounding_box(self._box2), self.margin):
             self.closed = False
             return False
         self.closed = bool(k.update(velocity=not self.set_valued, jacobians=True)) and k.g_N <= self.closing_tol
         return self.closed
 
     def jacobian(self, out) -> None:
-        """W (nu, dim) of the closed contact into ``out`` (zeroed by the caller)."""
-        k = self.kinematics
-        k.W_N(out[:, 0])
-        if self.dim == 3:
-            k.W_T(out[:, 1:])
+        """W (nu, dim) = [W_N] or [W_N, W_T] of the closed contact into ``out``."""
+        self.kinematics.fill_W(out)
 
     def add_forces(self, h) -> None:
         """Single-valued law: h += W_N F_N (+ W_T F_T) at the located contact, body block

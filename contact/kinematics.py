@@ -39,6 +39,7 @@ from ffrmbs.errors import ModelError
 
 from contours.rigid import PlaneContour, PointContour, SphereContour
 
+from . import _detection_kernels as K
 from .search import Contact1sSearch, Contact2sSearch
 
 
@@ -78,7 +79,6 @@ class ContactKinematics(ABC):
         self.T = np.zeros((3, 2))
         self.gd_N = np.nan
         self.gd_T = np.zeros(2)
-        self._dv = np.zeros(3)
         self.w_N1, self.w_N2 = np.zeros(contour1.nu), np.zeros(contour2.nu)
         self.w_T1, self.w_T2 = np.zeros((contour1.nu, 2)), np.zeros((contour2.nu, 2))
 
@@ -94,30 +94,23 @@ class ContactKinematics(ABC):
         self.active = self._locate(velocity, jacobians)
         if not self.active:
             return False
-        F = self.point2.frame
-        self.n[:] = F[:, 2]
-        self.T[:] = F[:, :2]
+        p1, p2 = self.point1, self.point2
+        gd_N = K.frame_rates_jacobians(p2.frame, p1.v, p2.v, p1.J_T, p2.J_T, velocity, jacobians, self.n, self.T,
+                                       self.gd_T, self.w_N1, self.w_N2, self.w_T1, self.w_T2)
         if velocity:
-            np.subtract(self.point1.v, self.point2.v, out=self._dv)
-            self.gd_N = float(self.n @ self._dv)
-            np.dot(self._dv, self.T, out=self.gd_T)
-        if jacobians:
-            np.dot(self.n, self.point1.J_T, out=self.w_N1)
-            np.dot(self.n, self.point2.J_T, out=self.w_N2)
-            self.w_N2 *= -1.0
-            np.dot(self.point1.J_T.T, self.T, out=self.w_T1)
-            np.dot(self.point2.J_T.T, self.T, out=self.w_T2)
-            self.w_T2 *= -1.0
+            self.gd_N = gd_N
         return True
 
     # --- assembly in the global u ---------------------------------------------------------
     def u_slices(self):
         """(slice of body 1, slice of body 2) in the global u; None for the ground."""
         b1, b2 = self.contour1.body, self.contour2.body
-        given = [b.u_slice for b in (b1, b2) if b is not None]
-        if all(s is not None for s in given):
-            return tuple(None if b is None else b.u_slice for b in (b1, b2))
-        if any(s is not None for s in given):
+        s1 = None if b1 is None else b1.u_slice
+        s2 = None if b2 is None else b2.u_slice
+        in_system1, in_system2 = b1 is None or s1 is not None, b2 is None or s2 is not None
+        if in_system1 and in_system2:
+            return s1, s2
+        if (b1 is not None and in_system1) or (b2 is not None and in_system2):
             raise ModelError(f"{self!r}: one body belongs to a System and the other not")
         s1 = None if b1 is None else slice(0, b1.nu)
         if b2 is None:
@@ -147,18 +140,29 @@ class ContactKinematics(ABC):
 
     def W_N(self, out=None):
         """W_N (nu_total,) into ``out`` (zero outside the bodies' slices); ġ_N = W_Nᵀ u."""
-        out = np.zeros(self.nu_total) if out is None else out
-        out[:] = 0.0
-        for s, w_N, _ in self.local_blocks():
-            out[s] += w_N
-        return out
+        return self._assemble(np.zeros(self.nu_total) if out is None else out, self.w_N1, self.w_N2)
 
     def W_T(self, out=None):
         """W_T (nu_total, 2) into ``out`` (zero outside the bodies' slices); ġ_T = W_Tᵀ u."""
-        out = np.zeros((self.nu_total, 2)) if out is None else out
-        out[:] = 0.0
-        for s, _, w_T in self.local_blocks():
-            out[s] += w_T
+        return self._assemble(np.zeros((self.nu_total, 2)) if out is None else out, self.w_T1, self.w_T2)
+
+    def fill_W(self, out) -> None:
+        """W = [W_N] or [W_N, W_T] into ``out`` (nu_total, 1 or 3) (zero outside the bodies'
+        slices), the columns of :meth:`W_N` and :meth:`W_T` in one kernel
+        (:func:`._detection_kernels.assemble_W`)."""
+        s1, s2 = self.u_slices()
+        K.assemble_W(out, -1 if s1 is None else s1.start, self.w_N1, self.w_T1,
+                     -1 if s2 is None else s2.start, self.w_N2, self.w_T2)
+
+    def _assemble(self, out, w1, w2):
+        """out ← the blocks w1, w2 added at the bodies' slices of the global u (both
+        contours may sit on one body)."""
+        out[...] = 0.0
+        s1, s2 = self.u_slices()
+        if s1 is not None:
+            out[s1] += w1
+        if s2 is not None:
+            out[s2] += w2
         return out
 
     def __repr__(self):
@@ -195,7 +199,8 @@ class _CentreContact(ContactKinematics):
         _require(contour1, self.side1, f"a {self.side1.__name__}")
         super().__init__(contour1, contour2, nu_total)
         self.radius = contour1.radius if self.side1 is SphereContour else 0.0
-        self._centre = np.zeros(3)
+        # the point's position (a view of point1's) or a copy of the sphere's centre
+        self._centre = self.point1.r if self.side1 is PointContour else np.zeros(3)
         self._A1 = np.eye(3)
 
     @abstractmethod
@@ -206,16 +211,15 @@ class _CentreContact(ContactKinematics):
         p1, c1 = self.point1, self.contour1
         if self.side1 is PointContour:
             c1.evaluate(p1, velocity=velocity, jacobians=jacobians)
-            self._centre[:] = p1.r
         else:
             self._A1[:] = c1.axes
             self._centre[:] = c1.centre
         if not self._project(self._centre, velocity, jacobians):
             return False
-        n = self.point2.n
-        self.g_N = float(n @ (self._centre - self.point2.r)) - self.radius
+        p2 = self.point2
+        self.g_N = K.normal_gap(p2.frame, self._centre, p2.derivs, self.radius)
         if self.side1 is SphereContour:
-            c1.evaluate(p1, *_sphere_angles(self._A1, -n), velocity=velocity, jacobians=jacobians)
+            c1.evaluate(p1, *_sphere_angles(self._A1, -p2.n), velocity=velocity, jacobians=jacobians)
         return True
 
 

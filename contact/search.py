@@ -29,6 +29,13 @@ scale; the root counts only if it is a local minimum of |g| (a maximum or saddle
 — e.g. the far side of a cylinder — is no contact point). Closed directions wrap the
 parameter; on an open direction an iterate is clipped to the domain, and a second clip in
 a row rejects the start (the root lies outside the contour: no contact point there).
+
+On a compiled neutral contour (:class:`~contours.neutral.factory.NeutralContour`, the
+default) Newton runs as one numba kernel per start (:func:`._detection_kernels.newton_2s`,
+:func:`._detection_kernels.newton_1s`) that evaluates the contour span-locally from its
+state; ``compiled=False`` (or any other contour) runs the Python reference
+(``_newton_reference``) over ``contour.evaluate``. Both give the same iterates up to
+rounding.
 """
 
 from __future__ import annotations
@@ -38,8 +45,10 @@ import numpy as np
 from ffrmbs.errors import ModelError
 
 from contours.base import D_ETA, D_ETA_ETA, D_ETA_XI, D_XI, D_XI_XI, VALUE
+from contours.neutral import NeutralContour
 
-_SINGULAR = 1e-10  # det H ≤ this × |t_η|² |t_ξ|² (1s: |H| ≤ this × |t_η|²): not definite
+from . import _detection_kernels as K
+from ._detection_kernels import SINGULAR as _SINGULAR
 
 
 class _Axis:
@@ -117,11 +126,14 @@ class _Search:
         Counters since construction or :meth:`reset_counters`.
     last_iterations : int
         Newton iterations of the last converged start.
+    compiled : bool
+        Newton runs in the numba kernel: asked for (``compiled=True``) and the contour is
+        a compiled neutral contour (decided at construction).
     """
 
     dim: int
 
-    def __init__(self, contour, tol, max_iter, length_scale):
+    def __init__(self, contour, tol, max_iter, length_scale, compiled):
         if contour.dim != self.dim:
             raise ModelError(f"{type(self).__name__} needs a {self.dim}s contour, got {contour!r}")
         self.contour = contour
@@ -130,6 +142,8 @@ class _Search:
         self.tol = float(tol)
         self.max_iter = int(max_iter)
         self._length_scale = None if length_scale is None else float(length_scale)
+        self.compiled = bool(compiled) and isinstance(contour, NeutralContour) and contour.compiled
+        self._work = contour.kernel_workspace() + (self._g,) if self.compiled else None
         self.reset_counters()
 
     def reset_counters(self):
@@ -165,12 +179,16 @@ class Contact2sSearch(_Search):
     nodes : (eta_nodes, xi_nodes) or None
         Coarse-grid node coordinates (e.g. the FE node parameters).
     tol, max_iter, length_scale : see :class:`_Search`.
+    compiled : bool
+        Newton in the numba kernel on a compiled neutral contour (default), else the
+        Python reference.
     """
 
     dim = 2
 
-    def __init__(self, contour, n_eta=8, n_xi=8, nodes=None, tol=1e-10, max_iter=20, length_scale=None):
-        super().__init__(contour, tol, max_iter, length_scale)
+    def __init__(self, contour, n_eta=8, n_xi=8, nodes=None, tol=1e-10, max_iter=20, length_scale=None,
+                 compiled=True):
+        super().__init__(contour, tol, max_iter, length_scale, compiled)
         self.axes = (_Axis(contour.domain[0], contour.closed[0]), _Axis(contour.domain[1], contour.closed[1]))
         if nodes is None:
             self.set_equal_spacing(n_eta, n_xi)
@@ -196,6 +214,7 @@ class Contact2sSearch(_Search):
         """Surface coordinates (η, ξ) of the contact point C2 of the point at ``r_point``
         (3,) [m], or None when there is none inside the domain. ``start``: the last
         successful (η, ξ) (warm start)."""
+        r_point = np.asarray(r_point, dtype=float)
         if start is not None:
             root = self._newton(r_point, start[0], start[1])
             if root is not None:
@@ -227,7 +246,23 @@ class Contact2sSearch(_Search):
 
     def _newton(self, r_point, eta, xi):
         """Newton on eq. 3.6 from (η, ξ); returns (η, ξ, |g|²) at a local minimum of the
-        distance, or None."""
+        distance, or None. The kernel :func:`._detection_kernels.newton_2s` when
+        :attr:`compiled`, else :meth:`_newton_reference`."""
+        if not self.compiled:
+            return self._newton_reference(r_point, eta, xi)
+        self.newton_solves += 1
+        ax_e, ax_x = self.axes
+        found, eta, xi, gg, k, steps = K.newton_2s(r_point, float(eta), float(xi), *self.contour.kernel_data,
+                                                   ax_e.max_step, ax_x.max_step, self._tol2(), self.max_iter,
+                                                   *self._work)
+        self.newton_iterations += steps
+        if not found:
+            return None
+        self.last_iterations = k
+        return eta, xi, gg
+
+    def _newton_reference(self, r_point, eta, xi):
+        """The Python reference of :meth:`_newton`, over ``contour.evaluate``."""
         self.newton_solves += 1
         ax_e, ax_x = self.axes
         eta, _ = ax_e.wrap(float(eta))
@@ -273,13 +308,13 @@ class Contact1sSearch(_Search):
         Cells of the equally spaced coarse grid; ignored when ``nodes`` is given.
     nodes : (k,) or None
         Coarse-grid node coordinates.
-    tol, max_iter, length_scale : see :class:`_Search`.
+    tol, max_iter, length_scale, compiled : see :class:`Contact2sSearch`.
     """
 
     dim = 1
 
-    def __init__(self, contour, n=16, nodes=None, tol=1e-10, max_iter=20, length_scale=None):
-        super().__init__(contour, tol, max_iter, length_scale)
+    def __init__(self, contour, n=16, nodes=None, tol=1e-10, max_iter=20, length_scale=None, compiled=True):
+        super().__init__(contour, tol, max_iter, length_scale, compiled)
         self.axes = (_Axis(contour.domain, contour.closed[0]),)
         if nodes is None:
             self.set_equal_spacing(n)
@@ -299,6 +334,7 @@ class Contact1sSearch(_Search):
     def solve(self, r_point, start=None):
         """Curve coordinate η of the contact point of the point at ``r_point`` (3,) [m], or
         None when there is none inside the domain. ``start``: the last successful η."""
+        r_point = np.asarray(r_point, dtype=float)
         if start is not None:
             root = self._newton(r_point, start)
             if root is not None:
@@ -323,7 +359,21 @@ class Contact1sSearch(_Search):
 
     def _newton(self, r_point, eta):
         """Newton on t_ηᵀ (r_P − r(η)) = 0 from η; returns (η, |g|²) at a local minimum of
-        the distance, or None."""
+        the distance, or None. The kernel :func:`._detection_kernels.newton_1s` when
+        :attr:`compiled`, else :meth:`_newton_reference`."""
+        if not self.compiled:
+            return self._newton_reference(r_point, eta)
+        self.newton_solves += 1
+        found, eta, gg, k, steps = K.newton_1s(r_point, float(eta), *self.contour.kernel_data, self.axes[0].max_step,
+                                               self._tol2(), self.max_iter, *self._work)
+        self.newton_iterations += steps
+        if not found:
+            return None
+        self.last_iterations = k
+        return eta, gg
+
+    def _newton_reference(self, r_point, eta):
+        """The Python reference of :meth:`_newton`, over ``contour.evaluate``."""
         self.newton_solves += 1
         ax = self.axes[0]
         eta, _ = ax.wrap(float(eta))

@@ -14,7 +14,7 @@ Public API::
 
 Every contour: ``update(q, u, t)`` once per step, then ``evaluate(point, η, ξ, …)`` into
 a :class:`ContourPoint` (position, tangents, frame, velocity, J_T, J_R),
-``bounding_box()`` and ``to_trimesh()``.
+``bounding_box(out)`` and ``to_trimesh()``.
 """
 
 from .base import Contour, ContourPoint

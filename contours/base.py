@@ -112,9 +112,10 @@ class Contour(ABC):
         velocity and the Jacobians when asked for. Returns ``point``."""
 
     @abstractmethod
-    def bounding_box(self) -> np.ndarray:
-        """(2, 3) [m]: an axis-aligned box containing the whole contour at the last update
-        (conservative; for the broad phase)."""
+    def bounding_box(self, out=None) -> np.ndarray:
+        """(2, 3) [m] (rows min, max) into ``out`` (a new array if None): an axis-aligned
+        box containing the whole contour at the last update (conservative; for the broad
+        phase, which passes preallocated boxes)."""
 
     def new_point(self) -> ContourPoint:
         """A workspace for :meth:`evaluate`."""

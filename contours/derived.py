@@ -99,17 +99,19 @@ class _OffsetContour(Contour):
             m = nc.n_modes
             phi_point = phi[VALUE].reshape(3, m) + G @ phi[D_ETA].reshape(3, m)
             if velocity:
-                nc._update_velocity()
+                nc._require_velocity()
                 point.v[:] = nc.v + A @ (np.cross(nc.w, ub[VALUE] + d) + phi_point @ nc.qdot_f)
             if jacobians:
                 nc.body.fill_J_T(A, nc.T, ub[VALUE] + d, phi_point, point.J_T)
                 nc.body.fill_J_R(A, nc.T, point.J_R)
         return point
 
-    def bounding_box(self) -> np.ndarray:
+    def bounding_box(self, out=None) -> np.ndarray:
         """The neutral curve's box grown by the largest offset (conservative)."""
-        box = self.neutral.bounding_box()
-        return box + np.array([[-self.reach], [self.reach]])
+        box = self.neutral.bounding_box(out)
+        box[0] -= self.reach
+        box[1] += self.reach
+        return box
 
 
 class FlexibleBand(_OffsetContour):

@@ -8,6 +8,12 @@ body rotation, so (thesis eq. 2.70, 2.72)
 
 Surface coordinates: sphere (η, ξ) = (longitude, latitude) [rad] in the frame's axes;
 plane (η, ξ) = coordinates [m] along the frame's x and y axes, normal along its z axis.
+
+``update`` reads the frame through its methods (position, orientation, velocity, angular
+velocity, J_T, J_R), each of which returns a new array. A frame on a point mass takes a
+shortcut that allocates nothing: r = q + ū0, ṙ = u, with the constant orientation
+A_rel, ω = 0, J_T = 1 and J_R = 0 set once (the same values the frame's methods give;
+compared in ``tests/test_compiled_contact.py``).
 """
 
 from __future__ import annotations
@@ -15,6 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from ffrmbs.errors import ModelError
+from mbs.rigid_body import PointMass
 
 from .base import D_ETA, D_ETA_ETA, D_ETA_XI, D_XI, D_XI_XI, VALUE, Contour
 
@@ -33,9 +40,20 @@ class _FrameContour(Contour):
         self._w = np.zeros(3)
         self._J_T = np.zeros((3, self.nu))
         self._J_R = np.zeros((3, self.nu))
+        self._on_point_mass = isinstance(body, PointMass)   # the shortcut of the module docstring
+        if self._on_point_mass:
+            self._A[:] = frame.A_rel
+            self._J_T[:] = np.eye(3)
         self.update(None if body is None else body.q_init, None if body is None else body.u_init)
 
     def update(self, q, u=None, t=0.0) -> None:
+        """The frame's position, orientation and Jacobians at (q, t) and, with u, its
+        velocity and angular velocity."""
+        if self._on_point_mass:
+            np.add(q, self.frame_ref.u0, out=self._r)
+            if u is not None:
+                self._v[:] = u
+            return
         f = self.frame_ref
         self._r[:] = f.position(q, t)
         self._A[:] = f.orientation(q, t)
@@ -79,8 +97,11 @@ class PointContour(_FrameContour):
         self._fill_offset(point, None, velocity, jacobians)
         return point
 
-    def bounding_box(self):
-        return np.array([self._r, self._r])
+    def bounding_box(self, out=None):
+        out = np.empty((2, 3)) if out is None else out
+        out[0] = self._r
+        out[1] = self._r
+        return out
 
 
 class SphereContour(_FrameContour):
@@ -124,8 +145,11 @@ class SphereContour(_FrameContour):
         """Orientation of the sphere's frame (3, 3) at the last update (a view)."""
         return self._A
 
-    def bounding_box(self):
-        return np.array([self._r - self.radius, self._r + self.radius])
+    def bounding_box(self, out=None):
+        out = np.empty((2, 3)) if out is None else out
+        np.subtract(self._r, self.radius, out=out[0])
+        np.add(self._r, self.radius, out=out[1])
+        return out
 
 
 class PlaneContour(_FrameContour):
@@ -157,5 +181,8 @@ class PlaneContour(_FrameContour):
         self._fill_offset(point, d, velocity, jacobians)
         return point
 
-    def bounding_box(self):
-        return np.array([np.full(3, -np.inf), np.full(3, np.inf)])
+    def bounding_box(self, out=None):
+        out = np.empty((2, 3)) if out is None else out
+        out[0] = -np.inf
+        out[1] = np.inf
+        return out

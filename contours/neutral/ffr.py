@@ -56,14 +56,18 @@ class Contour1sNeutralFFR(_FFRProducts, Contour1sNeutralFactory):
         Periodic curve (the last node connects back to the first).
     method : "chord" or "centripetal"
         Parametrization of the undeformed nodes (thesis eq. 3.19–3.21).
+    compiled : bool
+        Span-local numba evaluation (default) or the reference route
+        (:class:`~contours.neutral.factory.NeutralContour`).
     """
 
-    def __init__(self, body, nodes, normal, degree=3, closed=False, method="chord", name="neutral 1s"):
+    def __init__(self, body, nodes, normal, degree=3, closed=False, method="chord", name="neutral 1s",
+                 compiled=True):
         nodes = check_node_matrix(np.asarray(nodes).reshape(1, -1), body.data.n_nodes)[0]
         self.nodes = nodes
         interp = Interpolation1D.from_points(body.data.u0[nodes], degree, closed, method)
         phi = body.phi_nodes[nodes]
-        super().__init__(body, CurveSpace(interp), body.data.u0[nodes], phi, normal, name)
+        super().__init__(body, CurveSpace(interp), body.data.u0[nodes], phi, normal, name, compiled)
 
     @classmethod
     def along_line(cls, body, start, direction, normal, nodes=None, **kw):
@@ -94,10 +98,13 @@ class Contour2sNeutralFFR(_FFRProducts, Contour2sNeutralFactory):
     outward : None, +1 or -1
         Sign of t_η × t_ξ pointing out of the material; None decides it from the body's
         nodes behind the patch.
+    compiled : bool
+        Span-local numba evaluation (default) or the reference route
+        (:class:`~contours.neutral.factory.NeutralContour`).
     """
 
     def __init__(self, body, nodes, extra_rows=0, degree=3, closed=False, method="chord",
-                 outward=None, name="neutral 2s"):
+                 outward=None, name="neutral 2s", compiled=True):
         data = body.data
         if isinstance(nodes, str):
             candidates = data.surface_nodes if data.surface_triangles is not None else None
@@ -108,7 +115,8 @@ class Contour2sNeutralFFR(_FFRProducts, Contour2sNeutralFactory):
         grid = data.u0[O]
         interp = SurfaceInterpolation.from_grid(grid, as_pair(degree, "degree"), as_pair(closed, "closed"), method)
         phi = body.phi_nodes[O]
-        super().__init__(body, SurfaceSpace(interp), grid, phi, 1 if outward is None else outward, name)
+        super().__init__(body, SurfaceSpace(interp), grid, phi, 1 if outward is None else outward, name,
+                         compiled)
         if outward is None:
             self.sign = self._outward_sign()
 

@@ -12,7 +12,9 @@ the knots are fixed, so with ū = ū0 + Φ q_f at the nodes (thesis eq. 2.23)
 
     P_ū = P_ū0 + P_Φ q_f,   P_r = R + A P_ū,   P_ṙ = v + A (ω̄ × P_ū + P_Φ q̇_f)
 
-exactly — a step combines control points and never re-interpolates.
+exactly — a step combines control points and never re-interpolates. The compiled
+neutral contours go one step further and form only the control points of the span they
+evaluate (:mod:`.factory`); the products here are their reference and their export.
 """
 
 from __future__ import annotations

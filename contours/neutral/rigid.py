@@ -44,19 +44,22 @@ def _points(points, ndim, name):
 
 class Contour1sNeutralRigid(_RigidProducts, Contour1sNeutralFactory):
     """A curve through body-frame ``points`` (k, 3) [m] of a rigid body; ``normal`` the
-    body-frame reference normal; degree, closed and method as for the FFR family."""
+    body-frame reference normal; degree, closed, method and compiled as for the FFR family."""
 
-    def __init__(self, body, points, normal, degree=3, closed=False, method="chord", name="rigid 1s"):
+    def __init__(self, body, points, normal, degree=3, closed=False, method="chord", name="rigid 1s",
+                 compiled=True):
         P = _points(points, 2, name)
         interp = Interpolation1D.from_points(P, degree, closed, method)
-        super().__init__(body, CurveSpace(interp), P, None, normal, name)
+        super().__init__(body, CurveSpace(interp), P, None, normal, name, compiled)
 
 
 class Contour2sNeutralRigid(_RigidProducts, Contour2sNeutralFactory):
     """A surface through a body-frame point grid (k_eta, k_xi, 3) [m] of a rigid body;
-    ``outward`` = +1 if t_η × t_ξ points out of the material, else -1."""
+    ``outward`` = +1 if t_η × t_ξ points out of the material, else -1; ``compiled`` as for
+    the FFR family."""
 
-    def __init__(self, body, grid, degree=3, closed=False, method="chord", outward=1, name="rigid 2s"):
+    def __init__(self, body, grid, degree=3, closed=False, method="chord", outward=1, name="rigid 2s",
+                 compiled=True):
         G = _points(grid, 3, name)
         interp = SurfaceInterpolation.from_grid(G, as_pair(degree, "degree"), as_pair(closed, "closed"), method)
-        super().__init__(body, SurfaceSpace(interp), G, None, outward, name)
+        super().__init__(body, SurfaceSpace(interp), G, None, outward, name, compiled)

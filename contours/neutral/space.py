@@ -7,7 +7,10 @@ Sec. 3.2.2: "the knot vectors for all above NURBS interpolations has to be same"
 computed from the undeformed local positions). Every field of the contour is a
 control-point array on this space; :meth:`locate` computes the basis functions and
 their derivatives at (η, ξ) once, then :meth:`contract` combines any number of
-control-point arrays with them (numba kernels in :mod:`._kernels`).
+control-point arrays with them (numba kernels in :mod:`._kernels`). ``geometry`` holds
+the same knots, degrees and domains as arrays for the span-local kernels
+(:func:`._kernels.evaluate_1s`, :func:`._kernels.evaluate_2s`), which locate by
+themselves.
 """
 
 from __future__ import annotations
@@ -55,6 +58,8 @@ class CurveSpace:
         self.domain = (self.eta.a, self.eta.b)
         self.closed = (self.eta.closed,)
         self.ctrl_shape = (interp.n_ctrl,)
+        d = self.eta
+        self.geometry = (d.knots, np.array([d.p, d.n_ctrl, d.closed], dtype=np.int64), np.array([d.a, d.b]))
 
     def interpolate(self, values) -> np.ndarray:
         """Control points (n_ctrl, ...) of nodal values (k, ...) (eq. 3.22)."""
@@ -67,6 +72,12 @@ class CurveSpace:
         """out[:nrows] ← rows of :data:`contours.base` layout from ctrl (n_ctrl, m)."""
         d = self.eta
         K.contract_curve(d.B, d.span, d.p, ctrl, nrows, out)
+
+    def contract_state(self, ctrl0, phi, state, span, nrows, out):
+        """out[:nrows] ← rows of ū (6, 3) [m] from P_ū0 + P_Φ q_f over the located span
+        only (:func:`._kernels.local_rows_1s`)."""
+        d = self.eta
+        K.local_rows_1s(d.B, d.span, d.p, ctrl0, phi, state, span, nrows, out)
 
 
 class SurfaceSpace:
@@ -81,6 +92,9 @@ class SurfaceSpace:
         self.domain = ((self.eta.a, self.eta.b), (self.xi.a, self.xi.b))
         self.closed = (self.eta.closed, self.xi.closed)
         self.ctrl_shape = (interp.eta.n_ctrl, interp.xi.n_ctrl)
+        e, x = self.eta, self.xi
+        ints = np.array([e.p, e.n_ctrl, e.closed, x.p, x.n_ctrl, x.closed], dtype=np.int64)
+        self.geometry = (e.knots, x.knots, ints, np.array([e.a, e.b, x.a, x.b]))
 
     def interpolate(self, values) -> np.ndarray:
         """Control points (n_eta, n_xi, ...) of nodal values (k_eta, k_xi, ...)."""
@@ -94,3 +108,9 @@ class SurfaceSpace:
         """out[:nrows] ← S, S_η, S_ξ, S_ηη, S_ηξ, S_ξξ from ctrl (n_eta, n_xi, m)."""
         e, x = self.eta, self.xi
         K.contract_surface(e.B, e.span, e.p, x.B, x.span, x.p, ctrl, nrows, out)
+
+    def contract_state(self, ctrl0, phi, state, span, nrows, out):
+        """out[:nrows] ← rows of ū (6, 3) [m] from P_ū0 + P_Φ q_f over the located span
+        only (:func:`._kernels.local_rows_2s`)."""
+        e, x = self.eta, self.xi
+        K.local_rows_2s(e.B, e.span, e.p, x.B, x.span, x.p, ctrl0, phi, state, span, nrows, out)

@@ -1,0 +1,202 @@
+"""numba kernels of contact detection (stage 4 of a step, DESIGN.md): the broad-phase box
+test, Newton on eq. 3.6 over a neutral contour evaluated span-locally, and the contact
+frame, relative velocity and Jacobian pieces of eq. 3.4–3.8.
+
+The Newton kernels read the contour from its ``kernel_data`` (knots, degrees, domains,
+P_ū0, P_Φ, the state vector and the span cache of :mod:`contours.neutral._kernels`) and
+evaluate it by :func:`~contours.neutral._kernels.fields_1s` /
+:func:`~contours.neutral._kernels.fields_2s` — no Python per iteration. Their reference
+is the Python Newton of :mod:`contact.search` (``compiled=False``) over
+``contour.evaluate``; the others have their numpy formulas in the docstrings.
+``tests/test_compiled_contact.py`` compares them.
+"""
+
+from __future__ import annotations
+
+from numba import njit
+
+from contours.neutral._kernels import fields_1s, fields_2s
+
+SINGULAR = 1e-10  # det H ≤ this × |t_η|² |t_ξ|² (1s: |H| ≤ this × |t_η|²): not definite
+
+
+@njit(cache=True)
+def boxes_overlap(box1, box2, margin):
+    """True if the boxes (2, 3) [m] (rows min, max), each grown by ``margin`` [m], overlap:
+    lo1 − 2m ≤ hi2 and lo2 − 2m ≤ hi1 on every axis (infinite bounds allowed)."""
+    m = 2.0 * margin
+    for c in range(3):
+        if not (box1[0, c] - m <= box2[1, c] and box2[0, c] - m <= box1[1, c]):
+            return False
+    return True
+
+
+@njit(cache=True)
+def _wrap(t, a, b, closed):
+    """(t in [a, b], True if an open direction had to clip t); a closed one wraps t."""
+    if closed:
+        return a + (t - a) % (b - a), False
+    if t < a:
+        return a, True
+    if t > b:
+        return b, True
+    return t, False
+
+
+@njit(cache=True)
+def _step(t, dt, a, b, closed, max_step):
+    """t + dt with |dt| capped at ``max_step``, wrapped or clipped by :func:`_wrap`."""
+    return _wrap(t + min(max(dt, -max_step), max_step), a, b, closed)
+
+
+@njit(cache=True)
+def _dot(x, y):
+    """xᵀ y of two 3-vectors."""
+    return x[0] * y[0] + x[1] * y[1] + x[2] * y[2]
+
+
+@njit(cache=True)
+def _gap(r_point, D, g):
+    """g = r_P − r (3,) [m] from row 0 of D; returns |g|²."""
+    for c in range(3):
+        g[c] = r_point[c] - D[0, c]
+    return _dot(g, g)
+
+
+@njit(cache=True)
+def newton_2s(r_point, eta, xi, knots_e, knots_x, ints, floats, ctrl0, phi, state, span, max_step_e, max_step_x,
+              tol2, max_iter, B, local, D, g):
+    """Newton on g_η = t_ηᵀ g = 0, g_ξ = t_ξᵀ g = 0 (thesis eq. 3.31–3.32), g = r_P − r(η, ξ),
+    from (η, ξ) on a neutral 2s contour (the algorithm of
+    :meth:`contact.search.Contact2sSearch._newton_reference`, see :mod:`contact.search`).
+
+    ``max_step_*`` cap a step per coordinate, ``tol2`` = (tol · length scale)² [m²];
+    B, local, D (6, 3), g (3,) are work arrays. Returns (found, η, ξ, |g|² [m²],
+    iterations of the converged start, Newton steps taken); found is False when Newton
+    failed or stopped at a maximum or saddle of the distance.
+    """
+    ae, be, ax, bx = floats[0], floats[1], floats[2], floats[3]
+    ce, cx = ints[2] != 0, ints[5] != 0
+    eta = _wrap(eta, ae, be, ce)[0]
+    xi = _wrap(xi, ax, bx, cx)[0]
+    clipped = 0
+    steps = 0
+    for k in range(max_iter + 1):
+        fields_2s(eta, xi, knots_e, knots_x, ints, floats, ctrl0, phi, state, span, B, local, D)
+        gg = _gap(r_point, D, g)
+        f0, f1 = _dot(D[1], g), _dot(D[2], g)
+        a, b, c = _dot(D[1], D[1]), _dot(D[1], D[2]), _dot(D[2], D[2])
+        h11, h12, h22 = _dot(D[3], g) - a, _dot(D[4], g) - b, _dot(D[5], g) - c
+        det = h11 * h22 - h12 * h12
+        minimum = h11 < 0.0 and det > SINGULAR * a * c
+        if f0 * f0 <= tol2 * a and f1 * f1 <= tol2 * c:
+            return minimum, eta, xi, gg, k, steps
+        if k == max_iter:
+            break
+        steps += 1
+        if not minimum:  # Gauss–Newton: a descent direction of |g|²
+            h11, h12, h22, det = -a, -b, -c, a * c - b * b
+            if det <= SINGULAR * a * c:
+                break    # degenerate parametrization
+        eta, out_e = _step(eta, (h12 * f1 - h22 * f0) / det, ae, be, ce, max_step_e)
+        xi, out_x = _step(xi, (h12 * f0 - h11 * f1) / det, ax, bx, cx, max_step_x)
+        clipped = clipped + 1 if (out_e or out_x) else 0
+        if clipped == 2:
+            break        # the root lies outside the contour
+    return False, eta, xi, 0.0, max_iter, steps
+
+
+@njit(cache=True)
+def newton_1s(r_point, eta, knots, ints, floats, ctrl0, phi, state, span, max_step, tol2, max_iter, B, local, D,
+              g):
+    """Newton on g_η = t_ηᵀ (r_P − r(η)) = 0 (eq. 3.6 on a curve) from η on a neutral 1s
+    contour (the algorithm of :meth:`contact.search.Contact1sSearch._newton_reference`).
+    Arguments as for :func:`newton_2s`; returns (found, η, |g|² [m²], iterations of the
+    converged start, Newton steps taken)."""
+    a_, b_, closed = floats[0], floats[1], ints[2] != 0
+    eta = _wrap(eta, a_, b_, closed)[0]
+    clipped = 0
+    steps = 0
+    for k in range(max_iter + 1):
+        fields_1s(eta, knots, ints, floats, ctrl0, phi, state, span, B, local, D)
+        gg = _gap(r_point, D, g)
+        f, a = _dot(D[1], g), _dot(D[1], D[1])
+        h = _dot(D[3], g) - a
+        minimum = h < -SINGULAR * a
+        if f * f <= tol2 * a:
+            return minimum, eta, gg, k, steps
+        if k == max_iter or a == 0.0:
+            break
+        steps += 1
+        eta, out = _step(eta, -f / (h if minimum else -a), a_, b_, closed, max_step)  # else Gauss–Newton
+        clipped = clipped + 1 if out else 0
+        if clipped == 2:
+            break
+    return False, eta, 0.0, max_iter, steps
+
+
+@njit(cache=True)
+def normal_gap(F, centre, D, radius):
+    """g_N = nᵀ (c − r_C2) − ρ [m] (thesis eq. 3.4) with n = F[:, 2] and r_C2 = D[0]."""
+    s = 0.0
+    for c in range(3):
+        s += F[c, 2] * (centre[c] - D[0, c])
+    return s - radius
+
+
+@njit(cache=True)
+def frame_rates_jacobians(F, v1, v2, J1, J2, velocity, jacobians, n, T, gd_T, w_N1, w_N2, w_T1, w_T2):
+    """Contact frame and the pieces of eq. 3.8 from contour 2's frame F (3, 3) (columns
+    t1, t2, n): n = F[:, 2], T = F[:, :2]; with ``velocity`` ġ_T = Tᵀ (v1 − v2) into gd_T
+    and the return value ġ_N = nᵀ (v1 − v2) [m/s] (else 0); with ``jacobians``
+    w_N1 = J1ᵀ n, w_N2 = −J2ᵀ n, w_T1 = J1ᵀ T, w_T2 = −J2ᵀ T (J1 (3, nu1), J2 (3, nu2))."""
+    for c in range(3):
+        n[c] = F[c, 2]
+        T[c, 0] = F[c, 0]
+        T[c, 1] = F[c, 1]
+    gd_N = 0.0
+    if velocity:
+        gd_T[0] = gd_T[1] = 0.0
+        for c in range(3):
+            dv = v1[c] - v2[c]
+            gd_N += n[c] * dv
+            gd_T[0] += T[c, 0] * dv
+            gd_T[1] += T[c, 1] * dv
+    if jacobians:
+        _project(J1, n, T, 1.0, w_N1, w_T1)
+        _project(J2, n, T, -1.0, w_N2, w_T2)
+    return gd_N
+
+
+@njit(cache=True)
+def _project(J, n, T, sign, w_N, w_T):
+    """w_N = sign · Jᵀ n, w_T = sign · Jᵀ T."""
+    for j in range(J.shape[1]):
+        a = J[0, j] * n[0] + J[1, j] * n[1] + J[2, j] * n[2]
+        b = J[0, j] * T[0, 0] + J[1, j] * T[1, 0] + J[2, j] * T[2, 0]
+        c = J[0, j] * T[0, 1] + J[1, j] * T[1, 1] + J[2, j] * T[2, 1]
+        w_N[j] = sign * a
+        w_T[j, 0] = sign * b
+        w_T[j, 1] = sign * c
+
+
+@njit(cache=True)
+def assemble_W(out, start1, w_N1, w_T1, start2, w_N2, w_T2):
+    """W = [W_N] (out (nu_total, 1)) or [W_N, W_T] (out (nu_total, 3)) from the bodies'
+    pieces (eq. 3.8): zero, then the pieces added at rows start_i.. (start_i < 0: the
+    ground, no rows); both contours may sit on one body."""
+    out[:, :] = 0.0
+    _add_block(out, start1, w_N1, w_T1)
+    _add_block(out, start2, w_N2, w_T2)
+
+
+@njit(cache=True)
+def _add_block(out, start, w_N, w_T):
+    """out[start + j] += (w_N[j], w_T[j]) (the W_T columns only when out has three)."""
+    if start < 0:
+        return
+    for j in range(w_N.shape[0]):
+        out[start + j, 0] += w_N[j]
+        if out.shape[1] == 3:
+            out[start + j, 1] += w_T[j, 0]
+            out[start + j, 2] += w_T[j, 1]
