@@ -25,13 +25,11 @@ or with all benchmarks, ``python3 -m validation.bench --only akantu_case_study``
 
 from __future__ import annotations
 
-import argparse
-
 import numpy as np
 
 from mbs.modal import ModalBasis, SimpleRB
 from validation import CaseResult
-from validation.bench.common import machine, write_json
+from validation.bench.common import bench_main, machine
 from validation.cases import _wobble as wb
 from validation.cases import wobble_case_study as case
 
@@ -90,16 +88,7 @@ def run(quick: bool) -> dict:
 
 def main(argv=None):
     """Run the benchmark (command line ``argv``), print the table, write the JSON; return it."""
-    parser = argparse.ArgumentParser(prog="python3 -m validation.bench.akantu_case_study",
-                                     description=__doc__.split("\n")[0])
-    parser.add_argument("--quick", action="store_true", help="0.1 s instead of 1 s")
-    parser.add_argument("--out", default="out/bench")
-    args = parser.parse_args(argv)
-    doc = run(args.quick)
-    print(doc["table"])
-    print("\n".join(doc["verdicts"]))
-    write_json(doc, args.out, "akantu_case_study")
-    return doc
+    return bench_main(argv, "akantu_case_study", run, __doc__, "0.1 s instead of 1 s")
 
 
 if __name__ == "__main__":

@@ -58,3 +58,20 @@ def moving_state(body, rng, deform=2e-3):
     u[:] = rng.normal(size=body.nu)
     u[6:] *= scale
     return q, u
+
+
+def bench_main(argv, name, run, doc_string, quick_help):
+    """The command line of a benchmark module ``validation.bench.<name>``: parse ``--quick``
+    (help ``quick_help``) and ``--out``, run ``run(quick)``, print its table and verdicts,
+    write ``<out>/<name>.json``; returns the document."""
+    import argparse
+
+    parser = argparse.ArgumentParser(prog=f"python3 -m validation.bench.{name}", description=doc_string.split("\n")[0])
+    parser.add_argument("--quick", action="store_true", help=quick_help)
+    parser.add_argument("--out", default="out/bench")
+    args = parser.parse_args(argv)
+    doc = run(args.quick)
+    print(doc["table"])
+    print("\n".join(doc.get("verdicts", [])))
+    write_json(doc, args.out, name)
+    return doc

@@ -27,11 +27,9 @@ or with all benchmarks, ``python3 -m validation.bench --only exudyn_free_flight`
 
 from __future__ import annotations
 
-import argparse
-
 import numpy as np
 
-from validation.bench.common import machine, write_json
+from validation.bench.common import bench_main, machine
 from validation.cases import _wobble as wb
 from validation.cases import ffr_free_flight as ff
 
@@ -155,17 +153,8 @@ def run(quick: bool) -> dict:
 
 
 def main(argv=None):
-    """Run the benchmark (command line ``argv``), print the tables, write the JSON; return it."""
-    parser = argparse.ArgumentParser(prog="python3 -m validation.bench.exudyn_free_flight",
-                                     description=__doc__.split("\n")[0])
-    parser.add_argument("--quick", action="store_true", help="10 modes, Exudyn at 1e-3 s, 1 repeat")
-    parser.add_argument("--out", default="out/bench")
-    args = parser.parse_args(argv)
-    doc = run(args.quick)
-    print(doc["table"])
-    print("\n".join(doc["verdicts"]))
-    write_json(doc, args.out, "exudyn_free_flight")
-    return doc
+    """Run the benchmark (command line ``argv``), print the table, write the JSON; return it."""
+    return bench_main(argv, "exudyn_free_flight", run, __doc__, "10 modes, Exudyn at 1e-3 s, 1 repeat")
 
 
 if __name__ == "__main__":
