@@ -124,6 +124,7 @@ class System:
         all. A planned run leaves out the bodies it solves apart."""
         self._idle, self._idle_forces = tuple(bodies), tuple(forces)
         self._active_bodies = [b for b in self.bodies if b not in self._idle]
+        self._active_force_list = [f for f in self.forces if f not in self._idle_forces]
 
     @property
     def leaving_out(self) -> tuple:
@@ -134,11 +135,11 @@ class System:
         return self._active_bodies if self._idle else self.bodies
 
     def _active_forces(self):
-        return [f for f in self.forces if f not in self._idle_forces] if self._idle_forces else self.forces
+        return self._active_force_list if self._idle_forces else self.forces
 
     def _idle_identity(self, M):
         for b in self._idle:
-            M[b.u_slice, b.u_slice] = np.eye(b.nu)
+            np.fill_diagonal(M[b.u_slice, b.u_slice], 1.0)
 
     # --- dynamics -----------------------------------------------------------------------
     def mass_matrix(self, t, q):

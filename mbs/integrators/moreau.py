@@ -75,6 +75,8 @@ class MoreauTimeStepping(Integrator):
             for contour in c.contours():
                 contours[id(contour)] = contour
         self.contours = list(contours.values())
+        self._owners = [(k, [i for i, c in enumerate(self.contacts) if k in c.contours()]) for k in self.contours]
+        self._live, self._live_flags = [], [True] * len(self.contacts)   # reused each step
         self.stats = {"closed_contacts": 0, "solver_iterations": 0, "max_penetration": 0.0, "pruned_contacts": 0}
         self._lam = {}
         self._sets = {}
@@ -113,13 +115,9 @@ class MoreauTimeStepping(Integrator):
             return {}
         return {key: np.array(values) for key, values in self._trace.items()}
 
-    def _update_contours(self, t, q, u, contours=None):
-        for contour in self.contours if contours is None else contours:
-            body = contour.body
-            if body is None:
-                contour.update(None, None, t)
-            else:
-                contour.update(q[body.q_slice], u[body.u_slice], t)
+    def _update_contours(self, t, q, u):
+        for contour in self.contours:
+            _update_contour(contour, t, q, u)
 
     def _live_contacts(self, t, q, u):
         """The contacts to locate this step, their contours updated. Unplanned: all. Planned
@@ -129,14 +127,20 @@ class MoreauTimeStepping(Integrator):
         if self.plan is None:
             self._update_contours(t, q, u)
             return self.contacts
-        live = []
-        for c, s1, s2 in self._bounds:
-            if s2 is not None and _apart(c, s1, s2, q, t):
+        live, flags = self._live, self._live_flags
+        live.clear()
+        for i, (c, s1, s2) in enumerate(self._bounds):
+            flags[i] = s2 is None or not _apart(c, s1, s2, q, t)
+            if flags[i]:
+                live.append(c)
+            else:
                 c.closed = False
                 self.stats["pruned_contacts"] += 1
-            else:
-                live.append(c)
-        self._update_contours(t, q, u, {id(k): k for c in live for k in c.contours()}.values())
+        for contour, owners in self._owners:
+            for i in owners:
+                if flags[i]:
+                    _update_contour(contour, t, q, u)
+                    break
         return live
 
     def step(self, dt):
@@ -348,6 +352,15 @@ class AdaptiveMoreauTimeStepping(MoreauTimeStepping):
                 self.stats["rejected_steps"] += 1
                 self.h_next = h * factor
             h = self.h_next
+
+
+def _update_contour(contour, t, q, u):
+    """Update one contour at the global state (q, u, t) (ground contours take None)."""
+    body = contour.body
+    if body is None:
+        contour.update(None, None, t)
+    else:
+        contour.update(q[body.q_slice], u[body.u_slice], t)
 
 
 def contour_sphere(contour):
