@@ -21,8 +21,9 @@ forces, unconditionally stable; 0.5 conserves elastic energy), ``solver`` (a Pro
 or its method name), ``tol``, ``trace`` (True: per-step records in ``Result.trace``:
 t, dt [s], closed contacts, largest penetration [m], solver iterations and residual
 [m/s], the work of the impulses Λᵀ (γ⁺ + γ⁻)/2 [J] (contacts and joints; the energy the
-impact laws take out), total energy [J]). Non-convergence of the contact problem stops the run with a
-SimulationError naming the residual.
+impact laws take out), total energy [J]), ``penetration_bound`` [m] (default None: no
+bound; a midpoint penetration max(0, −g_N) beyond it stops the run). Non-convergence of
+the contact problem stops the run with a SimulationError naming the residual.
 
 :class:`AdaptiveMoreauTimeStepping` ("moreau-adaptive") controls the step size by step
 doubling, like MBSim's ``AutoTimeSteppingSSCIntegrator``: each step of size H is also
@@ -63,8 +64,12 @@ class MoreauTimeStepping(Integrator):
 
     name = "moreau"
 
-    def __init__(self, system, theta=1.0, solver="gauss-seidel", tol=1e-10, max_iter=2000, trace=False):
+    def __init__(self, system, theta=1.0, solver="gauss-seidel", tol=1e-10, max_iter=2000, trace=False,
+                 penetration_bound=None):
         super().__init__(system)
+        if penetration_bound is not None and not penetration_bound > 0:
+            raise ModelError(f"penetration_bound must be a positive length [m], got {penetration_bound}")
+        self.penetration_bound = None if penetration_bound is None else float(penetration_bound)
         if not 0.5 <= theta <= 1.0:
             raise ModelError(f"theta must lie in [0.5, 1], got {theta}")
         self.theta = float(theta)
@@ -162,6 +167,9 @@ class MoreauTimeStepping(Integrator):
                     c.add_forces(h)
                 last[1] = max(last[1], c.penetration)
             self.stats["max_penetration"] = max(self.stats["max_penetration"], last[1])
+            if self.penetration_bound is not None and last[1] > self.penetration_bound:
+                raise StepFailure(f"penetration {last[1]:.3g} m beyond the bound {self.penetration_bound:.3g} m "
+                                  "(a contact tunnelled or a penalty stiffness is too soft for the load)")
         if self._constant:
             for step, factor in self._factors:   # steps landing on output times differ by rounding
                 if abs(step - dt) <= 1e-12 * dt:
@@ -235,7 +243,7 @@ class MoreauTimeStepping(Integrator):
 
     def _contact_set(self, closed, laws):
         """The ContactSet of this active set, built once per set of closed contacts."""
-        key = tuple(id(c) for c in closed)
+        key = tuple(closed)              # the contacts themselves: keys survive a checkpoint
         cs = self._sets.get(key)
         if cs is None:
             cs = self._sets[key] = ContactSet(laws)
@@ -248,7 +256,7 @@ class MoreauTimeStepping(Integrator):
         if i and "joints" in self._lam and self._lam["joints"].size == i:
             lam[:i] = self._lam["joints"]
         for c in closed:
-            prev = self._lam.get(id(c))
+            prev = self._lam.get(c)
             if prev is not None:
                 lam[i:i + c.dim] = prev
             i += c.dim
@@ -258,7 +266,7 @@ class MoreauTimeStepping(Integrator):
         i = self.system.n_c
         self._lam = {"joints": lam[:i].copy()}
         for c in closed:
-            self._lam[id(c)] = lam[i:i + c.dim].copy()
+            self._lam[c] = lam[i:i + c.dim].copy()
             i += c.dim
 
 

@@ -1,0 +1,86 @@
+"""A scene: one simulation job — a System with its initial state set, how to integrate it
+and what to record — as built by the default scene, a TOML scene file
+(:mod:`ffrmbs.scene_toml`) or a Python model script.
+
+A model script is a Python file defining ``scene() -> Scene``; ``ffrmbs run model.py``
+calls it. :func:`load_scene` dispatches on the file's suffix.
+"""
+
+from __future__ import annotations
+
+import runpy
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ffrmbs.errors import InputFileError, ModelError
+
+
+@dataclass
+class Scene:
+    """A simulation job.
+
+    system: the :class:`mbs.System`, initial state set on its bodies; t_end, dt [s]: end
+    time and (largest) step; integrator: a name accepted by ``System.simulate``
+    ("moreau", "moreau-adaptive", "generalized-alpha", "rk4"); options: integrator
+    options (e.g. theta, tol, penetration_bound [m]); n_out: output samples, equally
+    spaced over [0, t_end]; outputs: {name: Frame or callable (t, q, u) -> array}, the
+    quantities recorded at each sample; energies: record kinetic and potential energy
+    [J]; plan, tolerance [m]: the scene planner (:mod:`mbs.plan`); name: a short
+    identifier, used for the result file's name; inputs: {label: path} of the files the
+    scene was built from (the result file records their SHA-256); description: one line
+    for logs.
+    """
+
+    system: object
+    t_end: float
+    dt: float
+    integrator: str = "moreau"
+    options: dict = field(default_factory=dict)
+    n_out: int = 101
+    outputs: dict = field(default_factory=dict)
+    energies: bool = True
+    plan: bool = True
+    tolerance: float | None = None
+    name: str = "scene"
+    inputs: dict = field(default_factory=dict)
+    description: str = ""
+
+    def __post_init__(self):
+        if not (self.t_end > 0 and self.dt > 0):
+            raise ModelError(f"scene {self.name!r}: need t_end > 0 and dt > 0, got {self.t_end}, {self.dt}")
+        if int(self.n_out) < 2:
+            raise ModelError(f"scene {self.name!r}: need at least 2 output samples, got {self.n_out}")
+        self.n_out = int(self.n_out)
+
+    def t_out(self) -> np.ndarray:
+        """The output times [s], (n_out,)."""
+        return np.linspace(0.0, self.t_end, self.n_out)
+
+
+def load_scene(path) -> Scene:
+    """The scene of a TOML scene file (``.toml``) or a Python model script (``.py``
+    defining ``scene()``)."""
+    path = Path(path)
+    if not path.is_file():
+        raise InputFileError(path, None, "no such scene file")
+    if path.suffix == ".toml":
+        from ffrmbs.scene_toml import read_scene
+
+        return read_scene(path)
+    if path.suffix == ".py":
+        return _from_script(path)
+    raise InputFileError(path, None, "a scene is a .toml scene file or a .py model script")
+
+
+def _from_script(path: Path) -> Scene:
+    namespace = runpy.run_path(str(path), run_name="ffrmbs_model")
+    build = namespace.get("scene")
+    if not callable(build):
+        raise InputFileError(path, None, "a model script must define a function scene() returning an ffrmbs Scene")
+    scene = build()
+    if not isinstance(scene, Scene):
+        raise InputFileError(path, None, f"scene() returned {type(scene).__name__}, not an ffrmbs.scene.Scene")
+    scene.inputs.setdefault("model script", str(path))
+    return scene
