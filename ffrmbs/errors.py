@@ -49,3 +49,18 @@ class SimulationError(FfrmbsError):
         self.step = step
         self.cause = cause
         super().__init__(f"simulation stopped at t = {t:.6g} s (step {step}): {cause}")
+
+
+class RunInterrupted(FfrmbsError):
+    """A run stopped on request (SIGINT, SIGTERM) after a complete step.
+
+    Carries the time ``t`` [s], the step index ``step``, the ``reason`` and, like
+    :class:`SimulationError`, the results so far in ``result``.
+    """
+
+    def __init__(self, t, step, reason):
+        self.t = t
+        self.step = step
+        self.reason = reason
+        self.result = None
+        super().__init__(f"run interrupted at t = {t:.6g} s (step {step}): {reason}")

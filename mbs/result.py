@@ -15,7 +15,10 @@ class Result:
     "potential"} (n,) [J] when requested; stats: steps, Newton iterations, CPU and wall
     seconds of the integration, integrator name and options; trace: per-step records
     {name: (steps,)} of integrators asked for them (Moreau's ``trace=True``), else {};
-    plan: the printed scene plan of a planned run (:mod:`mbs.plan`), else "".
+    plan: the printed scene plan of a planned run (:mod:`mbs.plan`), else "";
+    contacts: {contact name: {"active" (n,) int8, "gap" (n,) [m], "point" (n, 3) [m],
+    "normal" (n, 3), "force" (n, 3) [N]}} when asked for (``simulate(contacts=True)``):
+    each contact at the last step's midpoint, the force on its first contour's body.
     """
 
     t: np.ndarray
@@ -26,6 +29,7 @@ class Result:
     stats: dict = field(default_factory=dict)
     trace: dict = field(default_factory=dict)
     plan: str = ""
+    contacts: dict = field(default_factory=dict)
 
     def __getitem__(self, name):
         return self.outputs[name]
@@ -34,7 +38,8 @@ class Result:
         """The first ``n`` samples (what a diverging run computed before it stopped)."""
         return Result(self.t[:n], self.q[:n], self.u[:n],
                       {k: v[:n] for k, v in self.outputs.items()},
-                      {k: v[:n] for k, v in self.energy.items()}, dict(self.stats), dict(self.trace), self.plan)
+                      {k: v[:n] for k, v in self.energy.items()}, dict(self.stats), dict(self.trace), self.plan,
+                      {c: {k: v[:n] for k, v in rec.items()} for c, rec in self.contacts.items()})
 
     def total_energy(self) -> np.ndarray:
         return self.energy["kinetic"] + self.energy["potential"]

@@ -269,7 +269,8 @@ class System:
 
     # --- simulation ---------------------------------------------------------------------
     def simulate(self, t_end, dt, integrator="generalized-alpha", t_out=None, outputs=None,
-                 energies=False, q0=None, u0=None, breakpoints=(), plan=True, tolerance=None, **options):
+                 energies=False, q0=None, u0=None, breakpoints=(), plan=True, tolerance=None, contacts=False,
+                 recorder=None, progress=None, **options):
         """Integrate from t = 0 to ``t_end`` [s] with step ``dt`` [s].
 
         ``integrator``: "generalized-alpha" (implicit, default; option ``rho_inf``),
@@ -290,6 +291,11 @@ class System:
         integrator, within ``tolerance`` [m]; a :class:`~mbs.plan.Plan` from
         :meth:`plan` is used as given; ``plan=False`` integrates every body with
         ``integrator`` and updates every contour each step.
+
+        ``contacts``: also record each contact's state at the outputs (``Result.contacts``).
+        ``recorder``: streams the samples to a result file while the run goes and takes
+        checkpoints (:class:`mbs.result_file.ResultRecorder`); ``progress``: a callable
+        (t) called after each output time (e.g. :func:`ffrmbs.progress.progress_bar`).
         """
         from .integrators import integrator_class
 
@@ -306,4 +312,5 @@ class System:
             logging.getLogger("ffrmbs.plan").info("%s", the_plan)
         return integrator_class(integrator)(self, **options).run(
             q0, u0, t_end, dt, t_out, outputs or {}, energies,
-            set(breakpoints).union(*(f.breakpoints() for f in self.forces)), the_plan)
+            set(breakpoints).union(*(f.breakpoints() for f in self.forces)), the_plan,
+            recorder=recorder, progress=progress, contacts=contacts)

@@ -1,15 +1,23 @@
-"""The loop every smooth integrator shares: steps that land on the output times, sampling,
-and a clear stop when the state diverges."""
+"""The loop every integrator shares: steps that land on the output times, sampling, a
+clear stop when the state diverges, and the hooks of a run that lasts — a recorder that
+streams the samples to a result file and takes checkpoints (:mod:`mbs.result_file`,
+:mod:`mbs.checkpoint`), a stop on request (:func:`request_stop`, e.g. from a signal
+handler) and a progress callback.
+
+A run is resumable at every output sample: its whole state — the integrator with its
+System, the sampling plan, the samples so far — is one object graph (the integrator and
+its :class:`RunState`), which :func:`resume` continues bit for bit."""
 
 from __future__ import annotations
 
 import math
 import time
+from dataclasses import dataclass, field
 
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from ffrmbs.errors import ModelError, SimulationError
+from ffrmbs.errors import ModelError, RunInterrupted, SimulationError
 
 from ..body import Frame
 from ..link import body_q
@@ -43,6 +51,47 @@ class StepFailure(Exception):
     it into a SimulationError with the time and step number."""
 
 
+_stop = [None]      # the reason of a requested stop, checked after every accepted step
+
+
+def request_stop(reason: str) -> None:
+    """Ask the running integrator to stop after its current step (safe to call from a
+    signal handler): the run raises :class:`~ffrmbs.errors.RunInterrupted` carrying the
+    results so far."""
+    _stop[0] = reason
+
+
+def clear_stop() -> None:
+    _stop[0] = None
+
+
+@dataclass
+class RunState:
+    """Where a run stands: what it samples and when, and what it has recorded.
+
+    times (n,) [s]: output times; landings: output and break times in order;
+    breaks: times where loads jump; probes: {name: callable (t, q, u)}; result: the
+    preallocated :class:`~mbs.result.Result`, rows [0, recorded) filled; modal: {body:
+    (q (n, nq_b), u (n, nu_b))} of the bodies the plan solves apart; next_landing: index
+    into ``landings`` of the next target; cpu_s: CPU seconds spent before this process
+    (a resumed run adds its own); resumed_at: times [s] where the run was resumed.
+    """
+
+    times: np.ndarray
+    landings: list
+    breaks: list
+    probes: dict
+    result: Result
+    modal: dict
+    energies: bool
+    contacts: bool
+    stepping: bool
+    next_landing: int = 0
+    recorded: int = 0
+    cpu_s: float = 0.0
+    resumed_at: list = field(default_factory=list)
+
+
 class Integrator:
     """Base class: subclasses implement ``start(t, q, u)`` and ``step(h)`` on ``self.t``,
     ``self.q``, ``self.u`` and count Newton iterations in ``self.iterations``; accepted
@@ -56,6 +105,7 @@ class Integrator:
         self.iterations = 0
         self.steps = 0
         self.plan = None        # the scene plan of a planned run (mbs.plan), set by run()
+        self.state = None       # the RunState of the current run
 
     def advance(self, end, dt):
         """Step from ``self.t`` to ``end`` [s] in ceil((end − t)/dt) equal steps."""
@@ -66,10 +116,13 @@ class Integrator:
             self.accepted(gap / k)
 
     def accepted(self, h):
-        """Book an accepted step of size ``h``; a NaN or infinite state stops the run."""
+        """Book an accepted step of size ``h``; a NaN or infinite state stops the run, so
+        does a requested stop (:func:`request_stop`)."""
         self.steps += 1
         if not math.isfinite(self.q.sum() + self.u.sum()):     # a NaN or inf anywhere propagates
             raise SimulationError(self.t, self.steps, "the state became NaN or infinite")
+        if _stop[0] is not None:
+            raise RunInterrupted(self.t, self.steps, _stop[0])
 
     def trace(self) -> dict:
         """Per-step records {name: (steps,) array} when the integrator keeps them, else {}."""
@@ -82,13 +135,21 @@ class Integrator:
         """Counters the integrator keeps over the run (merged into ``Result.stats``)."""
         return {}
 
+    def contact_force(self, contact, out) -> None:
+        """The force on contact's first contour's body (world, (3,) [N]) at the last step
+        into ``out``: a single-valued law's normal force n F_N; set-valued laws are the
+        time-stepping integrators' (they know the impulses)."""
+        k = contact.kinematics
+        out[:] = k.n * contact.force_N if contact.closed and not contact.set_valued else 0.0
+
     def start(self, t, q, u):
         raise NotImplementedError
 
     def step(self, h):
         raise NotImplementedError
 
-    def run(self, q0, u0, t_end, dt, t_out, outputs, energies, breakpoints=(), plan=None):
+    def run(self, q0, u0, t_end, dt, t_out, outputs, energies, breakpoints=(), plan=None,
+            recorder=None, progress=None, contacts=False):
         """Integrate and sample (see ``System.simulate``). At each breakpoint t_b the
         integration ends at t_b − 1e-12 max(1, t_b) s, safely below t_b despite rounding
         (so loads that jump at t_b act with their left limit), and restarts at t_b with
@@ -100,79 +161,148 @@ class Integrator:
 
         With a ``plan`` (:mod:`mbs.plan`), its modal bodies are solved first at the output
         times, left out of the integrated equations (their velocities held at zero) and
-        written into the state at each output."""
-        with threadpool_limits(limits=1, user_api="blas"):
-            try:
-                return self._run(q0, u0, t_end, dt, t_out, outputs, energies, breakpoints, plan)
-            finally:
-                self.system.leave_out()
+        written into the state at each output.
 
-    def _run(self, q0, u0, t_end, dt, t_out, outputs, energies, breakpoints, plan):
+        ``recorder`` (:class:`mbs.result_file.ResultRecorder` or alike): ``begin(self)``,
+        ``sample(self, i)`` after each recorded sample, ``landed(self)`` after each
+        landing (where it may take a checkpoint), ``end(self, status)``. ``progress``: a
+        callable (t) after each landing. ``contacts``: also record each contact's state
+        (``Result.contacts``)."""
+        self.dt = dt
+        self.state = self._prepare(q0, u0, t_end, dt, t_out, outputs, energies, breakpoints, plan, contacts)
+        return self._go(recorder, progress, fresh=True)
+
+    def _prepare(self, q0, u0, t_end, dt, t_out, outputs, energies, breakpoints, plan, contacts):
         sys = self.system
         times = output_times(t_end, dt, t_out)
         breaks = sorted(float(b) for b in breakpoints if 0.0 < b < t_end)
-        landings = sorted(set(times.tolist()) | set(breaks))
-        record_at = {t: i for i, t in enumerate(times)}
-        probes = {name: _probe(sys, spec) for name, spec in outputs.items()}
         n = len(times)
         res = Result(np.full(n, np.nan), np.full((n, sys.nq), np.nan), np.full((n, sys.nu), np.nan))
         res.stats = {"integrator": self.name, "dt": dt, **self.options()}
+        if contacts:
+            res.contacts = {c.name: {"active": np.zeros(n, dtype=np.int8), "gap": np.full(n, np.nan),
+                                     "point": np.full((n, 3), np.nan), "normal": np.full((n, 3), np.nan),
+                                     "force": np.zeros((n, 3))} for c in sys.contacts}
+            if len(res.contacts) < len(sys.contacts):
+                raise ModelError("contacts need distinct names to be recorded")
         q, u = np.array(q0, dtype=float), np.array(u0, dtype=float)
         sys.normalize(q)
-        cpu0, wall0 = time.process_time(), time.perf_counter()
+        cpu0 = time.process_time()
         modal = plan.solve_modal(sys, times, q, u, dt) if plan is not None else {}
         self.plan = plan
         res.plan = "" if plan is None else str(plan)
-        if modal:
-            sys.leave_out(modal, plan.forces)
-            for b in modal:
-                u[b.u_slice] = 0.0
         res.stats["modal_cpu_s"] = time.process_time() - cpu0
-        stepping = len(modal) < len(sys.bodies)
-        self.start(0.0, q, u)
-        recorded = 0
+        state = RunState(times, sorted(set(times.tolist()) | set(breaks)), breaks,
+                         {name: _probe(sys, spec) for name, spec in outputs.items()}, res, modal, energies, contacts,
+                         stepping=len(modal) < len(sys.bodies), cpu_s=time.process_time() - cpu0)
+        for b in modal:
+            u[b.u_slice] = 0.0
+        self.t, self.q, self.u = 0.0, q, u       # started in _go, once the plan's bodies are left out
+        return state
 
-        def record(i):
-            res.t[i], res.q[i], res.u[i] = self.t, self.q, self.u
-            q, u = res.q[i], res.u[i]
-            for b, (qb, ub) in modal.items():
-                q[b.q_slice], u[b.u_slice] = qb[i], ub[i]
-            for name, probe in probes.items():
-                value = np.asarray(probe(self.t, q, u), dtype=float)
-                if name not in res.outputs:
-                    res.outputs[name] = np.full((n,) + value.shape, np.nan)
-                res.outputs[name][i] = value
-            if energies:
-                for key in ("kinetic", "potential"):
-                    res.energy.setdefault(key, np.full(n, np.nan))
-                res.energy["kinetic"][i] = sys.kinetic_energy(self.t, q, u)
-                res.energy["potential"][i] = sys.potential_energy(self.t, q)
+    def _go(self, recorder, progress, fresh):
+        """The sampling loop from ``self.state.next_landing`` on, BLAS single-threaded, the
+        plan's modal bodies left out meanwhile."""
+        with threadpool_limits(limits=1, user_api="blas"):
+            st = self.state
+            self._cpu0 = time.process_time()
+            if st.modal:
+                self.system.leave_out(st.modal, self.plan.forces)
+            try:
+                if fresh:
+                    self.start(self.t, self.q, self.u)
+                if recorder is not None:
+                    recorder.begin(self) if fresh else recorder.resume(self)
+                res = self._loop(recorder, progress)
+            except (SimulationError, RunInterrupted) as err:
+                err.result = self._finish(st.result.truncated(st.recorded))
+                if recorder is not None:
+                    recorder.end(self, "interrupted" if isinstance(err, RunInterrupted) else f"failed: {err}")
+                raise
+            finally:
+                self.system.leave_out()
+            if recorder is not None:
+                recorder.end(self, "complete")
+            return res
 
-        try:
-            for target in landings:
-                is_break = target in breaks
-                end = target - 1e-12 * max(1.0, abs(target)) if is_break else target
-                try:
-                    if stepping:
-                        self.advance(end, dt)
-                except StepFailure as failure:
-                    raise SimulationError(self.t, self.steps + 1, str(failure)) from None
-                except np.linalg.LinAlgError as failure:
-                    raise SimulationError(self.t, self.steps + 1, f"singular system matrix ({failure}); "
-                                          "a rotation singularity or a redundant constraint?") from None
-                if is_break:
-                    self.start(target, self.q, self.u)
-                self.t = target
-                if target in record_at:
-                    record(record_at[target])
-                    recorded += 1
-        except SimulationError as err:
-            err.result = res.truncated(recorded)
-            err.result.stats.update(steps=self.steps, newton_iterations=self.iterations,
-                                    cpu_s=time.process_time() - cpu0, **self.diagnostics())
-            err.result.trace = self.trace()
-            raise
+    def _finish(self, res):
+        st = self.state
         res.stats.update(steps=self.steps, newton_iterations=self.iterations,
-                         cpu_s=time.process_time() - cpu0, wall_s=time.perf_counter() - wall0, **self.diagnostics())
+                         cpu_s=st.cpu_s + time.process_time() - self._cpu0, **self.diagnostics())
+        if st.resumed_at:
+            res.stats["resumed_at"] = list(st.resumed_at)
         res.trace = self.trace()
         return res
+
+    def _loop(self, recorder, progress):
+        st = self.state
+        wall0 = time.perf_counter()
+        record_at = {t: i for i, t in enumerate(st.times)}
+        while st.next_landing < len(st.landings):
+            target = st.landings[st.next_landing]
+            is_break = target in st.breaks
+            end = target - 1e-12 * max(1.0, abs(target)) if is_break else target
+            try:
+                if st.stepping:
+                    self.advance(end, self.dt)
+            except StepFailure as failure:
+                raise SimulationError(self.t, self.steps + 1, str(failure)) from None
+            except np.linalg.LinAlgError as failure:
+                raise SimulationError(self.t, self.steps + 1, f"singular system matrix ({failure}); "
+                                      "a rotation singularity or a redundant constraint?") from None
+            if is_break:
+                self.start(target, self.q, self.u)
+            self.t = target
+            if target in record_at:
+                self._record(record_at[target])
+                st.recorded += 1
+                if recorder is not None:
+                    recorder.sample(self, record_at[target])
+            st.next_landing += 1
+            if recorder is not None:
+                st.cpu_s += time.process_time() - self._cpu0     # booked before a checkpoint is taken
+                self._cpu0 = time.process_time()
+                recorder.landed(self)
+            if progress is not None:
+                progress(target)
+        res = self._finish(st.result)
+        res.stats["wall_s"] = time.perf_counter() - wall0
+        return res
+
+    def _record(self, i):
+        """Sample row ``i`` of the result at the current state."""
+        st, sys = self.state, self.system
+        res, n = st.result, len(st.times)
+        res.t[i], res.q[i], res.u[i] = self.t, self.q, self.u
+        q, u = res.q[i], res.u[i]
+        for b, (qb, ub) in st.modal.items():
+            q[b.q_slice], u[b.u_slice] = qb[i], ub[i]
+        for name, probe in st.probes.items():
+            value = np.asarray(probe(self.t, q, u), dtype=float)
+            if name not in res.outputs:
+                res.outputs[name] = np.full((n,) + value.shape, np.nan)
+            res.outputs[name][i] = value
+        if st.energies:
+            for key in ("kinetic", "potential"):
+                res.energy.setdefault(key, np.full(n, np.nan))
+            res.energy["kinetic"][i] = sys.kinetic_energy(self.t, q, u)
+            res.energy["potential"][i] = sys.potential_energy(self.t, q)
+        if st.contacts:
+            for c in sys.contacts:
+                rec, k = res.contacts[c.name], c.kinematics
+                rec["active"][i] = c.closed
+                if k.active:
+                    rec["gap"][i] = k.g_N
+                    rec["point"][i] = k.point2.r
+                    rec["normal"][i] = k.n
+                self.contact_force(c, rec["force"][i])
+
+
+def resume(integrator, recorder=None, progress=None):
+    """Continue a run restored from a checkpoint (an integrator whose :class:`RunState` was
+    saved at an output sample) to its end; returns the full :class:`~mbs.result.Result`."""
+    st = integrator.state
+    if st is None:
+        raise ModelError("this integrator has no run to resume")
+    st.resumed_at.append(float(integrator.t))
+    return integrator._go(recorder, progress, fresh=False)

@@ -120,6 +120,21 @@ class MoreauTimeStepping(Integrator):
             return {}
         return {key: np.array(values) for key, values in self._trace.items()}
 
+    def contact_force(self, contact, out):
+        """Set-valued: (n Λ_N + T Λ_T) / Δt of the last step (the mean force over it) [N];
+        single-valued: the law's normal force."""
+        lam = self._lam.get(contact) if contact.set_valued and contact.closed else None
+        if lam is None:
+            super().contact_force(contact, out)
+            return
+        k = contact.kinematics
+        out[:] = k.n * lam[0]
+        if lam.size == 3:
+            out += k.T @ lam[1:]
+        elif lam.size == 2:                 # planar friction: the in-plane tangent T[:, 1]
+            out += k.T[:, 1] * lam[1]
+        out /= self._h_last
+
     def _update_contours(self, t, q, u):
         for contour in self.contours:
             _update_contour(contour, t, q, u)
@@ -219,6 +234,7 @@ class MoreauTimeStepping(Integrator):
         self.q = sys.increment(q_m, 0.5 * dt * self.u)
         sys.normalize(self.q)
         self.t += dt
+        self._h_last = dt
 
     def _factor(self, t_m, q_m, M, dt):
         """Cholesky factor of M̂ = M + θΔt D + θΔt² K with the tangents at the midpoint."""
