@@ -5,8 +5,15 @@ Subcommands
 ``preprocess``  mesh -> FE model -> modes -> body files (thesis Sec. 4.2.1 text files and body.h5)
 ``info``        summary of a body (text-file directory or HDF5 file)
 ``validate``    validation cases: error against run time (see ../DESIGN.md)
-``run``         the main job: the point mass dropped on the flexible beam (thesis Sec. 5.2)
+``run``         a scene as a job (result file streamed, checkpoints, ``--resume``, plot,
+                ParaView export): the default point mass on the flexible beam (thesis
+                Sec. 5.2), a TOML scene file or a Python model script
 ``bench``       every benchmark in one process: tables, target verdicts, JSON (validation.bench)
+``plot``        outputs, energy and contacts of a result file against time, as a PNG (ffrmbs.plot)
+``export``      a result file to ParaView: deformed surfaces over time, .pvd + .vtu (ffrmbs.export)
+
+Progress bars (preprocessing stages, export) are drawn on stderr only when it is a
+terminal; ``FFRMBS_PROGRESS=1`` forces them on, ``FFRMBS_PROGRESS=0`` off (ffrmbs.progress).
 
 Errors the user can cause (:class:`ffrmbs.errors.FfrmbsError`) are printed as one
 line ``ffrmbs: error: …`` and exit with status 2, without a traceback.
@@ -19,13 +26,22 @@ import sys
 import time
 
 from ffrmbs import __version__
-from ffrmbs.errors import FfrmbsError
+from ffrmbs.errors import FfrmbsError, RunInterrupted
 
 DEFAULT_MODES = 10  # modes printed by the main job
 
 
+def _say(msg):
+    """One line of a job's report on stdout (kept clear of a progress bar being drawn)."""
+    from ffrmbs.progress import write
+
+    write(msg, sys.stdout)
+
+
 def _log(msg):
-    print(msg, file=sys.stderr, flush=True)
+    from ffrmbs.progress import write
+
+    write(msg, sys.stderr)      # print(..., flush=True), or above a progress bar being drawn
 
 
 def _stage(label, fn, *args, **kwargs):
@@ -41,13 +57,18 @@ def _preprocess(spec, modes, clamp, units, density, young, poisson, order, mesh_
     from preprocess.bodyfiles import write_body
     from preprocess.pipeline import Material, build_body, mesh_source, mesh_statistics
 
-    mesh = _stage(f"meshing {spec}", mesh_source, spec, order, mesh_size)
-    print(mesh_statistics(mesh))
-    params = dict(input=spec, mesh_size=mesh_size)
-    body = build_body(mesh, Material(density, young, poisson), modes, clamp=clamp,
-                      units=units, params=params, log=_log)
-    if out is not None:
-        _stage(f"writing body files to {out}", write_body, out, body)
+    from ffrmbs.progress import stage_bar, write
+
+    with stage_bar(4 if out is not None else 3, "preprocess") as bar:
+        bar.stage("meshing")
+        mesh = _stage(f"meshing {spec}", mesh_source, spec, order, mesh_size)
+        write(mesh_statistics(mesh), sys.stdout)
+        params = dict(input=spec, mesh_size=mesh_size)
+        body = build_body(mesh, Material(density, young, poisson), modes, clamp=clamp,
+                          units=units, params=params, log=_log, progress=bar.stage)
+        if out is not None:
+            bar.stage("writing body files")
+            _stage(f"writing body files to {out}", write_body, out, body)
     print(body.frequency_table())
     return body
 
@@ -64,6 +85,12 @@ def cmd_info(args):
 
 
 def cmd_validate(args):
+    if args.stability:    # the stability suite (validation.stability); a case that did not pass is an error
+        from validation.stability.runner import run_stability
+
+        run_stability(args.out, quick=args.quick, only=args.only or None, progress=_log)
+        print(f"wrote {args.out}/stability.json and {args.out}/report.md")
+        return
     from validation import run_validation
 
     run_validation(args.out, quick=args.quick, only=args.only or None, progress=_log)
@@ -71,13 +98,30 @@ def cmd_validate(args):
 
 
 def cmd_run(args):
-    """Main job: the point mass dropped on the flexible beam (:mod:`ffrmbs.main_job`)."""
+    """A scene as a job (:mod:`ffrmbs.job`): the default scene — the point mass dropped on
+    the flexible beam (:mod:`ffrmbs.main_job`) — or a TOML scene file / Python model
+    script (:mod:`ffrmbs.scene`)."""
+    from ffrmbs.job import run_scene
     from ffrmbs.main_job import JobSettings, run_job
 
-    settings = JobSettings(setup=args.setup, modes=args.modes, law=args.law, e=args.e, contour=args.contour,
-                           t_end=args.t_end, dt=args.dt, check=not args.no_check)
-    run_job(settings, args.out, log=print)
-    print(f"wrote {args.out}/point_mass_beam.h5 and {args.out}/point_mass_beam.png")
+    given = {k: getattr(args, k) for k in DEFAULT_SCENE_OPTIONS if getattr(args, k) is not None}
+    common = dict(resume=args.resume, checkpoint_every=args.checkpoint_every, export=not args.no_export)
+    if args.scene is None:
+        settings = JobSettings(**given, check=not args.no_check)
+        summary = run_job(settings, args.out, log=_say, **common)
+    else:
+        if given:
+            raise FfrmbsError(f"--{', --'.join(k.replace('_', '-') for k in given)}: options of the default "
+                              f"scene; a scene file sets its own")
+        from ffrmbs.scene import load_scene
+
+        load_scene(args.scene)                    # validate the file before anything is written
+        summary = run_scene(lambda: load_scene(args.scene), args.out, check=not args.no_check, log=_say, **common)
+    written = [summary["result_file"]] + [summary[k] for k in ("plot", "paraview") if k in summary]
+    print("wrote " + ", ".join(written))
+
+
+DEFAULT_SCENE_OPTIONS = ("setup", "modes", "law", "e", "contour", "t_end", "dt")
 
 
 def cmd_bench(args):
@@ -91,6 +135,21 @@ def cmd_bench(args):
     failed = [name for name, entry in summary["benches"].items() if entry["status"] == "failed"]
     if failed:
         raise FfrmbsError(f"benchmark(s) failed: {', '.join(failed)} (see {summary['json']})")
+
+
+def cmd_plot(args):
+    """Plot a result file's outputs, energy and contacts against time (:mod:`ffrmbs.plot`)."""
+    from ffrmbs.plot import plot_result
+
+    print(f"wrote {plot_result(args.result, args.names or None, args.out)}")
+
+
+def cmd_export(args):
+    """Export a result file to ParaView (:mod:`ffrmbs.export`)."""
+    from ffrmbs.export import export_paraview
+
+    pvd = export_paraview(args.result, args.out, every=args.every, bodies=args.body, compress=args.compress)
+    print(f"wrote {pvd} (open it in ParaView: File > Open, Apply, then play)")
 
 
 def build_parser():
@@ -124,19 +183,30 @@ def build_parser():
     val.add_argument("--quick", action="store_true", help="coarse sweeps (minutes)")
     val.add_argument("--only", action="append", metavar="NAME", help="run only this case (repeatable)")
     val.add_argument("--out", required=True, help="output directory")
+    val.add_argument("--stability", action="store_true",
+                     help="run the stability suite instead (stiff and extreme cases): stability.json, report.md")
     val.set_defaults(func=cmd_validate)
 
-    run = sub.add_parser("run", help="the main job: a point mass dropped on a flexible beam (thesis Sec. 5.2)")
+    run = sub.add_parser("run", help="run a scene: the default (a point mass dropped on a flexible beam, "
+                                     "thesis Sec. 5.2), a TOML scene file or a Python model script")
+    run.add_argument("scene", nargs="?", help="scene file (.toml) or model script (.py defining scene()); "
+                                              "default: the embedded point-mass-on-beam scene")
     run.add_argument("--out", default="ffrmbs-run", help="output directory (default: ffrmbs-run)")
-    run.add_argument("--setup", choices=("A", "B"), default="A", help="initial position of the point mass")
-    run.add_argument("--modes", type=int, default=20, help="elastic modes of the beam (1..750)")
-    run.add_argument("--law", choices=("impact", "penalty"), default="impact",
-                     help="set-valued Newton impact or linear penalty k = 1e7 N/m")
-    run.add_argument("--e", type=float, default=0.0, help="coefficient of restitution of the impact law")
-    run.add_argument("--contour", choices=("2s", "band"), default="2s", help="top-face contour")
-    run.add_argument("--t-end", type=float, default=0.1, help="simulated time [s]")
-    run.add_argument("--dt", type=float, default=1e-5, help="time step [s]")
+    run.add_argument("--resume", action="store_true",
+                     help="continue a killed or interrupted run from its checkpoint (OUT/<scene>.h5.ckpt)")
+    run.add_argument("--checkpoint-every", type=float, default=60.0, metavar="SECONDS",
+                     help="wall seconds between checkpoints (default 60)")
     run.add_argument("--no-check", action="store_true", help="skip the second run at dt/2 (error estimate)")
+    run.add_argument("--no-export", action="store_true", help="skip the ParaView export")
+    default = run.add_argument_group("default scene")
+    default.add_argument("--setup", choices=("A", "B"), help="initial position of the point mass (default A)")
+    default.add_argument("--modes", type=int, help="elastic modes of the beam (1..750, default 20)")
+    default.add_argument("--law", choices=("impact", "penalty"),
+                         help="set-valued Newton impact (default) or linear penalty k = 1e7 N/m")
+    default.add_argument("--e", type=float, help="coefficient of restitution of the impact law (default 0)")
+    default.add_argument("--contour", choices=("2s", "band"), help="top-face contour (default 2s)")
+    default.add_argument("--t-end", type=float, help="simulated time [s] (default 0.1)")
+    default.add_argument("--dt", type=float, help="time step [s] (default 1e-5)")
     run.set_defaults(func=cmd_run)
 
     bench = sub.add_parser("bench", help="run the benchmarks: tables, target verdicts, JSON")
@@ -145,6 +215,21 @@ def build_parser():
     bench.add_argument("--only", action="append", metavar="NAME[,NAME]",
                        help="run only these benchmarks (comma-separated or repeated)")
     bench.set_defaults(func=cmd_bench)
+
+    plot = sub.add_parser("plot", help="plot a result file's outputs, energy and contacts against time")
+    plot.add_argument("result", help="result file (.h5) of a run")
+    plot.add_argument("names", nargs="*", metavar="NAME",
+                      help="output names, 'energy' or 'contact:NAME' (default: all outputs and energy)")
+    plot.add_argument("--out", help="PNG to write (default: RESULT with .png)")
+    plot.set_defaults(func=cmd_plot)
+
+    export = sub.add_parser("export", help="export a result file to ParaView (.pvd + .vtu per sample)")
+    export.add_argument("result", help="result file (.h5) of a run")
+    export.add_argument("--out", help="output directory (default: RESULT stem + '-paraview' beside it)")
+    export.add_argument("--every", type=int, default=1, metavar="N", help="every N-th sample (default: 1)")
+    export.add_argument("--body", action="append", metavar="NAME", help="only this body (repeatable)")
+    export.add_argument("--compress", action="store_true", help="zlib-compress the .vtu files (smaller, slower)")
+    export.set_defaults(func=cmd_export)
     return p
 
 
@@ -152,6 +237,9 @@ def main(argv=None):
     args = build_parser().parse_args(argv)
     try:
         args.func(args)
+    except RunInterrupted as exc:
+        print(f"ffrmbs: {exc}; the result file is closed, continue with --resume", file=sys.stderr)
+        return 130
     except FfrmbsError as exc:
         print(f"ffrmbs: error: {exc}", file=sys.stderr)
         return 2

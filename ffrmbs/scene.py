@@ -30,7 +30,8 @@ class Scene:
     [J]; plan, tolerance [m]: the scene planner (:mod:`mbs.plan`); name: a short
     identifier, used for the result file's name; inputs: {label: path} of the files the
     scene was built from (the result file records their SHA-256); description: one line
-    for logs.
+    for logs; warmup: (t_end, dt) [s] of a short run made first so that the numba kernels
+    are compiled (or loaded from numba's cache) outside the timed run, or None.
     """
 
     system: object
@@ -46,6 +47,7 @@ class Scene:
     name: str = "scene"
     inputs: dict = field(default_factory=dict)
     description: str = ""
+    warmup: tuple | None = None
 
     def __post_init__(self):
         if not (self.t_end > 0 and self.dt > 0):

@@ -251,9 +251,10 @@ class ResultRecorder:
         self._last_flush = time.perf_counter()
 
 
-def resume_recording(result_path, flush_every=2.0, checkpoint_every=60.0, progress=None):
+def resume_recording(result_path, flush_every=2.0, checkpoint_every=60.0, progress=None, inputs=None):
     """Continue the run whose checkpoint sits beside ``result_path`` to its end; returns
-    the full :class:`~mbs.result.Result` (samples before the checkpoint included)."""
+    the full :class:`~mbs.result.Result` (samples before the checkpoint included).
+    ``inputs`` ({label: path}, the scene's): refuse if one changed since the run started."""
     from .integrators.driver import resume
 
     path = Path(result_path)
@@ -261,6 +262,13 @@ def resume_recording(result_path, flush_every=2.0, checkpoint_every=60.0, progre
     if not ckpt.is_file():
         raise InputFileError(ckpt, None, "no checkpoint to resume from (the run completed, or never "
                                          "reached its first checkpoint)")
+    if inputs:
+        _, attrs = load_result(path)
+        then, now = attrs.get("inputs", {}), input_hashes(inputs)
+        changed = [label for label, entry in now.items() if then.get(label, {}).get("sha256") != entry["sha256"]]
+        if changed:
+            raise InputFileError(path, None, f"cannot resume: input(s) changed since the run started: "
+                                             f"{', '.join(changed)}")
     saved = read_checkpoint(ckpt)
     recorder = ResultRecorder(path, flush_every=flush_every, checkpoint_every=checkpoint_every)
     return resume(saved["integrator"], recorder, progress)

@@ -55,14 +55,16 @@ def mesh_source(spec: str, order=2, mesh_size=None) -> Mesh:
 
 
 def build_body(mesh: Mesh, material: Material, n_modes: int, clamp: str | None = None,
-               units: str = "si", params: dict | None = None, log=None) -> BodyData:
+               units: str = "si", params: dict | None = None, log=None, progress=None) -> BodyData:
     """Assemble K and the lumped masses, compute ``n_modes`` modes, return SI body data.
 
     ``clamp`` names a node group to clamp (thesis Sec. 2.4.4 (a)); None gives
     free-free modes with the rigid-body modes removed (b). ``log(msg)`` receives
-    progress lines with timings.
+    progress lines with timings; ``progress(label)`` is called as each long step begins
+    ("assembling K", "computing modes"), e.g. a stage bar's ``stage`` (ffrmbs.progress).
     """
     log = log or (lambda msg: None)
+    progress = progress or (lambda label: None)
     if n_modes < 1:
         raise ModelError(f"the number of modes must be at least 1, not {n_modes}")
     f = unitsys.unit_system(units)
@@ -70,11 +72,13 @@ def build_body(mesh: Mesh, material: Material, n_modes: int, clamp: str | None =
     mat = material.to_si(units)
     clamped = mesh.group(clamp) if clamp is not None else None
 
+    progress("assembling K")
     t0 = time.perf_counter()
     K = fe.stiffness_matrix(mesh_si, mat.young, mat.poisson)
     masses = fe.lumped_masses(mesh_si, mat.density)
     log(f"assembled K ({K.nnz} nonzeros) and lumped masses in {time.perf_counter() - t0:.2f} s")
 
+    progress("computing modes")
     t0 = time.perf_counter()
     if clamped is not None:
         eig, phi = modes.clamped_modes(K, masses, n_modes, clamped)

@@ -88,9 +88,10 @@ def test_main_job_runs_the_point_mass_on_the_beam(tmp_path):
     for key in ("contact: closed in", "maximum penetration", "energy: initial 0.01 J", "accuracy", "cost:"):
         assert key in text
     with h5py.File(tmp_path / "out" / "point_mass_beam.h5") as f:
-        t, y, vy = f["t"][()], f["y"][()], f["vy"][()]
+        t, y, vy = f["t"][()], f["outputs/y"][()], f["outputs/vy"][()]
         summary = json.loads(f.attrs["summary"])
-        assert f["node19"].shape == (t.size, 3) and f["trace/closed"].size == 10000
+        assert f["outputs/node19"].shape == (t.size, 3) and f["trace/closed"].size == 10000
+        assert f.attrs["status"] == "complete"
     first_close = summary["contact_intervals_s"][0][0]
     assert abs(first_close - 0.010) <= 1e-5
     before = t < 0.0099
@@ -99,10 +100,12 @@ def test_main_job_runs_the_point_mass_on_the_beam(tmp_path):
     assert e["initial"] == pytest.approx(0.5 * 0.5 * 0.2 ** 2) and abs(e["residual"]) < 1e-3 * e["initial"]
     assert e["impulse_work"] < 0 and 0 < summary["max_penetration_m"] <= 0.2 * 1e-5
     assert (tmp_path / "out" / "point_mass_beam.png").stat().st_size > 10_000
+    pvd = tmp_path / "out" / "point_mass_beam-paraview" / "point_mass_beam.pvd"
+    assert pvd.is_file() and pvd.read_text().count("<DataSet") >= 1001
 
 
 def test_contact_intervals_from_a_trace():
-    from ffrmbs.main_job import contact_intervals
+    from ffrmbs.job import contact_intervals
 
     t = np.arange(1, 11) * 0.1
     closed = np.array([0, 1, 1, 0, 0, 1, 0, 0, 1, 1])

@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ffrmbs.main_job import contact_intervals, energy_balance
+from ffrmbs.job import contact_intervals, energy_balance
 from validation import CaseResult, make_row, timed
 from validation.scenes import point_mass_beam as pmb
 

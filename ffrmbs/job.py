@@ -1,0 +1,184 @@
+"""Run a scene as a job (``ffrmbs run``): stream the result file, take checkpoints,
+resume a killed run, estimate the accuracy, report the cost, write the plot and the
+ParaView export.
+
+The job, for a scene (:class:`ffrmbs.scene.Scene`) built fresh by ``make_scene()``:
+
+1. warm-up (the scene's ``warmup`` run, if any): compiles the numba kernels outside the
+   timing; its time is reported apart;
+2. the run, streamed to ``OUT/<scene>.h5`` (:mod:`mbs.result_file`) with a checkpoint
+   every ``checkpoint_every`` seconds of wall time; SIGINT and SIGTERM stop it at its next
+   output sample with a checkpoint and a cleanly closed file (status "interrupted"); a
+   second signal stops it after the current step. ``resume=True`` continues a killed or
+   interrupted run from its checkpoint (refused if an input file changed since); the
+   result equals the uninterrupted run's bit for bit;
+3. the accuracy: the same scene once more at Δt/2 (``check``); max |x(Δt) − x(Δt/2)| over
+   every output estimates the time-discretization error (the error of the Δt/2 run is
+   about half of it for a first-order scheme across impacts);
+4. the summary (in the file's ``summary`` attribute and printed): steps, wall and CPU
+   seconds, µs per step; energy at start and end; for Moreau runs the contact intervals,
+   the largest penetration and the energy balance E(end) − E(0) − W of the impulses
+   (:func:`energy_balance`); the final outputs; the error estimate;
+5. ``OUT/<scene>.png`` (the outputs against time, :mod:`ffrmbs.plot`) and the ParaView
+   series ``OUT/<scene>-paraview/`` (:mod:`ffrmbs.export`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import signal
+import time
+from pathlib import Path
+
+import numpy as np
+
+from mbs.integrators import driver
+from mbs.result_file import ResultRecorder, resume_recording
+
+MOREAU = ("moreau", "moreau-adaptive")
+
+
+def contact_intervals(t, dt, closed):
+    """[(t_close, t_open)] [s] of the runs of steps with a closed contact (trace arrays:
+    step end times, step sizes, closed-contact counts)."""
+    on = np.asarray(closed) > 0
+    edges = np.flatnonzero(np.diff(np.concatenate(([0], on.view(np.int8), [0]))))
+    starts, stops = edges[::2], edges[1::2] - 1
+    return [(float(t[a] - dt[a]), float(t[b])) for a, b in zip(starts, stops)]
+
+
+def energy_balance(system, trace) -> dict:
+    """E(0), E(end) [J], the work of the contact impulses W = Σ Λᵀ(γ⁺ + γ⁻)/2 [J] and the
+    residual E(end) − E(0) − W [J] (the integrator's own energy error) of a Moreau run
+    with ``trace=True`` from the system's initial state."""
+    q0, u0 = system.initial_state()
+    E0 = float(system.kinetic_energy(0.0, q0, u0) + system.potential_energy(0.0, q0))
+    work, E_end = float(trace["impulse_work"].sum()), float(trace["energy"][-1])
+    return {"initial": E0, "final": E_end, "impulse_work": work, "residual": E_end - E0 - work}
+
+
+def _simulate(scene, dt=None, t_end=None, n_out=None, **extra):
+    options = dict(scene.options)
+    if scene.integrator in MOREAU:
+        options.setdefault("trace", True)
+    t_end = scene.t_end if t_end is None else t_end
+    n_out = scene.n_out if n_out is None else n_out
+    return scene.system.simulate(t_end, scene.dt if dt is None else dt, integrator=scene.integrator,
+                                 t_out=np.linspace(0.0, t_end, n_out), outputs=scene.outputs,
+                                 energies=scene.energies, plan=scene.plan, tolerance=scene.tolerance, **options,
+                                 **extra)
+
+
+@contextlib.contextmanager
+def _stop_on_signals(log):
+    """SIGINT/SIGTERM → :func:`mbs.integrators.driver.request_stop` while the run goes."""
+    def handler(signum, frame):
+        name = signal.Signals(signum).name
+        driver.request_stop(f"{name} received")
+        log(f"{name}: stopping at the next output sample (again: after the current step)")
+
+    old = {sig: signal.signal(sig, handler) for sig in (signal.SIGINT, signal.SIGTERM)}
+    driver.clear_stop()
+    try:
+        yield
+    finally:
+        for sig, h in old.items():
+            signal.signal(sig, h)
+        driver.clear_stop()
+
+
+def result_path(scene, out) -> Path:
+    return Path(out) / f"{scene.name}.h5"
+
+
+def run_scene(make_scene, out, check=True, resume=False, checkpoint_every=60.0, flush_every=2.0,
+              export=True, plot=True, log=print) -> dict:
+    """Run the job (module docstring) on ``make_scene()`` (a fresh Scene per call);
+    returns the summary. A diverging run raises SimulationError after closing the file
+    with its samples so far (status "failed: …"); an interrupted one RunInterrupted."""
+    scene = make_scene()
+    path = result_path(scene, out)
+    log(f"scene {scene.name}: {scene.description}" if scene.description else f"scene {scene.name}")
+    recorder = ResultRecorder(path, {"scene": scene.name, "description": scene.description, "inputs": scene.inputs},
+                              flush_every=flush_every, checkpoint_every=checkpoint_every)
+    warm_s = 0.0
+    if scene.warmup is not None:
+        w0 = time.perf_counter()
+        t_w, dt_w = scene.warmup
+        _simulate(make_scene(), dt=dt_w, t_end=t_w, n_out=2)
+        warm_s = time.perf_counter() - w0
+        log(f"kernels compiled or loaded in {warm_s:.2f} s")
+    progress = _progress(scene.t_end)
+    c0, w0 = time.process_time(), time.perf_counter()
+    with _stop_on_signals(log), progress as bar:
+        if resume:
+            log(f"resuming {path} from its checkpoint")
+            res = resume_recording(path, flush_every=flush_every, checkpoint_every=checkpoint_every,
+                                   progress=bar.update_to, inputs=scene.inputs)
+        else:
+            res = _simulate(scene, recorder=recorder, progress=bar.update_to, contacts=True)
+    wall, cpu = time.perf_counter() - w0, time.process_time() - c0
+    summary = _summary(scene, res, wall, cpu, warm_s)
+    if check:
+        half = _simulate(make_scene(), dt=0.5 * scene.dt)
+        summary["error_estimate"] = {name: float(np.nanmax(np.abs(res[name] - half[name]))) for name in res.outputs}
+    recorder.write_summary(summary)
+    _report(summary, log)
+    if plot:
+        from ffrmbs.plot import plot_result
+
+        summary["plot"] = str(plot_result(path))
+    if export:
+        from ffrmbs.export import export_paraview
+
+        summary["paraview"] = str(export_paraview(path))
+    summary["result_file"] = str(path)
+    return summary
+
+
+def _progress(t_end):
+    from ffrmbs.progress import progress_bar
+
+    return progress_bar(t_end, "simulating", unit="s")
+
+
+def _summary(scene, res, wall, cpu, warm_s) -> dict:
+    steps = int(res.stats["steps"])
+    s = {"scene": scene.name, "integrator": scene.integrator, "dt_s": scene.dt, "t_end_s": scene.t_end,
+         "steps": steps, "wall_s": wall, "cpu_s": cpu, "warmup_s": warm_s,
+         "us_per_step": 1e6 * wall / max(steps, 1),
+         "final": {name: np.asarray(v[-1]).tolist() for name, v in res.outputs.items()}}
+    if res.stats.get("resumed_at"):
+        s["resumed_at_s"] = res.stats["resumed_at"]
+        s["note"] = "resumed: wall and CPU seconds are those of the last process only"
+    if res.energy:
+        E = res.total_energy()
+        s["energy_J"] = {"initial": float(E[0]), "final": float(E[-1])}
+    tr = res.trace
+    if scene.integrator in MOREAU and tr:
+        s["contact_intervals_s"] = contact_intervals(tr["t"], tr["dt"], tr["closed"])
+        s["max_penetration_m"] = float(res.stats["max_penetration"])
+        s["energy_J"] = energy_balance(scene.system, tr)      # from the bodies' initial state
+    return s
+
+
+def _report(s, log):
+    if "contact_intervals_s" in s:
+        iv = s["contact_intervals_s"]
+        log(f"contact: closed in {len(iv)} interval(s)"
+            + (": " + ", ".join(f"{1e3 * a:.3f}-{1e3 * b:.3f} ms" for a, b in iv[:5]) + (" ..." if len(iv) > 5 else "")
+               if iv else ""))
+        log(f"maximum penetration: {s['max_penetration_m']:.3g} m")
+    e = s.get("energy_J")
+    if e is not None and "residual" in e:
+        log(f"energy: initial {e['initial']:.6g} J, final {e['final']:.6g} J, impulse work {e['impulse_work']:.6g} J, "
+            f"residual {e['residual']:.3g} J ({e['residual'] / e['initial']:+.2e} of the initial)")
+    elif e is not None:
+        log(f"energy: initial {e['initial']:.6g} J, final {e['final']:.6g} J")
+    for name, value in s["final"].items():
+        log(f"at t = {s['t_end_s']:g} s: {name} = {np.array2string(np.asarray(value), precision=6)}")
+    if "error_estimate" in s:
+        est = ", ".join(f"{name} {err:.2e}" for name, err in s["error_estimate"].items())
+        log(f"accuracy (time step, max |run(dt) - run(dt/2)| per output, SI units): {est}")
+    log(f"cost: {s['steps']} steps in {s['wall_s']:.2f} s wall ({s['cpu_s']:.2f} s CPU), "
+        f"{s['us_per_step']:.0f} µs per step")

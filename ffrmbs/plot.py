@@ -1,0 +1,217 @@
+"""Plots of a result file against time (matplotlib, Agg; no pyplot global state).
+
+:func:`plot_result` draws one subplot per requested name, all sharing the time axis t [s]:
+
+* an output name (``/outputs/<name>``): a scalar output is one line; a vector output
+  (n, 3) one line per component, labelled x, y, z; other shapes one line per component,
+  labelled by index. The y label carries the dataset's ``unit`` attribute when it has one;
+* ``energy``: kinetic, potential and their sum, total [J] (``/energy``);
+* ``contact:<name>``: the normal gap g_N [m] on the left axis and the normal force
+  magnitude |f · n| [N] on a twin right axis (``/contacts/<name>``); the gap is NaN, so
+  not drawn, while no contact point is located.
+
+The title names the scene, the integrator and Δt, and the file's status when the run is
+not complete ("interrupted at t = … s", "running at t = … s", "failed: …").
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+from ffrmbs.errors import FfrmbsError, InputFileError
+from ffrmbs.export import _attr, _check_shape, _dataset, _group, open_result
+
+COMPONENTS = ("x", "y", "z")
+SUBPLOT_HEIGHT = 2.4   # [in] per subplot
+WIDTH = 9.0            # [in]
+DPI = 100
+
+
+def available_names(f) -> list[str]:
+    """The names an open result file can plot: its outputs, ``energy`` when recorded, and
+    ``contact:<name>`` per contact."""
+    names = sorted(f["outputs"].keys()) if "outputs" in f else []
+    if "energy" in f and any(k in f["energy"] for k in ("kinetic", "potential")):
+        names.append("energy")
+    if "contacts" in f:
+        names += [f"contact:{c}" for c in sorted(f["contacts"].keys())]
+    return names
+
+
+def default_names(f) -> list[str]:
+    """What :func:`plot_result` draws without names: every output and the energy; the
+    contacts when the file has neither."""
+    names = [n for n in available_names(f) if not n.startswith("contact:")]
+    return names or available_names(f)
+
+
+def _title(f, path, n) -> str:
+    scene = _attr(f, "scene") or Path(path).stem
+    parts = [str(scene)]
+    integrator = _attr(f, "integrator")
+    dt = _attr(f, "dt")
+    run = ", ".join(x for x in (str(integrator) if integrator else "",
+                                f"Δt = {dt:g} s" if isinstance(dt, (int, float)) else "") if x)
+    if run:
+        parts.append(run)
+    title = " — ".join(parts)
+    status = _attr(f, "status", "") or ""
+    if status != "complete":
+        t_last = float(f["t"][n - 1]) if n else 0.0
+        if status.startswith("failed"):
+            title += f"\n{status} (last sample t = {t_last:.6g} s)"
+        else:
+            title += f"\n{status or 'status unknown'} at t = {t_last:.6g} s"
+    return title
+
+
+def _unit(ds) -> str:
+    unit = _attr(ds, "unit") or _attr(ds, "units")
+    return f" [{unit}]" if unit else ""
+
+
+def _components(name, shape):
+    """Labels of the columns of an output of per-sample shape ``shape``."""
+    if shape == (3,):
+        return [f"{name} {c}" for c in COMPONENTS]
+    if len(shape) == 2 and shape[1] == 3:
+        return [f"{name}[{i}] {c}" for i in range(shape[0]) for c in COMPONENTS]
+    return [f"{name}[{i}]" for i in range(int(np.prod(shape)))]
+
+
+def _plot_output(ax, f, name, t, n):
+    ds = f["outputs"][name]
+    y = np.asarray(ds[:n], dtype=float)
+    if y.shape[0] != n:
+        raise InputFileError(f.filename, None, f"{ds.name} has {y.shape[0]} samples, /t has {n}")
+    if y.ndim == 1:
+        ax.plot(t, y, label=name)
+    else:
+        for label, col in zip(_components(name, y.shape[1:]), y.reshape(n, -1).T):
+            ax.plot(t, col, label=label)
+    ax.set_ylabel(f"{name}{_unit(ds)}")
+    if y.ndim > 1 and y[0].size <= 12:
+        ax.legend(loc="best", fontsize="small")
+
+
+def _plot_energy(ax, f, t, n):
+    e = f["energy"]
+    total = np.zeros(n)
+    for key in ("kinetic", "potential"):
+        if key in e:
+            ds = _dataset(e, key, f.filename)
+            _check_shape(ds, (None,), f.filename)
+            y = np.asarray(ds[:n], dtype=float)
+            ax.plot(t, y, label=key)
+            total = total + y
+    ax.plot(t, total, "k--", label="total")
+    ax.set_ylabel("energy [J]")
+    ax.legend(loc="best", fontsize="small")
+
+
+def _plot_contact(ax, f, name, t, n):
+    c = _group(f["contacts"], name, f.filename)
+    gap = _dataset(c, "gap", f.filename)
+    force = _dataset(c, "force", f.filename)
+    _check_shape(gap, (None,), f.filename)
+    _check_shape(force, (None, 3), f.filename)
+    g = np.asarray(gap[:n], dtype=float)
+    fv = np.asarray(force[:n], dtype=float)
+    if "normal" in c:
+        nv = np.asarray(c["normal"][:n], dtype=float)
+        fn = np.abs(np.einsum("ij,ij->i", fv, nv))
+        fn[np.linalg.norm(fv, axis=1) == 0] = 0.0           # open contact: no force, normal may be NaN
+        force_label = "normal force |f·n| [N]"
+    else:
+        fn = np.linalg.norm(fv, axis=1)
+        force_label = "contact force |f| [N]"
+    ax.plot(t, g, color="C0", label="gap")
+    ax.axhline(0.0, color="0.6", lw=0.8)
+    ax.set_ylabel(f"{name}: gap g_N [m]", color="C0")
+    twin = ax.twinx()
+    twin.plot(t, fn, color="C3", label="normal force")
+    twin.set_ylabel(force_label, color="C3")
+
+
+def result_figure(result_path, names=None):
+    """The matplotlib Figure (Agg canvas attached) of :func:`plot_result`, unsaved."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    path = Path(result_path)
+    with open_result(path) as f:
+        available = available_names(f)
+        if names is None or len(names) == 0:
+            names = default_names(f)
+            if not names:
+                raise InputFileError(path, None, "nothing to plot: no outputs, energy or contacts")
+        else:
+            names = [names] if isinstance(names, str) else list(names)
+            unknown = [nm for nm in names if nm not in available]
+            if unknown:
+                raise InputFileError(path, None, f"no {', '.join(map(repr, unknown))} in the file; "
+                                                 f"available: {', '.join(available) or '(nothing)'}")
+        n = f["t"].shape[0]
+        if n == 0:
+            raise InputFileError(path, None, "no samples written yet")
+        t = np.asarray(f["t"][:n], dtype=float)
+
+        fig = Figure(figsize=(WIDTH, 1.2 + SUBPLOT_HEIGHT * len(names)), dpi=DPI)
+        FigureCanvasAgg(fig)
+        axes = fig.subplots(len(names), 1, sharex=True, squeeze=False)[:, 0]
+        for ax, name in zip(axes, names):
+            if name == "energy":
+                _plot_energy(ax, f, t, n)
+            elif name.startswith("contact:"):
+                _plot_contact(ax, f, name[len("contact:"):], t, n)
+            else:
+                _plot_output(ax, f, name, t, n)
+            ax.grid(True, alpha=0.3)
+        axes[-1].set_xlabel("t [s]")
+        fig.suptitle(_title(f, path, n))
+    fig.tight_layout()
+    return fig
+
+
+def plot_result(result_path, names=None, out=None) -> Path:
+    """Plot outputs, energy and contacts of a result file against time; write a PNG.
+
+    Parameters
+    ----------
+    result_path : str or os.PathLike
+        An ffrmbs result file (layout in :mod:`mbs.result_file`).
+    names : list of str, optional
+        Output names (``/outputs/<name>``), ``energy`` or ``contact:<name>``; one subplot
+        each, in this order. Default: every output plus ``energy`` when recorded (the
+        contacts when the file has neither).
+    out : str or os.PathLike, optional
+        The PNG to write; default ``<result stem>.png`` beside the result file.
+
+    Returns
+    -------
+    Path
+        The PNG written.
+
+    Raises
+    ------
+    InputFileError
+        Not an ffrmbs result file, a missing or malformed dataset, or an unknown name (the
+        message lists the available ones). No PNG is written.
+    """
+    result_path = Path(result_path)
+    out = Path(out) if out is not None else result_path.with_suffix(".png")
+    fig = result_figure(result_path, names)
+    tmp = out.with_name(f".{out.name}.tmp-{os.getpid()}")
+    try:
+        if out.parent and not out.parent.exists():
+            raise FfrmbsError(f"cannot write {out}: no directory {out.parent}")
+        fig.savefig(tmp, format="png")
+        os.replace(tmp, out)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+    return out
+
