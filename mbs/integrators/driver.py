@@ -22,6 +22,7 @@ from ffrmbs.errors import ModelError, RunInterrupted, SimulationError
 from ..body import Frame
 from ..link import body_q
 from ..result import Result
+from ..validity import SpinMonitor
 
 
 def output_times(t_end, dt, t_out):
@@ -51,18 +52,21 @@ class StepFailure(Exception):
     it into a SimulationError with the time and step number."""
 
 
-_stop = [None]      # the reason of a requested stop, checked after every accepted step
+_stop = [None, 0]   # the reason of a requested stop and how many times it was asked
 
 
 def request_stop(reason: str) -> None:
-    """Ask the running integrator to stop after its current step (safe to call from a
-    signal handler): the run raises :class:`~ffrmbs.errors.RunInterrupted` carrying the
-    results so far."""
+    """Ask the running integrator to stop (safe to call from a signal handler). The first
+    request stops the run at its next output sample, where the recorder takes a
+    checkpoint, so a resumed run loses nothing; a second request stops it after the
+    current step. Either way the run raises :class:`~ffrmbs.errors.RunInterrupted`
+    carrying the results so far."""
     _stop[0] = reason
+    _stop[1] += 1
 
 
 def clear_stop() -> None:
-    _stop[0] = None
+    _stop[0], _stop[1] = None, 0
 
 
 @dataclass
@@ -121,7 +125,7 @@ class Integrator:
         self.steps += 1
         if not math.isfinite(self.q.sum() + self.u.sum()):     # a NaN or inf anywhere propagates
             raise SimulationError(self.t, self.steps, "the state became NaN or infinite")
-        if _stop[0] is not None:
+        if _stop[1] > 1:
             raise RunInterrupted(self.t, self.steps, _stop[0])
 
     def trace(self) -> dict:
@@ -198,6 +202,7 @@ class Integrator:
         for b in modal:
             u[b.u_slice] = 0.0
         self.t, self.q, self.u = 0.0, q, u       # started in _go, once the plan's bodies are left out
+        self.monitor = SpinMonitor(sys)          # warns when a body spins too fast for linear FFR
         return state
 
     def _go(self, recorder, progress, fresh):
@@ -231,6 +236,8 @@ class Integrator:
                          cpu_s=st.cpu_s + time.process_time() - self._cpu0, **self.diagnostics())
         if st.resumed_at:
             res.stats["resumed_at"] = list(st.resumed_at)
+        if self.monitor.events:
+            res.stats["validity_warnings"] = list(self.monitor.events)
         res.trace = self.trace()
         return res
 
@@ -265,6 +272,10 @@ class Integrator:
                 recorder.landed(self)
             if progress is not None:
                 progress(target)
+            if _stop[1]:
+                if recorder is not None:
+                    recorder.checkpoint(self)
+                raise RunInterrupted(self.t, self.steps, _stop[0])
         res = self._finish(st.result)
         res.stats["wall_s"] = time.perf_counter() - wall0
         return res
@@ -277,6 +288,7 @@ class Integrator:
         q, u = res.q[i], res.u[i]
         for b, (qb, ub) in st.modal.items():
             q[b.q_slice], u[b.u_slice] = qb[i], ub[i]
+        self.monitor.check(self.t, q, u)
         for name, probe in st.probes.items():
             value = np.asarray(probe(self.t, q, u), dtype=float)
             if name not in res.outputs:
