@@ -192,14 +192,17 @@ def test_moving_load_against_the_oracle(quick_rows, beam_eb):
 def test_sliding_ball_frequency_energy_and_knots(quick_rows):
     """The ball's y oscillation frequency within 1 % of the EB cantilever with the 1 kg
     point mass at the ball's mean x (FE frequency error 0.4 %, the ball's 5 cm travel
-    changes it by ±0.35 % about the mean); total energy conserved to 5 % of the vibration
-    energy at Δt <= 2 ms (exact: constant; Moreau's velocity-level constraint costs O(Δt)),
-    and less at the smaller step; no outlier velocity jump at the knot crossing."""
+    changes it by ±0.35 % about the mean); with θ = 0.5 total energy conserved to 5 % of
+    the vibration energy at Δt <= 2 ms (exact: constant; Moreau's velocity-level
+    constraint costs O(Δt)), and less at the smaller step; θ = 1 (implicit Euler) damps
+    the vibration by design (more than 10 % at Δt = 1 ms, less than all of it); no outlier
+    velocity jump at the knot crossing."""
     freq = _rows(quick_rows, "sliding ball", "ball y frequency")
     assert freq and all(abs(r["error"]) < 0.01 for r in freq), [r["error"] for r in freq]
     energy = {(r["config"]["modes"], r["config"]["theta"], r["config"]["dt"]): r["error"]
               for r in _rows(quick_rows, "sliding ball", "energy drift")}
-    assert all(e < 0.05 for e in energy.values()), energy
+    assert all(e < 0.05 for (_, theta, _), e in energy.items() if theta == 0.5), energy
+    assert 0.1 < energy[20, 1.0, 1e-3] < 1.0, energy
     assert energy[20, 0.5, 1e-3] < 0.6 * energy[20, 0.5, 2e-3], energy
     knots = _rows(quick_rows, "sliding ball", "knot")
     assert knots and all(r["error"] < 1.5 for r in knots), [r["error"] for r in knots]

@@ -1,36 +1,55 @@
-"""Moreau's midpoint time-stepping for set-valued contacts and impacts (thesis eq. 3.1, 4.1).
+"""Moreau's time-stepping for set-valued contacts and impacts (thesis eq. 3.1, 4.1), as the
+θ-method of Moreau–Jean (Acary & Brogliato 2008, Sec. 10.1) on the smooth forces.
 
 One step of size Δt (DESIGN, "the data flow of one Moreau step"):
 
-1. q_m = q_k ⊕ (Δt/2) u_k;
-2. M, h at (t_m, q_m, u_k); single-valued contact forces join h (when M and the
+1. q_θ = q_k ⊕ θΔt u_k (θ = 1/2: the thesis's midpoint q_m);
+2. M, h at (t_k + θΔt, q_θ, u_k); single-valued contact forces join h (when M and the
    tangents are constant — point masses, frame-fixed FFR bodies, no springs — only h,
    and M̂ below is factored once per step size);
-3. the contours of the contacts update at q_m (each once);
-4. contacts located; a unilateral contact is closed where g_N(q_m) <= 0;
+3. the contours of the contacts update at q_θ (each once);
+4. contacts located; a unilateral contact is closed where g_N(q_θ) <= 0;
 5. bilateral joints (velocity level, C_q u⁺ + g_t = 0) and closed contacts form
-   W (nu, m); with M̂ = M + θ Δt D + θ Δt² K (linearly implicit stiffness and damping,
+   W (nu, m); with M̂ = M + θ Δt D + θ² Δt² K (linearly implicit stiffness and damping,
    so stiff modes do not limit Δt) the free velocity is u_free = u_k + M̂⁻¹ h Δt, the
    Delassus matrix G = Wᵀ M̂⁻¹ W, and the impulses Λ solve the laws on velocity level
    (:class:`contact.solver.ProxSolver`, Newton's impact law with γ⁻ = Wᵀ u_k);
 6. u_{k+1} = u_free + M̂⁻¹ W Λ;
-7. q_{k+1} = q_m ⊕ (Δt/2) u_{k+1}, orientations renormalized.
+7. q_{k+1} = q_k ⊕ Δt (θ u_{k+1} + (1 − θ) u_k) = q_θ ⊕ Δt (θ u_{k+1} + (1 − 2θ) u_k),
+   orientations renormalized.
 
-Options: ``theta`` (0.5..1, default 1: the damped implicit Euler on the elastic
-forces, unconditionally stable; 0.5 conserves elastic energy), ``solver`` (a ProxSolver
+Why θ² in M̂: the θ-method evaluates the elastic forces at θ q_{k+1} + (1 − θ) q_k =
+q_θ + θ² Δt (u_{k+1} − u_k) (from step 7), so M (u_{k+1} − u_k) = Δt [h(q_θ) − θ² Δt K
+(u_{k+1} − u_k) − θ D (u_{k+1} − u_k)]. Per elastic mode (s = ωΔt) the step's amplification
+has modulus 1 for θ = 1/2 at every s (the trapezoidal rule: elastic energy conserved,
+no overshoot of a stiff mode started with a velocity) and tends to (θ − 1)/θ for s → ∞
+(θ = 1: implicit Euler, stiff modes damped out). (An earlier M̂ = M + θΔt² K kept the
+midpoint update for every θ: its amplification had determinant 1 for all θ and a stiff
+mode with a velocity overshot its exact amplitude by ~ωΔt — found by the stability
+suite's ``stiff_modes`` case.)
+
+Single-valued (penalty) contact forces stay explicit: a closed one whose stiffness k
+gives ω Δt = Δt √(k w_Nᵀ M̂⁻¹ w_N) > 2 (the leapfrog limit) stops the run with the
+numbers, rather than gaining energy.
+
+Options: ``theta`` (0.5..1; default 0.5: the thesis's midpoint scheme, trapezoidal on
+the elastic forces, conserves elastic energy; 1: implicit Euler, stiff modes damped out,
+but positions advance with u_{k+1} alone: a plastic impact stops a body up to |u| Δt
+short of the surface, from where it falls again in small hops), ``solver`` (a ProxSolver
 or its method name), ``tol``, ``trace`` (True: per-step records in ``Result.trace``:
 t, dt [s], closed contacts, largest penetration [m], solver iterations and residual
 [m/s], the work of the impulses Λᵀ (γ⁺ + γ⁻)/2 [J] (contacts and joints; the energy the
 impact laws take out), total energy [J]), ``penetration_bound`` [m] (default None: no
-bound; a midpoint penetration max(0, −g_N) beyond it stops the run). Non-convergence of
+bound; a penetration max(0, −g_N) at q_θ beyond it, in an accepted step, stops the run). Non-convergence of
 the contact problem stops the run with a SimulationError naming the residual.
 
 :class:`AdaptiveMoreauTimeStepping` ("moreau-adaptive") controls the step size by step
 doubling, like MBSim's ``AutoTimeSteppingSSCIntegrator``: each step of size H is also
 taken as two steps of H/2; the difference of the positions, weighted by
 ``atol + rtol |q|``, estimates the local error of the (accepted) half-step solution.
-Gap control: a set-valued unilateral contact detected only at a midpoint can end a step
-already penetrating, and then both solutions agree; so the growth of the largest
+Gap control: a unilateral contact detected only at a midpoint can end a step already
+penetrating, and then both solutions agree (a penalty contact: both take the same free
+flight into the stiff spring); so the growth of the largest
 penetration max(0, −g_N) at the step's end over its start, divided by ``gap_tol`` [m]
 (default ``atol``), also enters e. A penetration that merely persists (a resting contact
 keeps the depth at which it closed) does not.
@@ -40,7 +59,9 @@ a rejected step is retaken with the smaller H. An impact inside a step separates
 two solutions by about the approach velocity times the mistimed interval, so the step
 shrinks around contact closing and grows again in free flight and steady contact.
 ``dt`` of ``simulate`` is the initial and largest step; ``dt_min`` the smallest (a step
-at dt_min is accepted whatever its error and counted in ``forced_steps``).
+at dt_min is accepted whatever its error and counted in ``forced_steps``). A trial step
+that cannot be taken (a penalty contact too stiff for it) is rejected and retaken at a
+fifth of its size; at dt_min the run stops with the cause.
 """
 
 from __future__ import annotations
@@ -64,7 +85,7 @@ class MoreauTimeStepping(Integrator):
 
     name = "moreau"
 
-    def __init__(self, system, theta=1.0, solver="gauss-seidel", tol=1e-10, max_iter=2000, trace=False,
+    def __init__(self, system, theta=0.5, solver="gauss-seidel", tol=1e-10, max_iter=2000, trace=False,
                  penetration_bound=None):
         super().__init__(system)
         if penetration_bound is not None and not penetration_bound > 0:
@@ -85,6 +106,8 @@ class MoreauTimeStepping(Integrator):
         self.stats = {"closed_contacts": 0, "solver_iterations": 0, "max_penetration": 0.0, "pruned_contacts": 0}
         self._lam = {}
         self._sets = {}
+        self._penalty = [c for c in self.contacts if not c.set_valued and c.unilateral and hasattr(c.law, "derivatives")]
+        self._w_N = np.zeros(system.nu)
         self._constant = system.constant_iteration_matrix   # factor M̂ once per step size
         self._factors = []                  # (step size, Cholesky factor of M̂)
         self._last = [0, 0.0, 0, 0.0, 0.0]  # this step: most closed contacts, penetration, iterations,
@@ -107,6 +130,9 @@ class MoreauTimeStepping(Integrator):
             np.arange(self.system.nu), np.concatenate([np.arange(self.system.nu)[b.u_slice] for b in idle]))
 
     def accepted(self, h):
+        if self.penetration_bound is not None and self._last[1] > self.penetration_bound:
+            raise StepFailure(f"penetration {self._last[1]:.3g} m beyond the bound {self.penetration_bound:.3g} m "
+                              "(a contact tunnelled, or a penalty stiffness is too soft for the load)")
         super().accepted(h)
         if self._trace is not None:
             sys = self.system
@@ -119,6 +145,21 @@ class MoreauTimeStepping(Integrator):
         if self._trace is None:
             return {}
         return {key: np.array(values) for key, values in self._trace.items()}
+
+    def _check_penalty(self, factor, dt):
+        """Stop when a closed single-valued contact is too stiff for its explicit force:
+        ω Δt = Δt √(k w_Nᵀ M̂⁻¹ w_N) > 2, k = −∂F_N/∂g_N at the contact point."""
+        for c in self._penalty:
+            if not (c.closed and c.force_N > 0.0):
+                continue
+            k = c.kinematics
+            stiffness = -float(c.law.derivatives(k.g_N, k.gd_N)[0])
+            w = k.W_N(self._w_N)
+            s2 = stiffness * dt * dt * float(w @ self._solve(factor, w))
+            if s2 > 4.0:
+                raise StepFailure(f"penalty contact {c.name!r} too stiff for the step: ω Δt = {s2 ** 0.5:.3g} > 2 "
+                                  f"(k = {stiffness:.3g} N/m); take Δt < {2.0 * dt / s2 ** 0.5:.3g} s or a "
+                                  "set-valued law")
 
     def contact_force(self, contact, out):
         """Set-valued: (n Λ_N + T Λ_T) / Δt of the last step (the mean force over it) [N];
@@ -165,8 +206,9 @@ class MoreauTimeStepping(Integrator):
 
     def step(self, dt):
         sys = self.system
-        t_m = self.t + 0.5 * dt
-        q_m = sys.increment(self.q, 0.5 * dt * self.u)
+        th = self.theta
+        t_m = self.t + th * dt
+        q_m = sys.increment(self.q, th * dt * self.u)
         sys.normalize(q_m)
         if self._constant:
             h = sys.h(t_m, q_m, self.u)
@@ -182,9 +224,6 @@ class MoreauTimeStepping(Integrator):
                     c.add_forces(h)
                 last[1] = max(last[1], c.penetration)
             self.stats["max_penetration"] = max(self.stats["max_penetration"], last[1])
-            if self.penetration_bound is not None and last[1] > self.penetration_bound:
-                raise StepFailure(f"penetration {last[1]:.3g} m beyond the bound {self.penetration_bound:.3g} m "
-                                  "(a contact tunnelled or a penalty stiffness is too soft for the load)")
         if self._constant:
             for step, factor in self._factors:   # steps landing on output times differ by rounding
                 if abs(step - dt) <= 1e-12 * dt:
@@ -196,8 +235,11 @@ class MoreauTimeStepping(Integrator):
                 self._factors.append((dt, factor))
         else:
             factor = self._factor(t_m, q_m, M, dt)
+        if self._penalty:
+            self._check_penalty(factor, dt)
         u_free = self.u + self._solve(factor, dt * h)
         m = sys.n_c + sum(c.dim for c in closed)
+        u_prev = self.u
         if m == 0:
             self.u = u_free
         else:
@@ -231,16 +273,17 @@ class MoreauTimeStepping(Integrator):
             self.u = u_free + MW @ sol.lam
         self.stats["closed_contacts"] += len(closed)
         last[0] = max(last[0], len(closed))
-        self.q = sys.increment(q_m, 0.5 * dt * self.u)
+        du = th * dt * self.u if th == 0.5 else th * dt * self.u + (1.0 - 2.0 * th) * dt * u_prev
+        self.q = sys.increment(q_m, du)
         sys.normalize(self.q)
         self.t += dt
         self._h_last = dt
 
     def _factor(self, t_m, q_m, M, dt):
-        """Cholesky factor of M̂ = M + θΔt D + θΔt² K with the tangents at the midpoint."""
+        """Cholesky factor of M̂ = M + θΔt D + θ²Δt² K with the tangents at q_θ."""
         K, D = self.system.tangents(t_m, q_m, self.u)  # elastic, damping and link (spring) tangents
         th = self.theta
-        M_hat = M + th * dt * D + th * dt * dt * K
+        M_hat = M + th * dt * D + th * th * dt * dt * K
         if self._act is not None:
             M_hat = M_hat[np.ix_(self._act, self._act)]
         factor, info = dpotrf(M_hat, lower=True, overwrite_a=True)
@@ -310,7 +353,7 @@ class AdaptiveMoreauTimeStepping(MoreauTimeStepping):
             raise ModelError(f"need atol > 0, rtol >= 0, dt_min > 0 and gap_tol > 0, got {atol}, {rtol}, "
                              f"{dt_min}, {gap_tol}")
         self.atol, self.rtol, self.dt_min, self.gap_tol = float(atol), float(rtol), float(dt_min), float(gap_tol)
-        self.unilateral = [c for c in self.contacts if c.set_valued and c.unilateral]
+        self.unilateral = [c for c in self.contacts if c.unilateral]     # set-valued and penalty
         self.h_next = None
         self._pen = 0.0
         self.stats.update(rejected_steps=0, forced_steps=0, smallest_dt=np.inf, largest_dt=0.0)
@@ -324,7 +367,7 @@ class AdaptiveMoreauTimeStepping(MoreauTimeStepping):
         self._pen = self._penetration()
 
     def _penetration(self) -> float:
-        """Largest penetration [m] of the set-valued unilateral contacts at (t, q, u)."""
+        """Largest penetration [m] of the unilateral contacts (set-valued and penalty) at (t, q, u)."""
         if not self.unilateral:
             return 0.0
         self._update_contours(self.t, self.q, self.u)
@@ -353,11 +396,19 @@ class AdaptiveMoreauTimeStepping(MoreauTimeStepping):
             elif h > 0.5 * rest:                      # avoid a sliver before ``end``
                 h = 0.5 * rest
             saved = self._save()
-            self.step(h)
-            q_full = self.q
-            self._restore(saved)
-            self.step(0.5 * h)
-            self.step(0.5 * h)
+            try:
+                self.step(h)
+                q_full = self.q
+                self._restore(saved)
+                self.step(0.5 * h)
+                self.step(0.5 * h)
+            except StepFailure:
+                if h <= self.dt_min * (1 + 1e-12):
+                    raise
+                self._restore(saved)                  # e.g. a penalty contact too stiff for H: retake smaller
+                self.stats["rejected_steps"] += 1
+                h = self.h_next = max(0.2 * h, self.dt_min)
+                continue
             dq = np.abs(self.q - q_full)
             err = float(np.max(dq / (self.atol + self.rtol * np.abs(self.q)))) if dq.size else 0.0
             pen = self._penetration()
