@@ -260,8 +260,8 @@ class ProxSolver:
         phi, b, norm, v_terms = merit(lam)
         for it in range(self.max_iter + 1):
             residual = kern.prox_step(xi, r, cs.kinds, cs.entry_offsets, cs.mu, lam, False)
-            if residual <= kern.threshold(self.tol, c_ref, cs.m, v_terms):
-                return it, residual, True
+            if residual <= kern.threshold(self.tol, c_ref, cs.m, v_terms) and (it > 0 or not phi.any()):
+                return it, residual, True                 # a warm start is refined once unless exact
             if it == self.max_iter:
                 break
             safe = np.where(norm > 0.0, norm, 1.0)

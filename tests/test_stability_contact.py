@@ -2,9 +2,7 @@
 
 Each case measures against its own analytic reference (derivations in the module
 docstring); the tests assert that the row reports the expected outcome and the case's
-quantitative claim. Rows that expose known defects of the integrator or the contact
-solver are strict xfails (an AssertionError is expected; a fix turns them into XPASS,
-which fails, so the marker must then be removed).
+quantitative claim.
 """
 
 import math
@@ -184,9 +182,6 @@ def test_heavy_on_light_stack_stops_gauss_seidel_gracefully():
     assert "not solved" in row.details["cause"] and row.details["step"] == 1
 
 
-@pytest.mark.xfail(strict=True, raises=AssertionError,
-                   reason="known defect: at mass ratio 1e6 the solver's rounding acceptance lets the warm start "
-                          "drift; the 1e-12 m closing tolerance is crossed and the stack chatters")
 def test_heavy_on_light_stack_rests_with_newton():
     row = run("mass_ratio_stack_1e6_newton")
     assert row.passed, row.outcome
