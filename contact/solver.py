@@ -260,7 +260,8 @@ class ProxSolver:
         phi, b, norm, v_terms = merit(lam)
         for it in range(self.max_iter + 1):
             residual = kern.prox_step(xi, r, cs.kinds, cs.entry_offsets, cs.mu, lam, False)
-            if residual <= kern.threshold(self.tol, c_ref, cs.m, v_terms) and (it > 0 or not phi.any()):
+            accepted = residual <= kern.threshold(self.tol, c_ref, cs.m, v_terms)
+            if accepted and (it > 0 or not phi.any()):
                 return it, residual, True                 # a warm start is refined once unless exact
             if it == self.max_iter:
                 break
@@ -283,8 +284,8 @@ class ProxSolver:
                 if 0.5 * phi_t @ phi_t <= psi + ARMIJO_SIGMA * step * slope:
                     break
                 step *= 0.5
-                if step < ARMIJO_MIN_STEP:
-                    return it, residual, False
+                if step < ARMIJO_MIN_STEP:                # no descent left: solved if within the tolerance
+                    return it, residual, accepted
             lam[:] = trial
             phi, b, norm, v_terms = phi_t, b_t, norm_t, v_t
         return self.max_iter, residual, False
