@@ -9,6 +9,7 @@ surface, material and params). :func:`write_body` writes all five atomically.
 from __future__ import annotations
 
 import os
+import shutil
 import uuid
 from pathlib import Path
 
@@ -49,20 +50,43 @@ def write_body(directory, body: BodyData, units: str = "si") -> None:
 
     Atomic per file set: everything is first written to hidden temporary files in
     ``directory`` (created if missing), then each is moved into place with
-    ``os.replace``; on any exception the temporaries are removed and the exception
-    re-raised, so no half-written file is left.
+    ``os.replace``, an existing file being kept aside (a hard link, or a copy) until
+    all five are in place. On any exception the files already moved are put back (or
+    removed if they are new), the temporaries removed and the exception re-raised:
+    the directory holds the old set or the new one, never a mix or a half-written file.
     """
     unit_system(units)
     directory = Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
     token = uuid.uuid4().hex
-    temporaries = {name: directory / f".{name}.{token}.tmp" for name in (*TEXT_FILES, HDF5_FILE)}
+    names = (*TEXT_FILES, HDF5_FILE)
+    temporaries = {name: directory / f".{name}.{token}.tmp" for name in names}
+    backups = {name: directory / f".{name}.{token}.old" for name in names}
+    placed = []
     try:
         write_text_files({name: temporaries[name] for name in TEXT_FILES}, body, units)
         write_hdf5(temporaries[HDF5_FILE], body)
-        for name in list(temporaries):
-            os.replace(temporaries.pop(name), directory / name)
+        for name in names:
+            target = directory / name
+            if target.exists():
+                _keep(target, backups[name])
+            os.replace(temporaries[name], target)
+            placed.append(name)
     except BaseException:
-        for temporary in temporaries.values():
-            temporary.unlink(missing_ok=True)
+        for name in reversed(placed):           # back to the old set
+            if backups[name].exists():
+                os.replace(backups[name], directory / name)
+            else:
+                (directory / name).unlink(missing_ok=True)
         raise
+    finally:
+        for path in (*temporaries.values(), *backups.values()):
+            path.unlink(missing_ok=True)
+
+
+def _keep(target: Path, backup: Path) -> None:
+    """Keep the current ``target`` as ``backup``: a hard link, else a copy."""
+    try:
+        os.link(target, backup)
+    except OSError:
+        shutil.copy2(target, backup)

@@ -187,5 +187,6 @@ def read_hdf5(path) -> BodyData:
     try:
         with h5py.File(path, "r") as f:
             return _read(_Reader(f, path))
-    except (OSError, KeyError, TypeError, ValueError) as exc:
+    except (OSError, KeyError, TypeError, ValueError, RuntimeError) as exc:
+        # h5py raises RuntimeError for some damaged files (e.g. "Link iteration failed")
         raise InputFileError(path, None, f"unreadable HDF5 body file: {exc}") from None
