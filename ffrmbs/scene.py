@@ -81,7 +81,10 @@ def _from_script(path: Path) -> Scene:
     build = namespace.get("scene")
     if not callable(build):
         raise InputFileError(path, None, "a model script must define a function scene() returning an ffrmbs Scene")
-    scene = build()
+    try:
+        scene = build()
+    except ModelError as exc:
+        raise ModelError(f"{path}: scene(): {exc}") from None
     if not isinstance(scene, Scene):
         raise InputFileError(path, None, f"scene() returned {type(scene).__name__}, not an ffrmbs.scene.Scene")
     scene.inputs.setdefault("model script", str(path))
