@@ -115,7 +115,6 @@ def cmd_run(args):
                               f"scene; a scene file sets its own")
         from ffrmbs.scene import load_scene
 
-        load_scene(args.scene)                    # validate the file before anything is written
         summary = run_scene(lambda: load_scene(args.scene), args.out, check=not args.no_check, log=_say, **common)
     written = [summary["result_file"]] + [summary[k] for k in ("plot", "paraview") if k in summary]
     print("wrote " + ", ".join(written))

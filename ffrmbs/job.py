@@ -96,7 +96,7 @@ def run_scene(make_scene, out, check=True, resume=False, checkpoint_every=60.0, 
     """Run the job (module docstring) on ``make_scene()`` (a fresh Scene per call);
     returns the summary. A diverging run raises SimulationError after closing the file
     with its samples so far (status "failed: …"); an interrupted one RunInterrupted."""
-    scene = make_scene()
+    scene = make_scene()                      # a bad scene stops here, before anything is written
     path = result_path(scene, out)
     log(f"scene {scene.name}: {scene.description}" if scene.description else f"scene {scene.name}")
     recorder = ResultRecorder(path, {"scene": scene.name, "description": scene.description, "inputs": scene.inputs},
@@ -113,8 +113,7 @@ def run_scene(make_scene, out, check=True, resume=False, checkpoint_every=60.0, 
     with _stop_on_signals(log), progress as bar:
         if resume:
             log(f"resuming {path} from its checkpoint")
-            res = resume_recording(path, flush_every=flush_every, checkpoint_every=checkpoint_every,
-                                   progress=bar.update_to, inputs=scene.inputs)
+            res = resume_recording(recorder, progress=bar.update_to, inputs=scene.inputs)
         else:
             res = _simulate(scene, recorder=recorder, progress=bar.update_to, contacts=True)
     wall, cpu = time.perf_counter() - w0, time.process_time() - c0

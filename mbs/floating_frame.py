@@ -165,8 +165,8 @@ class FloatingFrameBody(Body):
         return self._frame(q, None, t)[1]
 
     def modal_coordinates(self, q) -> np.ndarray:
-        """q_f (n_f,) [-]: the modal part of the body's coordinates ``q``."""
-        return q[self._f]
+        """q_f (..., n_f) [-]: the modal part of the body's coordinates ``q`` (..., nq_b)."""
+        return q[..., self._f]
 
     def angular_velocity(self, q, u, t=0.0):
         """Inertial angular velocity ω = A ω̄ [rad/s]."""

@@ -162,9 +162,6 @@ class ResultRecorder:
         f.attrs["resumed_at"] = np.asarray(integ.state.resumed_at, dtype=float)
         self._clocks()
 
-    def sample(self, integ, i):
-        pass                      # samples are taken from the run's Result rows when flushed
-
     def landed(self, integ):
         now = time.perf_counter()
         if self.checkpoint_every is not None and now - self._last_checkpoint >= self.checkpoint_every:
@@ -238,7 +235,7 @@ class ResultRecorder:
             _append(f, f"{g}/R", R)
             _append(f, f"{g}/A", A)
             if getattr(body, "n_modes", 0):
-                _append(f, f"{g}/q_f", np.array([body.modal_coordinates(qi) for qi in q]))
+                _append(f, f"{g}/q_f", body.modal_coordinates(q))
         for key, values in res.energy.items():
             _append(f, f"energy/{key}", values[a:b])
         for name, values in res.outputs.items():
@@ -251,14 +248,14 @@ class ResultRecorder:
         self._last_flush = time.perf_counter()
 
 
-def resume_recording(result_path, flush_every=2.0, checkpoint_every=60.0, progress=None, inputs=None):
-    """Continue the run whose checkpoint sits beside ``result_path`` to its end; returns
-    the full :class:`~mbs.result.Result` (samples before the checkpoint included).
-    ``inputs`` ({label: path}, the scene's): refuse if one changed since the run started."""
+def resume_recording(recorder, progress=None, inputs=None):
+    """Continue the run whose checkpoint sits beside ``recorder.path`` to its end,
+    recording with ``recorder``; returns the full :class:`~mbs.result.Result` (samples
+    before the checkpoint included). ``inputs`` ({label: path}, the scene's): refuse if
+    one changed since the run started."""
     from .integrators.driver import resume
 
-    path = Path(result_path)
-    ckpt = path.with_name(path.name + ".ckpt")
+    path, ckpt = recorder.path, recorder.checkpoint_path
     if not ckpt.is_file():
         raise InputFileError(ckpt, None, "no checkpoint to resume from (the run completed, or never "
                                          "reached its first checkpoint)")
@@ -269,9 +266,7 @@ def resume_recording(result_path, flush_every=2.0, checkpoint_every=60.0, progre
         if changed:
             raise InputFileError(path, None, f"cannot resume: input(s) changed since the run started: "
                                              f"{', '.join(changed)}")
-    saved = read_checkpoint(ckpt)
-    recorder = ResultRecorder(path, flush_every=flush_every, checkpoint_every=checkpoint_every)
-    return resume(saved["integrator"], recorder, progress)
+    return resume(read_checkpoint(ckpt)["integrator"], recorder, progress)
 
 
 def _append(f, name, rows):

@@ -167,9 +167,10 @@ class Integrator:
         times, left out of the integrated equations (their velocities held at zero) and
         written into the state at each output.
 
-        ``recorder`` (:class:`mbs.result_file.ResultRecorder` or alike): ``begin(self)``,
-        ``sample(self, i)`` after each recorded sample, ``landed(self)`` after each
-        landing (where it may take a checkpoint), ``end(self, status)``. ``progress``: a
+        ``recorder`` (:class:`mbs.result_file.ResultRecorder` or alike): ``begin(self)``
+        (``resume(self)`` for a restored run), ``landed(self)`` after each landing (it
+        reads the new rows of ``self.state.result`` and may take a checkpoint),
+        ``checkpoint(self)``, ``end(self, status)``. ``progress``: a
         callable (t) after each landing. ``contacts``: also record each contact's state
         (``Result.contacts``)."""
         self.dt = dt
@@ -263,8 +264,6 @@ class Integrator:
             if target in record_at:
                 self._record(record_at[target])
                 st.recorded += 1
-                if recorder is not None:
-                    recorder.sample(self, record_at[target])
             st.next_landing += 1
             if recorder is not None:
                 st.cpu_s += time.process_time() - self._cpu0     # booked before a checkpoint is taken
