@@ -377,6 +377,13 @@ class _Reader:
     def fail(self, keypath, fault):
         raise InputFileError(self.path, self.index.find(keypath), fault)
 
+    def run(self, keypath, label, make):
+        """``make()``, with a ModelError of the API reported at ``keypath`` after ``label``."""
+        try:
+            return make()
+        except ModelError as exc:
+            self.fail(keypath, f"{label}: {exc}")
+
 
 class _Table:
     """One table of the scene file with its key path and label ("body 'beam'").
@@ -474,30 +481,34 @@ class _Table:
             self.fail(key, f"{key!r} must hold numbers >= {low:g}{_unit(unit)}, got {value!r}")
         return array
 
-    def matrix3(self, key, default=_REQUIRED, unit="") -> np.ndarray | None:
-        """A 3 x 3 matrix given as a list of three rows of three numbers."""
+    def rows(self, key, n_rows, what, default=_REQUIRED) -> np.ndarray | None:
+        """An (n_rows, 3) array given as a list of rows of three finite numbers (any
+        number of rows >= 1 if n_rows is None). ``what`` describes it in a fault."""
         given, value = self._raw(key, default)
         if not given:
             return value
-        if not (isinstance(value, list) and len(value) == 3 and all(
+        if not (isinstance(value, list) and value and (n_rows is None or len(value) == n_rows) and all(
                 isinstance(row, list) and len(row) == 3 and all(_is_number(v) for v in row) for row in value)):
-            self.fail(key, f"{key!r} must be a 3 x 3 matrix{_unit(unit)} (three rows of three numbers), "
-                           f"got {_describe(value)}")
+            self.fail(key, f"{key!r} must be {what}, got {_describe(value)}")
         array = np.array(value, dtype=float)
         if not np.isfinite(array).all():
             self.fail(key, f"{key!r} must hold finite numbers")
         return array
 
-    def indices(self, key, n_nodes, default=_REQUIRED, what="node") -> np.ndarray:
-        """A non-empty list of 0-based indices < n_nodes."""
+    def matrix3(self, key, default=_REQUIRED, unit="") -> np.ndarray | None:
+        """A 3 x 3 matrix given as a list of three rows of three numbers."""
+        return self.rows(key, 3, f"a 3 x 3 matrix{_unit(unit)} (three rows of three numbers)", default)
+
+    def indices(self, key, n_nodes, default=_REQUIRED) -> np.ndarray:
+        """A non-empty list of 0-based node indices < n_nodes."""
         given, value = self._raw(key, default)
         if not given:
             return value
         if not (isinstance(value, list) and value and all(_is_int(v) for v in value)):
-            self.fail(key, f"{key!r} must be a non-empty array of 0-based {what} indices, got {_describe(value)}")
+            self.fail(key, f"{key!r} must be a non-empty array of 0-based node indices, got {_describe(value)}")
         bad = [v for v in value if not 0 <= v < n_nodes]
         if bad:
-            self.fail(key, f"{key!r}: {what} {bad[0]} outside 0..{n_nodes - 1}")
+            self.fail(key, f"{key!r}: node {bad[0]} outside 0..{n_nodes - 1}")
         return np.array(value, dtype=np.int64)
 
     def table(self, key, label, allowed, default=_REQUIRED):
@@ -508,10 +519,7 @@ class _Table:
 
     def model(self, key, make):
         """``make()``, with a ModelError of the API reported at ``key``."""
-        try:
-            return make()
-        except ModelError as exc:
-            self.fail(key, str(exc))
+        return self.r.run(self.keypath + (key,), self.label, make)
 
 
 # --- validated entries -----------------------------------------------------------------------
@@ -525,7 +533,6 @@ class _Body:
     keypath: tuple
     make: object
     data: object = None         # BodyData of a flexible body
-    n_modes: int = 0
 
 
 @dataclass(eq=False)
@@ -547,19 +554,19 @@ class _FrameRef:
         from mbs import PointMass, ground_frame
         from mbs.body import Frame
 
+        point = np.zeros(3) if self.point is None else self.point
         if self.body == GROUND:
-            return ground_frame(np.zeros(3) if self.point is None else self.point, orientation, name or GROUND)
+            return ground_frame(point, orientation, name or GROUND)
         body = env.bodies[self.body]
         if self.node is not None:
             return body.node(self.node, orientation)
         if isinstance(body, PointMass):
             if self.point is None and orientation is None:
                 return body.point
-            return Frame(body, np.zeros(3) if self.point is None else self.point, orientation=orientation,
-                         name=name or body.name)
+            return Frame(body, point, orientation=orientation, name=name or body.name)
         if self.point is None and orientation is None:
             return body.origin
-        return body.frame_at(np.zeros(3) if self.point is None else self.point, orientation, name)
+        return body.frame_at(point, orientation, name)
 
 
 @dataclass
@@ -594,7 +601,7 @@ class _SceneReader:
     def __init__(self, path: Path, text: str, doc: dict):
         self.path, self.doc = path, doc
         self.r = _Reader(path, text)
-        self.root = _Table(self.r, doc, (), "scene file", TOP_LEVEL)
+        _Table(self.r, doc, (), "scene file", TOP_LEVEL)          # rejects unknown top-level keys
         self.bodies: dict[str, _Body] = {}
         self.steps: list = []               # (keypath, label, build(env)) after the bodies
         self.outputs: dict = {}             # name -> (keypath, label, make(env))
@@ -739,7 +746,7 @@ class _SceneReader:
                 body.set_initial(R=R, A=A, v=v, omega=w)
             return body.set_initial(q_f=q_f, qdot_f=qd_f)
 
-        return _Body(name, "flexible", keypath, make, body_data, n_modes)
+        return _Body(name, "flexible", keypath, make, body_data)
 
     def _modal(self, t: _Table, key, n_modes, unit, low=None):
         array = t.numbers(key, None, None, unit=unit, low=low)
@@ -785,10 +792,8 @@ class _SceneReader:
         return self._sources[key]
 
     def _builtin(self, t: _Table, name, which):
-        import hashlib
-
         from validation.scenes import point_mass_beam, sliding_ball
-        from validation.scenes.cache import cache_dir
+        from validation.scenes.cache import cached_body_path
 
         builtins = {"point_mass_beam": point_mass_beam, "sliding_ball": sliding_ball}
         if which not in builtins:
@@ -798,10 +803,7 @@ class _SceneReader:
         key = (BUILTIN + which, "si")
         if key not in self._sources:
             self._sources[key] = module.default_beam_data()
-        # the cache entry's file, as validation.scenes.cache.cached_body names it
-        recipe = module._recipe()
-        digest = hashlib.sha256(json.dumps(recipe, sort_keys=True).encode()).hexdigest()[:12]
-        h5 = cache_dir() / f"{recipe['scene']}-{digest}" / "body.h5"
+        h5 = cached_body_path(module.recipe())
         if h5.exists():
             self.inputs[f"body {name!r}"] = str(h5)
         return self._sources[key]
@@ -862,9 +864,9 @@ class _SceneReader:
                         f"{' or '.join(k for k in kinds if k != GROUND)}")
         return name
 
-    def frame(self, t: _Table, default_body=_REQUIRED, kinds=None) -> _FrameRef:
+    def frame(self, t: _Table, default_body=_REQUIRED) -> _FrameRef:
         """The frame named by the keys body, node, at, point of ``t``."""
-        name = self.body_of(t, "body", kinds, default_body)
+        name = self.body_of(t, default=default_body)
         given = [k for k in ("node", "at", "point") if t.has(k)]
         if len(given) > 1:
             t.fail(given[1], f"give one of 'node', 'at' or 'point', not {' and '.join(map(repr, given))}")
@@ -933,30 +935,20 @@ class _SceneReader:
         """A constant (3,) or a :class:`mbs.Tabulated` of 3-vectors."""
         from mbs import Tabulated
 
-        value = t.data.get(key)
-        if not isinstance(value, dict):
-            if key not in t.data:
-                t.fail(None, f"missing required key {key!r}")
+        if not isinstance(t.data.get(key), dict):
             return t.numbers(key, 3, unit=unit)
         table = t.table(key, f"{key!r} table", ("times", "values", "kind", "hold_first"))
         times = table.numbers("times", unit="s")
-        values = table.data.get("values")
-        if not (isinstance(values, list) and values and all(
-                isinstance(row, list) and len(row) == 3 and all(_is_number(v) for v in row) for row in values)):
-            if "values" not in table.data:
-                table.fail(None, "missing required key 'values'")
-            table.fail("values", f"'values' must be an array of [x, y, z] rows{_unit(unit)}, got {_describe(values)}")
+        values = table.rows("values", None, f"an array of [x, y, z] rows{_unit(unit)}")
         if len(values) != times.size:
             table.fail("values", f"{len(values)} rows of 'values' for {times.size} 'times'")
-        values = np.array(values, dtype=float)
-        if not np.isfinite(values).all():
-            table.fail("values", "'values' must hold finite numbers")
         kind = table.choice("kind", Tabulated.KINDS, "step")
         hold = table.boolean("hold_first", False)
         return table.model("times", lambda: Tabulated(times, values, kind, hold))
 
     def read_loads(self):
         from mbs import read_force_file
+        from preprocess.modes import clamped_dofs
 
         for i, data in self._entries("load", "load"):
             keypath, label = ("load", i), f"load #{i + 1}"
@@ -1009,7 +1001,7 @@ class _SceneReader:
                 if t.has("blocked"):
                     nodes = self._nodes(t, "blocked", name)
                     nodes = body_data.node_groups[nodes] if isinstance(nodes, str) else nodes
-                    blocked = (3 * np.asarray(nodes, dtype=np.int64)[:, None] + np.arange(3)).ravel()
+                    blocked = clamped_dofs(3 * body_data.n_nodes, nodes)
                 try:
                     times, forces = read_force_file(path, body_data.n_nodes, blocked)
                 except InputFileError as exc:
@@ -1049,16 +1041,15 @@ class _SceneReader:
             keypath = ("contact", i)
             given = data.get("name")
             label = f"contact {given!r}" if isinstance(given, str) else f"contact #{i + 1}"
-            head = _Table(self.r, data, keypath, label, tuple(data))
-            name = head.string("name", f"contact {i + 1}")
+            t = _Table(self.r, data, keypath, label, tuple(data))      # the keys are checked once the law is known
+            name = t.string("name", f"contact {i + 1}")
             if name in names:
-                head.fail("name", f"a second contact named {name!r} (contact names must be unique)")
+                t.fail("name", f"a second contact named {name!r} (contact names must be unique)")
             names.add(name)
-            law = head.choice("law", LAWS)
+            law = t.choice("law", LAWS)
             law_keys = {"impact": ("e",), "coulomb": ("e", "mu", "e_T"), "penalty": ("k", "d", "mu", "v_eps"),
                         "bilateral": ()}[law]
             common = ("name", "contour1", "contour2", "law") + (("margin",) if law != "bilateral" else ())
-            t = head
             t.allow(common + law_keys, f" for law {law!r}")
             c1 = self._contour(t, "contour1", CONTOUR1_KINDS)
             c2 = self._contour(t, "contour2", CONTOUR2_KINDS)
@@ -1125,9 +1116,7 @@ class _SceneReader:
     def _contour(self, t: _Table, key, kinds):
         """(kind, make(env) -> Contour) of the contour table ``key``."""
         raw = t.data.get(key)
-        if key not in t.data:
-            t.fail(None, f"missing required key {key!r}")
-        head = t.table(key, f"{key!r}", tuple(raw) if isinstance(raw, dict) else ())
+        head = t.table(key, f"{key!r}", tuple(raw) if isinstance(raw, dict) else ())     # no key check yet
         kind = head.choice("kind", kinds)
         label = f"{key} ({kind})"
         if kind == "point":
@@ -1217,13 +1206,8 @@ class _SceneReader:
                     return FlexibleCylinder(curve, radius)
                 return curve
 
-        return kind, self._reported(t.keypath + (key,), f"{t.label}: {label}", make)
-
-    def _reported(self, keypath, label, make):
-        """``make`` with a ModelError of the API reported at ``keypath`` with ``label``."""
-        def reported(env):
-            return self._run(keypath, label, lambda: make(env))
-        return reported
+        keypath, label = t.keypath + (key,), f"{t.label}: {label}"        # a ModelError is reported there
+        return kind, lambda env: self.r.run(keypath, label, lambda: make(env))
 
     def _pair(self, c: _Table, key, default, kind):
         """One value or a pair [η, ξ] of integers (>= 1) or booleans."""
@@ -1308,23 +1292,16 @@ class _SceneReader:
 
         env = _Env(System(gravity=settings["gravity"]))
         for body in self.bodies.values():
-            env.bodies[body.name] = self._run(body.keypath, f"body {body.name!r}",
-                                              lambda body=body: env.system.add(body.make()))
+            env.bodies[body.name] = self.r.run(body.keypath, f"body {body.name!r}",
+                                               lambda body=body: env.system.add(body.make()))
         for keypath, label, build in self.steps:
-            self._run(keypath, label, lambda: build(env))
-        outputs = {name: self._run(keypath, label, lambda make=make: make(env))
+            self.r.run(keypath, label, lambda: build(env))
+        outputs = {name: self.r.run(keypath, label, lambda make=make: make(env))
                    for name, (keypath, label, make) in self.outputs.items()}
-        return self._run(("scene",), "[scene]", lambda: Scene(
+        return self.r.run(("scene",), "[scene]", lambda: Scene(
             env.system, settings["t_end"], settings["dt"], settings["integrator"], settings["options"],
             settings["n_out"], outputs, settings["energies"], settings["plan"], settings["tolerance"],
             settings["name"], dict(self.inputs), settings["description"]))
-
-    def _run(self, keypath, label, make):
-        """``make()``, with a ModelError of the API reported at the entry."""
-        try:
-            return make()
-        except ModelError as exc:
-            self.r.fail(keypath, f"{label}: {exc}")
 
 
 # --- reading -------------------------------------------------------------------------------------------

@@ -35,6 +35,8 @@ from preprocess import Material, bodyfiles, build_body, read_body, write_body
 from preprocess.bodyfiles import HDF5_FILE, TEXT_FILES
 from preprocess.geometry import box
 
+from scene_files import BODIES
+
 FUZZ = settings(deadline=None, derandomize=True, database=None,
                 suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
 
@@ -289,33 +291,7 @@ gravity = [0.0, -9.81, 0.0]
 theta = 0.5
 trace = false
 
-[[body]]
-name = "beam"
-kind = "flexible"
-source = "body/body.h5"
-modes = 3
-frame = "fixed"
-position = [0.0, 0.0, 0.0]
-q_f = [0.0, 0.0, 0.0]
-modal_velocities = [0.0, 0.0, 0.0]
-rayleigh = [0.0, 1e-4]
-
-[[body]]
-name = "block"
-kind = "rigid"
-mass = 1.0
-inertia = [0.01, 0.01, 0.01]
-position = [0.1, 0.2, 0.0]
-velocity = [0.0, 0.0, 0.0]
-angular_velocity = [0.0, 0.0, 0.0]
-
-[[body]]
-name = "bob"
-kind = "point_mass"
-mass = 0.5
-position = [0.1, 0.06, 0.025]
-velocity = [0.0, -0.1, 0.0]
-
+""" + BODIES + """
 [[spring]]
 frame1 = { body = "ground", point = [0.0, 0.3, 0.0] }
 frame2 = { body = "block" }

@@ -22,6 +22,8 @@ from mbs import (DistributedForce, FlexibleBodyFFR, Force, Joint, NodalForces, P
 from preprocess import Material, build_body, read_body, write_body
 from preprocess.geometry import box
 
+from scene_files import BODIES
+
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "scenes"
 
 
@@ -295,26 +297,7 @@ CONTACTS = """\
 t_end = 0.01
 dt = 1e-4
 
-[[body]]
-name = "beam"
-kind = "flexible"
-source = "body/body.h5"
-modes = 3
-frame = "fixed"
-
-[[body]]
-name = "block"
-kind = "rigid"
-mass = 1.0
-inertia = [[0.01, 0.0, 0.0], [0.0, 0.01, 0.0], [0.0, 0.0, 0.01]]
-position = [0.1, 0.2, 0.025]
-
-[[body]]
-name = "bob"
-kind = "point_mass"
-mass = 0.1
-position = [0.1, 0.06, 0.025]
-
+""" + BODIES + """
 [[contact]]
 name = "top"
 contour1 = { kind = "point", body = "bob" }

@@ -19,15 +19,21 @@ def cache_dir() -> Path:
     return Path(os.environ.get("FFRMBS_CACHE") or Path.home() / ".cache" / "ffrmbs")
 
 
+def cached_body_path(recipe: dict) -> Path:
+    """The ``body.h5`` file of the cache entry of ``recipe`` (a JSON-able dict with a
+    ``"scene"`` name), whether it exists yet or not."""
+    key = hashlib.sha256(json.dumps(recipe, sort_keys=True).encode()).hexdigest()[:12]
+    return cache_dir() / f"{recipe['scene']}-{key}" / "body.h5"
+
+
 def cached_body(recipe: dict, build, log=None):
     """The body data for ``recipe`` (a JSON-able dict with a ``"scene"`` name): read from
     the cache, or made by ``build()`` (returning BodyData), written and read back."""
     from preprocess import read_body, write_body
 
-    key = hashlib.sha256(json.dumps(recipe, sort_keys=True).encode()).hexdigest()[:12]
-    path = cache_dir() / f"{recipe['scene']}-{key}"
-    if not (path / "body.h5").exists():
+    h5 = cached_body_path(recipe)
+    if not h5.exists():
         if log:
-            log(f"preprocessing the {recipe['scene']} body (once; cached in {path})")
-        write_body(path, build())
-    return read_body(path / "body.h5")
+            log(f"preprocessing the {recipe['scene']} body (once; cached in {h5.parent})")
+        write_body(h5.parent, build())
+    return read_body(h5)

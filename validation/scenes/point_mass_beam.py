@@ -42,7 +42,8 @@ NODE_19 = (0.25, 0.05, 0.025)                     # the thesis's output node [m]
 PENALTY_K = 1e7                                   # [N/m], the thesis's soft contact
 
 
-def _recipe(divisions=DIVISIONS, modes="all") -> dict:
+def recipe(divisions=DIVISIONS, modes="all") -> dict:
+    """The cache key of :func:`default_beam_data` (:func:`validation.scenes.cache.cached_body`)."""
     return {"scene": "point_mass_beam", "size": [LENGTH, HEIGHT, WIDTH], "divisions": list(divisions),
             "material": [DENSITY, YOUNG, POISSON], "clamp": "x0", "modes": modes, "version": 1}
 
@@ -57,7 +58,7 @@ def default_beam_data(log=None, divisions=DIVISIONS, modes="all"):
     6000 free DOFs) or the number of lowest clamped modes, found by the sparse
     shift-invert solver (:func:`preprocess.build_body`) — the way for large meshes.
     """
-    recipe = _recipe(tuple(divisions), modes)
+    params = recipe(tuple(divisions), modes)
 
     def build():
         from preprocess import Material, build_body
@@ -67,13 +68,13 @@ def default_beam_data(log=None, divisions=DIVISIONS, modes="all"):
         mesh = box(LENGTH, HEIGHT, WIDTH, None, order=1, divisions=tuple(divisions))
         material = Material(DENSITY, YOUNG, POISSON)
         if modes != "all":
-            return build_body(mesh, material, n_modes=int(modes), clamp="x0", params=recipe)
-        data = build_body(mesh, material, n_modes=1, clamp="x0", params=recipe)
+            return build_body(mesh, material, n_modes=int(modes), clamp="x0", params=params)
+        data = build_body(mesh, material, n_modes=1, clamp="x0", params=params)
         data.eigenvalues, data.phi = all_modes(data.stiffness, data.masses, data.node_groups["x0"])
         data.params["n_modes"] = data.phi.shape[1]
         return data
 
-    return cached_body(recipe, build, log)
+    return cached_body(params, build, log)
 
 
 @dataclass

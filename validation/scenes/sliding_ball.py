@@ -67,7 +67,8 @@ T_END = 5.0                                       # [s]
 DEGREE = 3
 
 
-def _recipe() -> dict:
+def recipe() -> dict:
+    """The cache key of :func:`default_beam_data` (:func:`validation.scenes.cache.cached_body`)."""
     return {"scene": "sliding_ball", "size": [LENGTH, HEIGHT, WIDTH], "divisions": list(DIVISIONS),
             "order": ORDER, "material": [DENSITY, YOUNG, POISSON], "clamp": "x0",
             "modes": STORED_MODES, "version": 1}
@@ -82,9 +83,9 @@ def default_beam_data(log=None):
 
         mesh = box(LENGTH, HEIGHT, WIDTH, None, order=ORDER, divisions=DIVISIONS)
         return build_body(mesh, Material(DENSITY, YOUNG, POISSON), n_modes=STORED_MODES, clamp="x0",
-                          params=_recipe())
+                          params=recipe())
 
-    return cached_body(_recipe(), build, log)
+    return cached_body(recipe(), build, log)
 
 
 def axis_nodes(data) -> np.ndarray:
