@@ -112,24 +112,23 @@ def open_result(path):
         f.close()
 
 
+def _child(group, name, path, cls, kind):
+    """``group[name]`` as an h5py ``cls`` (Dataset or Group), or InputFileError naming it."""
+    obj = group.get(name)
+    if not isinstance(obj, cls):
+        where = f"{group.name.rstrip('/')}/{name}"
+        raise InputFileError(path, None, f"missing {kind} {where}" if obj is None else f"{where} is not a {kind}")
+    return obj
+
+
 def _dataset(group, name, path):
     """``group[name]`` as an h5py Dataset, or InputFileError naming the missing one."""
-    obj = group.get(name)
-    if not isinstance(obj, h5py.Dataset):
-        where = f"{group.name.rstrip('/')}/{name}"
-        raise InputFileError(path, None, f"missing dataset {where}" if obj is None
-                             else f"{where} is not a dataset")
-    return obj
+    return _child(group, name, path, h5py.Dataset, "dataset")
 
 
 def _group(group, name, path):
     """``group[name]`` as an h5py Group, or InputFileError naming the missing one."""
-    obj = group.get(name)
-    if not isinstance(obj, h5py.Group):
-        where = f"{group.name.rstrip('/')}/{name}"
-        raise InputFileError(path, None, f"missing group {where}" if obj is None
-                             else f"{where} is not a group")
-    return obj
+    return _child(group, name, path, h5py.Group, "group")
 
 
 def _check_shape(ds, shape, path):
@@ -247,14 +246,20 @@ def export_paraview(result_path, out_dir=None, every=1, bodies=None, compress=Fa
         try:
             idx = np.arange(0, plan["n"], every)
             n_files = len(idx) * len(plan["series"])
+            width = max(6, len(str(plan["n"] - 1)))
             entries = []
             with progress_bar(n_files, "export", unit="file") as bar:
                 for part, series in enumerate(plan["series"]):
-                    files = series["write"](f, tmp, series, idx, plan["t"], bar, compress)
-                    rel = [Path(series["name"]) / p.name for p in files]
-                    own = [(plan["t"][k], p.name, 0, series["label"]) for k, p in zip(idx, files)]
-                    write_pvd(tmp / series["name"] / f"{series['name']}.pvd", own, series.get("comment"))
-                    entries += [(plan["t"][k], r, part, series["label"]) for k, r in zip(idx, rel)]
+                    name, label, t = series["name"], series["label"], plan["t"]
+                    (tmp / name).mkdir()
+                    own = []
+                    for k, points, cells, point_data in series["samples"](series, idx):
+                        file = f"{name}_{k:0{width}d}.vtu"
+                        _write_vtu(tmp / name / file, points, cells, point_data, compress)
+                        own.append((t[k], file, 0, label))
+                        entries.append((t[k], Path(name) / file, part, label))
+                        bar.update()
+                    write_pvd(tmp / name / f"{name}.pvd", own, series.get("comment"))
             entries.sort(key=lambda e: (e[0], e[2]))
             main = tmp / f"{result_path.stem}.pvd"
             write_pvd(main, entries, f"ffrmbs export of {result_path.name}: "
@@ -299,7 +304,8 @@ def _replace_dir(tmp: Path, out_dir: Path):
 
 
 def _plan(f, path, bodies):
-    """Check the file and list the series to write: dicts with name, label, write, ..."""
+    """Check the file and list the series to write: dicts with name, label, samples (a
+    generator of (k, points, cells, point_data) per sample k), ..."""
     t_ds = f["t"]
     lengths = [t_ds.shape[0]]
     bodies_group = _group(f, "bodies", path)
@@ -337,7 +343,7 @@ def _plan(f, path, bodies):
             if tri_a.size and (tri_a.min() < 0 or tri_a.max() >= m):
                 raise InputFileError(path, None, f"{tri.name} refers to rows outside 0..{m - 1} of the surface nodes")
             nodes = np.asarray(s["nodes"][...], dtype=np.int64) if "nodes" in s else np.arange(m)
-            entry.update(write=_write_surface, u0=np.asarray(u0[...], dtype=float),
+            entry.update(samples=_surface_samples, u0=np.asarray(u0[...], dtype=float),
                          phi=np.asarray(phi[...], dtype=float), triangles=tri_a, nodes=nodes)
         else:
             kind = _attr(g, "kind", "")
@@ -345,8 +351,8 @@ def _plan(f, path, bodies):
             velocity = kind in POINT_BODY_VELOCITY and isinstance(u, h5py.Dataset) \
                 and u.ndim == 2 and u.shape[1] >= 3
             if velocity:
-                lengths.append(g["u"].shape[0])
-            entry.update(write=_write_point_body, velocity=velocity)
+                lengths.append(u.shape[0])
+            entry.update(samples=_point_body_samples, velocity=velocity)
         series.append(entry)
     contacts = None
     if "contacts" in f:
@@ -378,7 +384,7 @@ def _plan(f, path, bodies):
                            gap=np.asarray(ds["gap"][:n], dtype=float),
                            active=np.asarray(ds["active"][:n], dtype=np.int8))
         if data:
-            series.append(dict(name="contacts", label="contacts", write=_write_contacts, contacts=data,
+            series.append(dict(name="contacts", label="contacts", samples=_contact_samples, contacts=data,
                                comment="contact index: " + ", ".join(f"{i} = {c}" for i, c in enumerate(names))))
     if not series:
         raise InputFileError(path, None, "nothing to export: no bodies and no located contacts")
@@ -397,19 +403,12 @@ def _blocks(idx, per_sample):
         yield slice(int(block[0]), int(block[-1]) + 1, step), block
 
 
-def _vtu_name(series, k, width):
-    return f"{series['name']}_{k:0{width}d}.vtu"
-
-
-def _write_surface(f, tmp, series, idx, t, bar, compress):
-    """The deformed surface x = R + A (ū0 + Φ q_f) per sample (thesis eq. 2.24), by block."""
+def _surface_samples(series, idx):
+    """The deformed surface x = R + A (ū0 + Φ q_f) per sample (thesis eq. 2.24), read and
+    computed by block; yields (k, points, cells, point_data) per sample k of ``idx``."""
     g = series["group"]
     u0, phi, tri, nodes = series["u0"], series["phi"], series["triangles"], series["nodes"]
     n_f = phi.shape[2]
-    d = tmp / series["name"]
-    d.mkdir()
-    width = max(6, len(str(len(t) - 1)))
-    files = []
     cells = [("triangle", tri.astype(np.int32) if len(u0) < 2**31 else tri)]
     for sl, block in _blocks(idx, 4 * 3 * len(u0)):
         R = np.asarray(g["R"][sl], dtype=float)                            # (s, 3)
@@ -419,35 +418,22 @@ def _write_surface(f, tmp, series, idx, t, bar, compress):
         x = R[:, None, :] + np.einsum("sij,mj->smi", A, u0) + elastic       # (s, m, 3) [m]
         magnitude = np.linalg.norm(elastic, axis=2)
         for j, k in enumerate(block):
-            path = d / _vtu_name(series, k, width)
-            _write_vtu(path, x[j], cells, {"displacement": x[j] - u0, "elastic_displacement": elastic[j],
-                                           "elastic_displacement_magnitude": magnitude[j], "node": nodes},
-                       compress)
-            files.append(path)
-            bar.update()
-    return files
+            yield k, x[j], cells, {"displacement": x[j] - u0, "elastic_displacement": elastic[j],
+                                   "elastic_displacement_magnitude": magnitude[j], "node": nodes}
 
 
-def _write_point_body(f, tmp, series, idx, t, bar, compress):
+def _point_body_samples(series, idx):
     """One vertex at the frame origin R [m] per sample (velocity Ṙ [m/s] when known)."""
     g = series["group"]
-    d = tmp / series["name"]
-    d.mkdir()
-    width = max(6, len(str(len(t) - 1)))
-    files = []
     cells = [("vertex", np.zeros((1, 1), dtype=np.int64))]
     for sl, block in _blocks(idx, 6):
         R = np.asarray(g["R"][sl], dtype=float)
         v = np.asarray(g["u"][sl, :3], dtype=float) if series["velocity"] else None
         for j, k in enumerate(block):
-            path = d / _vtu_name(series, k, width)
-            _write_vtu(path, R[j:j + 1], cells, {} if v is None else {"velocity": v[j:j + 1]}, compress)
-            files.append(path)
-            bar.update()
-    return files
+            yield k, R[j:j + 1], cells, {} if v is None else {"velocity": v[j:j + 1]}
 
 
-def _write_contacts(f, tmp, series, idx, t, bar, compress):
+def _contact_samples(series, idx):
     """One vertex per located contact at its contact point [m], with force [N], gap [m],
     normal, active, located and the contact index as point data."""
     data = series["contacts"]
@@ -455,16 +441,8 @@ def _write_contacts(f, tmp, series, idx, t, bar, compress):
     stacked = {k: np.stack([data[i][k][idx] for i in data], axis=1)   # (samples, contacts, ...)
                for k in ("point", "force", "gap", "normal", "active", "located")}
     pts = stacked.pop("point")
-    d = tmp / series["name"]
-    d.mkdir()
-    width = max(6, len(str(len(t) - 1)))
     cells = [("vertex", np.arange(len(ids), dtype=np.int64)[:, None])]
-    files = []
     for j, k in enumerate(idx):
-        path = d / _vtu_name(series, k, width)
         point_data = {key: np.ascontiguousarray(v[j]) for key, v in stacked.items()}
         point_data["contact"] = ids
-        _write_vtu(path, pts[j], cells, point_data, compress)
-        files.append(path)
-        bar.update()
-    return files
+        yield k, pts[j], cells, point_data

@@ -25,6 +25,7 @@ from scipy.special import ellipk
 
 from ffrmbs.errors import SimulationError
 from mbs import FlexibleBodyFFR, PrescribedFrameMotion, RigidBody, System
+from mbs.rotations import rotvec_from_matrix
 from mbs.validity import SPIN_RATIO, FFRValidityWarning, SpinMonitor
 from preprocess import Material, box, build_body
 from validation.stability.core import StabilityRow, Stopwatch, graceful_row, stability_case
@@ -41,14 +42,7 @@ def _verdict(failures: list[str]) -> tuple[bool, str]:
 
 def _rotation_angle(A, B) -> float:
     """The angle [rad] of the rotation Aᵀ B (0 when A = B)."""
-    c = 0.5 * (np.trace(A.T @ B) - 1.0)
-    s = 0.5 * np.linalg.norm(_vee(A.T @ B - B.T @ A))
-    return float(math.atan2(s, c))
-
-
-def _vee(S) -> np.ndarray:
-    """The axial vector of the skew part of a 3x3 matrix S, vee((S − Sᵀ)/2) (ω of ω̃)."""
-    return 0.5 * np.array([S[2, 1] - S[1, 2], S[0, 2] - S[2, 0], S[1, 0] - S[0, 1]])
+    return float(np.linalg.norm(rotvec_from_matrix(A.T @ B)))
 
 
 def node_mass_inertia(data):

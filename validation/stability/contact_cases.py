@@ -167,8 +167,6 @@ relative, no drift (1e-9 m), penetration not growing.
 
 from __future__ import annotations
 
-import dataclasses
-import functools
 import math
 
 import numpy as np
@@ -183,33 +181,6 @@ from mbs import Joint, PointMass, RigidBody, System, ground_frame
 from .core import StabilityRow, Stopwatch, graceful_row, stability_case
 
 G = 9.81                     # [m/s²]
-
-
-def _plain(obj):
-    """``obj`` with numpy scalars and arrays turned into Python numbers and lists (rows go
-    to JSON)."""
-    if isinstance(obj, dict):
-        return {k: _plain(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_plain(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return _plain(obj.tolist())
-    if isinstance(obj, np.generic):
-        return obj.item()
-    return obj
-
-
-def _case(name, title):
-    """:func:`stability_case` for this module: the row's fields as plain Python values."""
-    def register(fn):
-        @functools.wraps(fn)
-        def run(quick):
-            row = fn(quick)
-            for f in dataclasses.fields(row):
-                setattr(row, f.name, _plain(getattr(row, f.name)))
-            return row
-        return stability_case(name, title)(run)
-    return register
 
 
 def _outcome(failures):
@@ -413,23 +384,23 @@ def _penalty_unstable(name, k, dt, quick):
 def _register_penalty():
     dt_coarse = 1e-4
     for k, label in ((1e5, "1e5"), (1e7, "1e7")):
-        _case(f"penalty_k{label}", f"penalty contact k = {label} N/m, Δt = 1e-4 s (ω Δt < 1): stable")(
+        stability_case(f"penalty_k{label}", f"penalty contact k = {label} N/m, Δt = 1e-4 s (ω Δt < 1): stable")(
             lambda quick, k=k, label=label: _penalty_stable(f"penalty_k{label}", k, dt_coarse, "moreau", quick))
     for k, label in ((1e9, "1e9"), (1e12, "1e12")):
-        _case(f"penalty_k{label}",
-              f"penalty contact k = {label} N/m, Δt = 1e-4 s (ω Δt > 2): graceful stop expected")(
+        stability_case(f"penalty_k{label}",
+                       f"penalty contact k = {label} N/m, Δt = 1e-4 s (ω Δt > 2): graceful stop expected")(
             lambda quick, k=k, label=label: _penalty_unstable(f"penalty_k{label}", k, dt_coarse, quick))
-        _case(f"penalty_k{label}_dt_omega",
-              f"penalty contact k = {label} N/m, Δt = 0.2 sqrt(m/k): stable")(
+        stability_case(f"penalty_k{label}_dt_omega",
+                       f"penalty contact k = {label} N/m, Δt = 0.2 sqrt(m/k): stable")(
             lambda quick, k=k, label=label: _penalty_stable(f"penalty_k{label}_dt_omega", k,
                                                             0.2 / penalty_reference(k)["omega"], "moreau", quick))
     atol = 1e-3 * penalty_reference(1e12)["delta"]
-    _case("penalty_k1e12_adaptive",
-          "penalty contact k = 1e12 N/m, moreau-adaptive (largest step 1e-4 s, atol 1e-3 δ)")(
+    stability_case("penalty_k1e12_adaptive",
+                   "penalty contact k = 1e12 N/m, moreau-adaptive (largest step 1e-4 s, atol 1e-3 δ)")(
         lambda quick: _penalty_stable("penalty_k1e12_adaptive", 1e12, dt_coarse, "moreau-adaptive", quick,
                                       bound=False, atol=atol, rtol=0.0))
-    _case("penalty_k1e12_adaptive_bound",
-          "penalty contact k = 1e12 N/m, moreau-adaptive with penetration_bound = 2 δ")(
+    stability_case("penalty_k1e12_adaptive_bound",
+                   "penalty contact k = 1e12 N/m, moreau-adaptive with penetration_bound = 2 δ")(
         lambda quick: _penalty_stable("penalty_k1e12_adaptive_bound", 1e12, dt_coarse, "moreau-adaptive", quick,
                                       bound=True, atol=atol, rtol=0.0))
 
@@ -465,7 +436,7 @@ def _grazing_run(delta, dt, phase, n):
     return _run(system, 2 * n * dt, dt, integrator="moreau", trace=True, t_out=[2 * n * dt])
 
 
-@_case("grazing", "grazing contact: a ball skimming the top of a fixed sphere (g_N = ġ_N = 0), ± offsets")
+@stability_case("grazing", "grazing contact: a ball skimming the top of a fixed sphere (g_N = ġ_N = 0), ± offsets")
 def grazing(quick: bool) -> StabilityRow:
     dt = 1e-4 if quick else 2e-5
     n = int(round(0.03 / (GR_V * dt)))     # start 0.03 m before the top: outside the contact region of every δ
@@ -540,7 +511,7 @@ def _edge_scene(dim, x, z0, v, e, gravity):
     return system, plate, p
 
 
-@_case("contour_edge", "a point mass hitting an open NURBS contour just inside / outside its end; "
+@stability_case("contour_edge", "a point mass hitting an open NURBS contour just inside / outside its end; "
                                 "sliding off the edge")
 def contour_edge(quick: bool) -> StabilityRow:
     dt = 1e-4 if quick else 1e-5
@@ -631,7 +602,7 @@ def _unwrap(eta, period=1.0):
     return np.concatenate(([eta[0]], eta[0] + np.cumsum(d - jumps * period))), int(np.abs(jumps).sum())
 
 
-@_case("closed_seam_cylinder", "a point mass circling inside a closed 2s NURBS cylinder across its seam")
+@stability_case("closed_seam_cylinder", "a point mass circling inside a closed 2s NURBS cylinder across its seam")
 def closed_seam_cylinder(quick: bool) -> StabilityRow:
     dt, T = (2e-4, 0.7) if quick else (1e-4, 1.0)
     R, v = CY_R, CY_V
@@ -717,7 +688,7 @@ def _closest_eta(curve, x_local, n=4001):
     return (0.5 * (a + b)) % 1.0
 
 
-@_case("closed_seam_ring", "a point mass resting on a spinning closed 1s NURBS ring: the contact "
+@stability_case("closed_seam_ring", "a point mass resting on a spinning closed 1s NURBS ring: the contact "
                                     "point crosses the seam")
 def closed_seam_ring(quick: bool) -> StabilityRow:
     dt, T = (1e-3, 0.5) if quick else (2e-4, 1.0)
@@ -856,17 +827,17 @@ def _redundant_rest(name, npts, solver, quick):
                  "energy_error_vs_rest": E_err})
 
 
-@_case("redundant_contacts_4", "rigid box on 4 corner contacts (rank-deficient Delassus), Gauss–Seidel")
+@stability_case("redundant_contacts_4", "rigid box on 4 corner contacts (rank-deficient Delassus), Gauss–Seidel")
 def redundant_contacts_4(quick: bool) -> StabilityRow:
     return _redundant_rest("redundant_contacts_4", 4, "gauss-seidel", quick)
 
 
-@_case("redundant_contacts_8_newton", "rigid box on 8 contacts (rank 3 of 8), semismooth Newton")
+@stability_case("redundant_contacts_8_newton", "rigid box on 8 contacts (rank 3 of 8), semismooth Newton")
 def redundant_contacts_8_newton(quick: bool) -> StabilityRow:
     return _redundant_rest("redundant_contacts_8_newton", 8, "newton", quick)
 
 
-@_case("redundant_contacts_friction", "rigid box sliding to rest on 4 Coulomb corner contacts")
+@stability_case("redundant_contacts_friction", "rigid box sliding to rest on 4 Coulomb corner contacts")
 def redundant_contacts_friction(quick: bool) -> StabilityRow:
     dt = 1e-3 if quick else 2e-4
     mu, V = 0.4, np.array([1.0, 0.3])
@@ -978,12 +949,12 @@ def _zeno(name, integrator, dt, quick, **options):
                  "energy_error_vs_rest": E_err, "steps": res.stats["steps"]})
 
 
-@_case("zeno", "Zeno bouncing ball, e = 0.5, fixed step")
+@stability_case("zeno", "Zeno bouncing ball, e = 0.5, fixed step")
 def zeno(quick: bool) -> StabilityRow:
     return _zeno("zeno", "moreau", 1e-3 if quick else 1e-4, quick)
 
 
-@_case("zeno_adaptive", "Zeno bouncing ball, e = 0.5, moreau-adaptive")
+@stability_case("zeno_adaptive", "Zeno bouncing ball, e = 0.5, moreau-adaptive")
 def zeno_adaptive(quick: bool) -> StabilityRow:
     return _zeno("zeno_adaptive", "moreau-adaptive", 1e-2, quick, atol=1e-6 if quick else 1e-8, rtol=0.0)
 
@@ -1039,12 +1010,12 @@ def _collision(name, m2, quick):
                  "energy_loss_error": dT_err, "iterations": int(res.trace["iterations"].max())})
 
 
-@_case("mass_ratio_1e-6", "1D impact of a 1 kg ball on a 1e-6 kg ball")
+@stability_case("mass_ratio_1e-6", "1D impact of a 1 kg ball on a 1e-6 kg ball")
 def mass_ratio_small(quick: bool) -> StabilityRow:
     return _collision("mass_ratio_1e-6", 1e-6, quick)
 
 
-@_case("mass_ratio_1e6", "1D impact of a 1 kg ball on a 1e6 kg ball")
+@stability_case("mass_ratio_1e6", "1D impact of a 1 kg ball on a 1e6 kg ball")
 def mass_ratio_large(quick: bool) -> StabilityRow:
     return _collision("mass_ratio_1e6", 1e6, quick)
 
@@ -1094,8 +1065,11 @@ def _stack(name, m_bottom, m_top, solver, expect_stop, quick):
     if failures and solver == "newton":
         outcome += (" — the solver's acceptance threshold includes the rounding bound 8 ε (m + 1) Σ|G_ij Λ_j| "
                     "(contact/solver.py), ~1e-11 m/s here because the impulses on the light body cancel at "
-                    "~m_top g Δt; the warm start from the previous step is accepted with 0 iterations, the "
-                    "relative velocity of the contacts drifts by that much per step, the gap reaches the "
+                    "~m_top g Δt. ProxSolver._newton does not take the previous step's Λ as it is when it lies "
+                    "within that threshold: it refines it by one Newton step unless its Fischer–Burmeister "
+                    "residual is exactly zero, and keeps it unrefined (0 iterations) only when that step's line "
+                    "search finds no descent. A warm start kept unrefined step after step lets the relative "
+                    "velocity of the contacts drift by up to the threshold per step; the gap then reaches the "
                     "closing tolerance 1e-12 m (contact/contact.py) within tens of steps, the contact opens "
                     "for a step, the top ball falls g Δt² and is caught by a double impulse: chatter with "
                     "penetration growing by g Δt² per opening")
@@ -1107,16 +1081,16 @@ def _stack(name, m_bottom, m_top, solver, expect_stop, quick):
                  "max_penetration_m": float(pen.max()), "max_iterations": int(res.trace["iterations"].max())})
 
 
-@_case("mass_ratio_stack_1e-6", "a 1e-6 kg ball resting on a 1 kg ball on the plane (Gauss–Seidel)")
+@stability_case("mass_ratio_stack_1e-6", "a 1e-6 kg ball resting on a 1 kg ball on the plane (Gauss–Seidel)")
 def mass_ratio_stack_light_on_heavy(quick: bool) -> StabilityRow:
     return _stack("mass_ratio_stack_1e-6", 1.0, 1e-6, "gauss-seidel", False, quick)
 
 
-@_case("mass_ratio_stack_1e6_gs", "a 1e6 kg ball on a 1 kg ball (Gauss–Seidel): graceful stop expected")
+@stability_case("mass_ratio_stack_1e6_gs", "a 1e6 kg ball on a 1 kg ball (Gauss–Seidel): graceful stop expected")
 def mass_ratio_stack_heavy_on_light_gs(quick: bool) -> StabilityRow:
     return _stack("mass_ratio_stack_1e6_gs", 1.0, 1e6, "gauss-seidel", True, quick)
 
 
-@_case("mass_ratio_stack_1e6_newton", "a 1e6 kg ball on a 1 kg ball (semismooth Newton): rest expected")
+@stability_case("mass_ratio_stack_1e6_newton", "a 1e6 kg ball on a 1 kg ball (semismooth Newton): rest expected")
 def mass_ratio_stack_heavy_on_light_newton(quick: bool) -> StabilityRow:
     return _stack("mass_ratio_stack_1e6_newton", 1.0, 1e6, "newton", False, quick)

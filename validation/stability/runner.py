@@ -15,13 +15,12 @@ import datetime
 import json
 import math
 import os
-import tempfile
 import time
 import traceback
 
-import numpy as np
-
 from ffrmbs.errors import FfrmbsError, SimulationError
+from validation.bench.common import machine
+from validation.harness import _cell, _json_safe, _write_atomic
 from validation.stability.core import CASES, StabilityCase, StabilityRow, graceful_row
 
 COLUMNS = ("case", "finished", "stable", "energy drift", "max penetration [m]", "error (reference)", "run time [s]",
@@ -83,11 +82,11 @@ def run_stability(out_dir, quick=False, only=None, progress=print, cases=None) -
     os.makedirs(out_dir, exist_ok=True)
     doc = {"suite": "stability", "quick": bool(quick), "only": list(only) if only else None,
            "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
-           "machine": _machine(), "rows": [_jsonable(r.as_dict()) for r in rows]}
+           "machine": machine(), "rows": [_json_safe(r.as_dict()) for r in rows]}
     json_path = os.path.join(out_dir, "stability.json")
-    _write_atomic(json_path, json.dumps(doc, indent=1, allow_nan=False) + "\n")
+    _write_text(json_path, json.dumps(doc, indent=1, allow_nan=False) + "\n")
     table = markdown_table(rows)
-    _write_atomic(os.path.join(out_dir, "report.md"), report_markdown(rows, quick, doc["machine"]))
+    _write_text(os.path.join(out_dir, "report.md"), report_markdown(rows, quick, doc["machine"]))
     progress(table)
     failed = [r.case for r in rows if not r.passed]
     if failed:
@@ -115,16 +114,6 @@ def report_markdown(rows, quick, machine) -> str:
     return head + markdown_table(rows) + "\n\n## Notes\n\n" + notes + "\n"
 
 
-def _machine() -> dict:
-    try:
-        from validation.bench.common import machine
-        return machine()
-    except Exception as exc:            # a machine description must not cost the report
-        import platform
-        return {"platform": platform.platform(), "python": platform.python_version(), "cpu_count": os.cpu_count(),
-                "machine_error": f"{type(exc).__name__}: {exc}"}
-
-
 def _yes(flag) -> str:
     return "yes" if flag else "no"
 
@@ -135,36 +124,6 @@ def _num(x) -> str:
     return f"{x:.3g}"
 
 
-def _cell(text) -> str:
-    return str(text).replace("|", "\\|").replace("\n", " ")
-
-
-def _jsonable(x):
-    """Plain JSON values: numpy scalars and arrays converted, non-finite floats to None."""
-    if isinstance(x, dict):
-        return {str(k): _jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_jsonable(v) for v in x]
-    if isinstance(x, np.ndarray):
-        return _jsonable(x.tolist())
-    if isinstance(x, np.generic):
-        x = x.item()
-    if isinstance(x, float):
-        return x if math.isfinite(x) else None
-    if x is None or isinstance(x, (bool, int, str)):
-        return x
-    return str(x)
-
-
-def _write_atomic(path, text):
-    """Write ``text`` to ``path`` through a temporary file in the same directory."""
-    directory = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=os.path.basename(path), dir=directory)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+def _write_text(path, text):
+    """Write ``text`` (UTF-8) to ``path`` atomically (:func:`validation.harness._write_atomic`)."""
+    _write_atomic(path, lambda f: f.write(text.encode("utf-8")))
