@@ -6,8 +6,9 @@
 * set-valued (``UnilateralNewtonImpact``, ``UnilateralCoulombContact``): the contact is
   closed when g_N(q_m) <= ``closing_tol`` at the Moreau midpoint (default 1e-12 m: a
   resting contact whose gap is zero only to rounding, e.g. on an inclined plane, stays
-  closed instead of opening for a step and letting the body fall); it then adds ``dim`` rows to the
-  contact problem, W = [w_N] or [w_N, w_T1, w_T2] (thesis eq. 3.1, 4.1);
+  closed instead of opening for a step and letting the body fall; Moreau lets a pressed
+  contact close such a gap, :mod:`mbs.integrators.moreau`); it then adds ``dim`` rows to
+  the contact problem, W = [w_N] or [w_N, w_T1, w_T2] (thesis eq. 3.1, 4.1);
 * single-valued (``LinearRegularizedUnilateralConstraint``, optionally with
   ``RegularizedCoulombFriction``): a force W_N F_N + W_T F_T added to h.
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from contact.contact import Contact
-from contact.kinematics import ContactKinematicsPointPlane, ContactKinematicsSpherePlane
+from contact.kinematics import ContactKinematicsPointPlane, ContactKinematicsSpherePlane, ContactKinematicsSphereSphere
 from contact.laws import (LinearRegularizedUnilateralConstraint, RegularizedCoulombFriction,
                           UnilateralCoulombContact, UnilateralNewtonImpact)
 from contours import PlaneContour, PointContour, SphereContour
@@ -200,3 +200,42 @@ def test_adaptive_lands_on_output_times_without_sliver_steps():
     res = system.simulate(1.0, 1e-2, integrator="moreau-adaptive", atol=1e-3, rtol=0.0, trace=True)
     assert res.stats["steps"] == 100 and res.trace["dt"].min() == pytest.approx(1e-2)
     assert np.isclose(res.q[-1, 2], -0.5 * G, rtol=1e-12)
+
+
+@pytest.mark.parametrize("theta", [0.5, 1.0])
+def test_a_pressed_contact_apart_within_closing_tol_closes_its_gap_and_a_penetration_stays(theta):
+    """Gravity, ball at rest 0.4 µm above the plane, inside closing_tol = 1 µm: the law
+    on γ⁺ + g/Δt lets it close the gap, and from the second step on it rests at z = R
+    (θ = 1/2: u⁺ = −g/Δt, q⁺ = q + Δt/2 u⁺ leaves g/2, which the next midpoint
+    q⁺ + Δt/2 u⁺ closes; θ = 1: q⁺ = q + Δt u⁺ = R). A ball penetrating by 0.4 µm is
+    not pushed out. Without the term the first ball hovered 0.4 µm above the plane."""
+    dt = 1e-3
+    for z0, z_end in [(R + 4e-7, R), (R - 4e-7, R - 4e-7)]:
+        system = System(gravity=(0, 0, -G))
+        ball = system.add(PointMass(1.0, position=(0, 0, z0)))
+        kin = ContactKinematicsSpherePlane(SphereContour(ball.point, R), PlaneContour(ground_frame()))
+        system.add(Contact(kin, UnilateralNewtonImpact(0.0), closing_tol=1e-6))
+        res = system.simulate(6 * dt, dt, integrator="moreau", theta=theta)
+        assert np.allclose(res.q[2:, 2], z_end, rtol=0, atol=1e-15)
+        assert np.allclose(res.u[3:, 2], 0.0, rtol=0, atol=1e-12)
+
+
+def test_heavy_ball_on_a_light_one_rests_for_a_thousand_steps_with_newton():
+    """1e6 kg on 1 kg on the plane: the Delassus matrix has condition ~1e6, so the
+    relative velocity between the balls is exact only to ~1e-12 m/s, always with the same
+    rounding; without closing the rounding gap the contact opened after ~840 steps and the
+    top ball fell g Δt² into the bottom one. Exact: rest, forces m_top g and (m_top + m_b) g."""
+    dt, m_b, m_t, r = 1e-3, 1.0, 1e6, 0.05
+    system = System(gravity=(0, 0, -G))
+    a = system.add(PointMass(m_b, position=(0, 0, r)))
+    b = system.add(PointMass(m_t, position=(0, 0, 3 * r)))
+    system.add(Contact(ContactKinematicsSpherePlane(SphereContour(a.point, r), PlaneContour(ground_frame())),
+                       UnilateralNewtonImpact(0.0), name="ground"))
+    system.add(Contact(ContactKinematicsSphereSphere(SphereContour(b.point, r), SphereContour(a.point, r)),
+                       UnilateralNewtonImpact(0.0), name="between"))
+    res = system.simulate(1.0, dt, integrator="moreau", solver="newton", trace=True, contacts=True)
+    assert np.all(res.trace["closed"] == 2)
+    assert np.abs(res.q[:, a.q_slice][:, 2] - r).max() < 1e-12
+    assert np.abs(res.q[:, b.q_slice][:, 2] - 3 * r).max() < 1e-12
+    assert np.allclose(res.contacts["between"]["force"][1:, 2], m_t * G, rtol=1e-6)
+    assert np.allclose(res.contacts["ground"]["force"][1:, 2], (m_t + m_b) * G, rtol=1e-6)

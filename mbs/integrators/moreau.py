@@ -8,12 +8,22 @@ One step of size Δt (DESIGN, "the data flow of one Moreau step"):
    tangents are constant — point masses, frame-fixed FFR bodies, no springs — only h,
    and M̂ below is factored once per step size);
 3. the contours of the contacts update at q_θ (each once);
-4. contacts located; a unilateral contact is closed where g_N(q_θ) <= 0;
+4. contacts located; a unilateral contact is closed where g_N(q_θ) <= ``closing_tol``
+   (:class:`contact.Contact`; 1e-12 m by default, i.e. touching to rounding);
 5. bilateral joints (velocity level, C_q u⁺ + g_t = 0) and closed contacts form
    W (nu, m); with M̂ = M + θ Δt D + θ² Δt² K (linearly implicit stiffness and damping,
    so stiff modes do not limit Δt) the free velocity is u_free = u_k + M̂⁻¹ h Δt, the
    Delassus matrix G = Wᵀ M̂⁻¹ W, and the impulses Λ solve the laws on velocity level
    (:class:`contact.solver.ProxSolver`, Newton's impact law with γ⁻ = Wᵀ u_k);
+   A closed contact still apart by 0 < g_N(q_θ) <= closing_tol has the law act on
+   γ_N⁺ + g_N/Δt: pressed, it closes that gap (for θ = 1/2 the next midpoint's gap is
+   zero: g_N(q_θ,k+1) = g_N(q_θ) + Δt γ_N⁺ for a body at rest); it is never pulled.
+   Without this a resting contact's gap walks off by rounding: in a heavy-on-light stack
+   (Delassus condition ~ m_top/m_bottom) the relative velocity is exact only to
+   cond(G) ε |c| ~ 1e-12 m/s, always with the same sign, so the gap grew by ~1e-15 m
+   per step until it passed closing_tol; the contact opened for a step and the top body
+   fell g Δt² into the bottom one (the stability suite's ``mass_ratio_stack_1e6_newton``).
+   Penetrations (g_N < 0) are not pushed out: that would inject energy;
 6. u_{k+1} = u_free + M̂⁻¹ W Λ;
 7. q_{k+1} = q_k ⊕ Δt (θ u_{k+1} + (1 − θ) u_k) = q_θ ⊕ Δt (θ u_{k+1} + (1 − 2θ) u_k),
    orientations renormalized.
@@ -248,17 +258,20 @@ class MoreauTimeStepping(Integrator):
             if sys.n_c:
                 W[:, :sys.n_c] = sys.constraint_jacobian(t_m, q_m).T
                 laws.append(Bilateral(sys.n_c))
+            closing = np.zeros(m)
             i = sys.n_c
             for c in closed:
                 c.jacobian(W[:, i:i + c.dim])
                 laws.append(c.law)
+                if c.unilateral and c.kinematics.g_N > 0.0:   # touching within closing_tol
+                    closing[i] = c.kinematics.g_N / dt
                 i += c.dim
             offset = np.zeros(m)
             if sys.n_c:
                 offset[:sys.n_c] = sys.constraint_velocity_term(t_m, q_m)
             MW = self._solve(factor, W)
             G = W.T @ MW
-            xi_free = W.T @ u_free + offset
+            xi_free = W.T @ u_free + offset + closing
             gamma_pre = W.T @ self.u + offset
             sol = self.solver.solve(self._contact_set(closed, laws), G, xi_free, gamma_pre,
                                     self._warm(closed, m), validate=False)
@@ -268,7 +281,7 @@ class MoreauTimeStepping(Integrator):
             self.stats["solver_iterations"] += sol.iterations
             last[2] += sol.iterations
             last[3] = max(last[3], sol.residual)
-            last[4] += 0.5 * float(sol.lam @ (sol.gamma_plus + gamma_pre))
+            last[4] += 0.5 * float(sol.lam @ (sol.gamma_plus - closing + gamma_pre))
             self._store(closed, sol.lam)
             self.u = u_free + MW @ sol.lam
         self.stats["closed_contacts"] += len(closed)
