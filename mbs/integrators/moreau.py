@@ -14,16 +14,17 @@ One step of size Δt (DESIGN, "the data flow of one Moreau step"):
    W (nu, m); with M̂ = M + θ Δt D + θ² Δt² K (linearly implicit stiffness and damping,
    so stiff modes do not limit Δt) the free velocity is u_free = u_k + M̂⁻¹ h Δt, the
    Delassus matrix G = Wᵀ M̂⁻¹ W, and the impulses Λ solve the laws on velocity level
-   (:class:`contact.solver.ProxSolver`, Newton's impact law with γ⁻ = Wᵀ u_k);
-   A closed contact still apart by 0 < g_N(q_θ) <= closing_tol has the law act on
-   γ_N⁺ + g_N/Δt: pressed, it closes that gap (for θ = 1/2 the next midpoint's gap is
-   zero: g_N(q_θ,k+1) = g_N(q_θ) + Δt γ_N⁺ for a body at rest); it is never pulled.
-   Without this a resting contact's gap walks off by rounding: in a heavy-on-light stack
-   (Delassus condition ~ m_top/m_bottom) the relative velocity is exact only to
-   cond(G) ε |c| ~ 1e-12 m/s, always with the same sign, so the gap grew by ~1e-15 m
-   per step until it passed closing_tol; the contact opened for a step and the top body
-   fell g Δt² into the bottom one (the stability suite's ``mass_ratio_stack_1e6_newton``).
-   Penetrations (g_N < 0) are not pushed out: that would inject energy;
+   (:class:`contact.solver.ProxSolver`, Newton's impact law with γ⁻ = Wᵀ u_k).
+   A resting contact (closed in this step and the previous one) still apart by
+   0 < g_N(q_θ) <= closing_tol has the law act on γ_N⁺ + g_N/Δt: pressed, it closes
+   that gap (for θ = 1/2 the next midpoint's gap is zero: g_N(q_θ,k+1) = g_N(q_θ) +
+   Δt γ_N⁺ for a body at rest); it is never pulled, and penetrations (g_N < 0) are not
+   pushed out (that would inject energy). Without this a resting contact's gap walks
+   off by rounding: in a heavy-on-light stack (Delassus condition ~ m_top/m_bottom)
+   the relative velocity is exact only to cond(G) ε |c| ~ 1e-12 m/s, always with the
+   same sign, so the gap grew by ~1e-15 m per step until it passed closing_tol; the
+   contact opened for a step and the top body fell g Δt² into the bottom one (the
+   stability suite's ``mass_ratio_stack_1e6_newton``);
 6. u_{k+1} = u_free + M̂⁻¹ W Λ;
 7. q_{k+1} = q_k ⊕ Δt (θ u_{k+1} + (1 − θ) u_k) = q_θ ⊕ Δt (θ u_{k+1} + (1 − 2θ) u_k),
    orientations renormalized.
@@ -252,6 +253,8 @@ class MoreauTimeStepping(Integrator):
         u_prev = self.u
         if m == 0:
             self.u = u_free
+            if self._lam:
+                self._lam = {}           # nothing closed: no warm start, no resting contact
         else:
             W = np.zeros((sys.nu, m))
             laws = []
@@ -263,7 +266,7 @@ class MoreauTimeStepping(Integrator):
             for c in closed:
                 c.jacobian(W[:, i:i + c.dim])
                 laws.append(c.law)
-                if c.unilateral and c.kinematics.g_N > 0.0:   # touching within closing_tol
+                if c.unilateral and c.kinematics.g_N > 0.0 and c in self._lam:   # resting within closing_tol
                     closing[i] = c.kinematics.g_N / dt
                 i += c.dim
             offset = np.zeros(m)
