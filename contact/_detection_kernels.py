@@ -5,7 +5,9 @@ frame, relative velocity and Jacobian pieces of eq. 3.4–3.8.
 The Newton kernels read the contour from its ``kernel_data`` (knots, degrees, domains,
 P_ū0, P_Φ, the state vector and the span cache of :mod:`contours.neutral._kernels`) and
 evaluate it by :func:`~contours.neutral._kernels.fields_1s` /
-:func:`~contours.neutral._kernels.fields_2s` — no Python per iteration. Their reference
+:func:`~contours.neutral._kernels.fields_2s` (an offset contour — band, cylinder — by
+:func:`~contours._offset_kernels.offset_fields` over its neutral curve's) — no Python
+per iteration. Their reference
 is the Python Newton of :mod:`contact.search` (``compiled=False``) over
 ``contour.evaluate``; the others have their numpy formulas in the docstrings.
 ``tests/test_compiled_contact.py`` compares them.
@@ -15,6 +17,7 @@ from __future__ import annotations
 
 from numba import njit
 
+from contours._offset_kernels import offset_fields, offsets
 from contours.neutral._kernels import fields_1s, fields_2s
 
 SINGULAR = 1e-10  # det H ≤ this × |t_η|² |t_ξ|² (1s: |H| ≤ this × |t_η|²): not definite
@@ -64,6 +67,27 @@ def _gap(r_point, D, g):
 
 
 @njit(cache=True)
+def _newton_2s_direction(r_point, D, g, tol2):
+    """One Newton iteration's test and step on eq. 3.31–3.32 from the fields D (6, 3) at
+    the iterate (g = r_P − r into g): returns (|g|² [m²], converged, minimum, Δη, Δξ,
+    degenerate). ``minimum``: H negative definite (a distance minimum); the step is
+    Newton's there, else Gauss–Newton's; ``degenerate``: the Gauss–Newton matrix is
+    singular (no step, Δη = Δξ = 0)."""
+    gg = _gap(r_point, D, g)
+    f0, f1 = _dot(D[1], g), _dot(D[2], g)
+    a, b, c = _dot(D[1], D[1]), _dot(D[1], D[2]), _dot(D[2], D[2])
+    h11, h12, h22 = _dot(D[3], g) - a, _dot(D[4], g) - b, _dot(D[5], g) - c
+    det = h11 * h22 - h12 * h12
+    minimum = h11 < 0.0 and det > SINGULAR * a * c
+    converged = f0 * f0 <= tol2 * a and f1 * f1 <= tol2 * c
+    if not minimum:  # Gauss–Newton: a descent direction of |g|²
+        h11, h12, h22, det = -a, -b, -c, a * c - b * b
+        if det <= SINGULAR * a * c:
+            return gg, converged, minimum, 0.0, 0.0, True   # degenerate parametrization
+    return gg, converged, minimum, (h12 * f1 - h22 * f0) / det, (h12 * f0 - h11 * f1) / det, False
+
+
+@njit(cache=True)
 def newton_2s(r_point, eta, xi, knots_e, knots_x, ints, floats, ctrl0, phi, state, span, max_step_e, max_step_x,
               tol2, max_iter, B, local, D, g):
     """Newton on g_η = t_ηᵀ g = 0, g_ξ = t_ξᵀ g = 0 (thesis eq. 3.31–3.32), g = r_P − r(η, ξ),
@@ -83,23 +107,50 @@ def newton_2s(r_point, eta, xi, knots_e, knots_x, ints, floats, ctrl0, phi, stat
     steps = 0
     for k in range(max_iter + 1):
         fields_2s(eta, xi, knots_e, knots_x, ints, floats, ctrl0, phi, state, span, B, local, D)
-        gg = _gap(r_point, D, g)
-        f0, f1 = _dot(D[1], g), _dot(D[2], g)
-        a, b, c = _dot(D[1], D[1]), _dot(D[1], D[2]), _dot(D[2], D[2])
-        h11, h12, h22 = _dot(D[3], g) - a, _dot(D[4], g) - b, _dot(D[5], g) - c
-        det = h11 * h22 - h12 * h12
-        minimum = h11 < 0.0 and det > SINGULAR * a * c
-        if f0 * f0 <= tol2 * a and f1 * f1 <= tol2 * c:
+        gg, converged, minimum, d_eta, d_xi, degenerate = _newton_2s_direction(r_point, D, g, tol2)
+        if converged:
             return minimum, eta, xi, gg, k, steps
         if k == max_iter:
             break
         steps += 1
-        if not minimum:  # Gauss–Newton: a descent direction of |g|²
-            h11, h12, h22, det = -a, -b, -c, a * c - b * b
-            if det <= SINGULAR * a * c:
-                break    # degenerate parametrization
-        eta, out_e = _step(eta, (h12 * f1 - h22 * f0) / det, ae, be, ce, max_step_e)
-        xi, out_x = _step(xi, (h12 * f0 - h11 * f1) / det, ax, bx, cx, max_step_x)
+        if degenerate:
+            break
+        eta, out_e = _step(eta, d_eta, ae, be, ce, max_step_e)
+        xi, out_x = _step(xi, d_xi, ax, bx, cx, max_step_x)
+        clipped = clipped + 1 if (out_e or out_x) else 0
+        if clipped == 2:
+            break        # the root lies outside the contour
+    return False, eta, xi, 0.0, max_iter, steps
+
+
+@njit(cache=True)
+def newton_offset(r_point, eta, xi, knots, ints, floats, ctrl0, phi, state, span, n0, law, size, ax, bx, cx,
+                  max_step_e, max_step_x, tol2, max_iter, B, local, rows, frame, D, g):
+    """:func:`newton_2s` on an offset contour (band, cylinder: :mod:`contours.derived`):
+    the fields from :func:`~contours._offset_kernels.offset_fields` over the neutral
+    curve's ``kernel_data`` (knots … span) and body-frame reference normal n0, the offsets
+    at ξ from the law (``law``, ``size``) of :func:`~contours._offset_kernels.offsets`;
+    ξ ∈ [ax, bx], closed if ``cx``. B, local, rows, frame, D, g are the work arrays of
+    ``contour.kernel_workspace()`` and g (3,). Returns as :func:`newton_2s`."""
+    ae, be, ce = floats[0], floats[1], ints[2] != 0
+    eta = _wrap(eta, ae, be, ce)[0]
+    xi = _wrap(xi, ax, bx, cx)[0]
+    clipped = 0
+    steps = 0
+    for k in range(max_iter + 1):
+        al, bt, al1, bt1, al2, bt2 = offsets(law, size, xi)
+        offset_fields(eta, knots, ints, floats, ctrl0, phi, state, span, n0, al, bt, al1, bt1, al2, bt2, B, local,
+                      rows, frame, D)
+        gg, converged, minimum, d_eta, d_xi, degenerate = _newton_2s_direction(r_point, D, g, tol2)
+        if converged:
+            return minimum, eta, xi, gg, k, steps
+        if k == max_iter:
+            break
+        steps += 1
+        if degenerate:
+            break
+        eta, out_e = _step(eta, d_eta, ae, be, ce, max_step_e)
+        xi, out_x = _step(xi, d_xi, ax, bx, cx, max_step_x)
         clipped = clipped + 1 if (out_e or out_x) else 0
         if clipped == 2:
             break        # the root lies outside the contour

@@ -33,7 +33,9 @@ a row rejects the start (the root lies outside the contour: no contact point the
 On a compiled neutral contour (:class:`~contours.neutral.factory.NeutralContour`, the
 default) Newton runs as one numba kernel per start (:func:`._detection_kernels.newton_2s`,
 :func:`._detection_kernels.newton_1s`) that evaluates the contour span-locally from its
-state; ``compiled=False`` (or any other contour) runs the Python reference
+state, and so on a compiled band or cylinder (:mod:`contours.derived`,
+:func:`._detection_kernels.newton_offset`, over its neutral curve's state);
+``compiled=False`` (or any other contour) runs the Python reference
 (``_newton_reference``) over ``contour.evaluate``. Both give the same iterates up to
 rounding.
 """
@@ -45,6 +47,7 @@ import numpy as np
 from ffrmbs.errors import ModelError
 
 from contours.base import D_ETA, D_ETA_ETA, D_ETA_XI, D_XI, D_XI_XI, VALUE
+from contours.derived import OffsetContour
 from contours.neutral import NeutralContour
 
 from . import _detection_kernels as K
@@ -128,7 +131,7 @@ class _Search:
         Newton iterations of the last converged start.
     compiled : bool
         Newton runs in the numba kernel: asked for (``compiled=True``) and the contour is
-        a compiled neutral contour (decided at construction).
+        a compiled neutral contour or a compiled band or cylinder (decided at construction).
     """
 
     dim: int
@@ -142,7 +145,8 @@ class _Search:
         self.tol = float(tol)
         self.max_iter = int(max_iter)
         self._length_scale = None if length_scale is None else float(length_scale)
-        self.compiled = bool(compiled) and isinstance(contour, NeutralContour) and contour.compiled
+        self.compiled = (bool(compiled) and isinstance(contour, (NeutralContour, OffsetContour))
+                         and contour.compiled)
         self._work = contour.kernel_workspace() + (self._g,) if self.compiled else None
         self.reset_counters()
 
@@ -246,15 +250,23 @@ class Contact2sSearch(_Search):
 
     def _newton(self, r_point, eta, xi):
         """Newton on eq. 3.6 from (η, ξ); returns (η, ξ, |g|²) at a local minimum of the
-        distance, or None. The kernel :func:`._detection_kernels.newton_2s` when
-        :attr:`compiled`, else :meth:`_newton_reference`."""
+        distance, or None. The kernel :func:`._detection_kernels.newton_2s` (on a band or
+        cylinder :func:`._detection_kernels.newton_offset`) when :attr:`compiled`, else
+        :meth:`_newton_reference`."""
         if not self.compiled:
             return self._newton_reference(r_point, eta, xi)
         self.newton_solves += 1
         ax_e, ax_x = self.axes
-        found, eta, xi, gg, k, steps = K.newton_2s(r_point, float(eta), float(xi), *self.contour.kernel_data,
-                                                   ax_e.max_step, ax_x.max_step, self._tol2(), self.max_iter,
-                                                   *self._work)
+        contour = self.contour
+        if isinstance(contour, OffsetContour):
+            found, eta, xi, gg, k, steps = K.newton_offset(
+                r_point, float(eta), float(xi), *contour.neutral.kernel_data, contour.neutral.normal_ref,
+                *contour.offset_law, ax_x.a, ax_x.b, ax_x.closed, ax_e.max_step, ax_x.max_step, self._tol2(),
+                self.max_iter, *self._work)
+        else:
+            found, eta, xi, gg, k, steps = K.newton_2s(r_point, float(eta), float(xi), *contour.kernel_data,
+                                                       ax_e.max_step, ax_x.max_step, self._tol2(), self.max_iter,
+                                                       *self._work)
         self.newton_iterations += steps
         if not found:
             return None

@@ -19,6 +19,10 @@ neutral curve. A C² band or cylinder (thesis Sec. 3.2: sliding needs C²) needs
 curve of degree ≥ 4; a lower degree is accepted with a warning. Second derivatives: r_ξξ, r_ηξ exact; r_ηη = A ū_ηη
 neglects the offset's second derivative along the curve (O(|d̄| · |∂²G/∂η²|); zero on
 a straight undeformed neutral line).
+
+``compiled=True`` (default) evaluates all of this in one numba kernel over the neutral
+curve's span-local state (:mod:`._offset_kernels`, G applied to vectors, never formed);
+``compiled=False`` is the numpy reference over :func:`offset_frame`.
 """
 
 from __future__ import annotations
@@ -30,6 +34,7 @@ import numpy as np
 
 from ffrmbs.errors import ModelError
 
+from . import _offset_kernels as OK
 from .base import D_ETA, D_ETA_ETA, D_ETA_XI, D_XI, D_XI_XI, VALUE, Contour
 from .neutral import _kernels as K
 from .neutral.factory import Contour1sNeutralFactory
@@ -52,12 +57,19 @@ def offset_frame(a, n0):
     return t, t2, n, Dt2, Dn
 
 
-class _OffsetContour(Contour):
-    """A 2s contour at offsets (α, β)(ξ) in the frame of a 1s neutral contour."""
+class OffsetContour(Contour):
+    """A 2s contour at offsets (α, β)(ξ) in the frame of a 1s neutral contour.
+
+    ``compiled`` True (default): :meth:`evaluate` is the numba kernel
+    :func:`._offset_kernels.evaluate_offset`, which reads the neutral curve span-locally
+    from its ``kernel_data`` and allocates nothing; False: the numpy reference
+    (:meth:`_evaluate_reference`, over :func:`offset_frame` and the neutral's
+    ``local_fields``). Both give the same fields up to rounding.
+    """
 
     dim = 2
 
-    def __init__(self, neutral: Contour1sNeutralFactory, xi_domain, closed_xi, reach, name):
+    def __init__(self, neutral: Contour1sNeutralFactory, xi_domain, closed_xi, reach, name, compiled=True):
         if not isinstance(neutral, Contour1sNeutralFactory):
             raise ModelError(f"{name}: needs a 1s neutral contour, got {type(neutral).__name__}")
         super().__init__(neutral.body, name)
@@ -69,6 +81,26 @@ class _OffsetContour(Contour):
         self.domain = (neutral.domain, xi_domain)
         self.closed = (neutral.closed[0], closed_xi)
         self.reach = reach  # largest |d̄| [m]
+        self.compiled = bool(compiled)
+        n_f = neutral.n_modes
+        self._B, self._local_rows, self._rows, self._frame = self.kernel_workspace()[:4]
+        self._phi_rows = np.zeros((3, 3 * n_f))   # Φ, Φ_η at the neutral point (row 2 work)
+        self._phi_point = np.zeros(3 * n_f)       # Φ_P = Φ + G Φ_η, row-major (3, n_f)
+        self._phi_point_rows = self._phi_point.reshape(3, n_f)
+
+    def kernel_workspace(self):
+        """Fresh work arrays of :func:`._offset_kernels.offset_fields` (also for the
+        compiled search of :mod:`contact.search`): the neutral's basis table B (3, p+1), its
+        ū rows (6, 3), the offset point's body-frame rows (6, 3), the neutral frame t̄, n̄,
+        t̄2 (3, 3) and the rows of r (6, 3)."""
+        rows = np.zeros((3, 6, 3))
+        return self.neutral.kernel_workspace()[0], rows[0], rows[1], np.zeros((3, 3)), rows[2]
+
+    @property
+    @abstractmethod
+    def offset_law(self):
+        """(law, size) of :func:`._offset_kernels.offsets`: the offsets of :meth:`_offsets`
+        for the compiled search."""
 
     @abstractmethod
     def _offsets(self, xi):
@@ -78,6 +110,25 @@ class _OffsetContour(Contour):
         self.neutral.update(q, u, t)
 
     def evaluate(self, point, eta, xi=0.0, velocity=False, jacobians=False):
+        """Fields at (η, ξ) (see :meth:`Contour.evaluate`; the equations in the module
+        docstring): the kernel when :attr:`compiled`, else :meth:`_evaluate_reference`."""
+        if not self.compiled:
+            return self._evaluate_reference(point, eta, xi, velocity, jacobians)
+        nc = self.neutral
+        if velocity:
+            nc._require_velocity()
+        (al, be), (al1, be1), (al2, be2) = self._offsets(xi)
+        point.eta, point.xi = eta, xi
+        OK.evaluate_offset(eta, *nc.kernel_data, nc.normal_ref, al, be, al1, be1, al2, be2, velocity or jacobians,
+                           velocity, self._B, self._local_rows, self._rows, self._frame, self._phi_rows,
+                           self._phi_point, point.derivs, point.frame, point.v)
+        if jacobians:
+            nc.body.fill_J_T(nc.A, nc.T, self._rows[VALUE], self._phi_point_rows, point.J_T)
+            nc.body.fill_J_R(nc.A, nc.T, point.J_R)
+        return point
+
+    def _evaluate_reference(self, point, eta, xi, velocity, jacobians):
+        """The numpy reference of :meth:`evaluate`: :func:`offset_frame` and matrix products."""
         nc = self.neutral
         nc.space.locate(eta)
         ub, phi = nc.local_fields(6)
@@ -114,31 +165,40 @@ class _OffsetContour(Contour):
         return box
 
 
-class FlexibleBand(_OffsetContour):
+class FlexibleBand(OffsetContour):
     """A band of ``width`` [m] at ``offset`` [m] along the neutral normal n (thesis
     Sec. 5.2, MBSim's ``FlexibleBand``): ξ ∈ [−w/2, w/2] runs along t2 = n × t1, the
     band's normal is the surface normal r_η × r_ξ (= n on an undeformed straight line).
     Put it on the side the neutral's reference normal points to (offset ≥ 0)."""
 
-    def __init__(self, neutral, width, offset=0.0, name="band"):
+    def __init__(self, neutral, width, offset=0.0, name="band", compiled=True):
         if not width > 0:
             raise ModelError(f"{name}: width must be positive, got {width}")
         self.width, self.offset = float(width), float(offset)
-        super().__init__(neutral, (-0.5 * width, 0.5 * width), False, np.hypot(offset, 0.5 * width), name)
+        super().__init__(neutral, (-0.5 * width, 0.5 * width), False, np.hypot(offset, 0.5 * width), name,
+                         compiled)
+
+    @property
+    def offset_law(self):
+        return OK.BAND, self.offset
 
     def _offsets(self, xi):
         return (self.offset, xi), (0.0, 1.0), (0.0, 0.0)
 
 
-class FlexibleCylinder(_OffsetContour):
+class FlexibleCylinder(OffsetContour):
     """A cylinder of ``radius`` [m] around the neutral curve (MBSim's
     ``CylinderFlexible``): ξ = φ ∈ [0, 2π) from n towards t2, outward normal radial."""
 
-    def __init__(self, neutral, radius, name="cylinder"):
+    def __init__(self, neutral, radius, name="cylinder", compiled=True):
         if not radius > 0:
             raise ModelError(f"{name}: radius must be positive, got {radius}")
         self.radius = float(radius)
-        super().__init__(neutral, (0.0, 2.0 * np.pi), True, self.radius, name)
+        super().__init__(neutral, (0.0, 2.0 * np.pi), True, self.radius, name, compiled)
+
+    @property
+    def offset_law(self):
+        return OK.CYLINDER, self.radius
 
     def _offsets(self, xi):
         c, s, r = np.cos(xi), np.sin(xi), self.radius
