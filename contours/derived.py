@@ -99,12 +99,13 @@ class OffsetContour(Contour):
     @property
     @abstractmethod
     def offset_law(self):
-        """(law, size) of :func:`._offset_kernels.offsets`: the offsets of :meth:`_offsets`
-        for the compiled search."""
+        """(law, size) of :func:`._offset_kernels.offsets`: the offsets (α, β)(ξ), one
+        law for the evaluation (both routes) and the compiled search."""
 
-    @abstractmethod
     def _offsets(self, xi):
-        """(α, β), (α_ξ, β_ξ), (α_ξξ, β_ξξ) at ξ."""
+        """(α, β), (α_ξ, β_ξ), (α_ξξ, β_ξξ) [m] at ξ: the law of :attr:`offset_law`."""
+        al, be, al1, be1, al2, be2 = OK.offsets(*self.offset_law, float(xi))
+        return (al, be), (al1, be1), (al2, be2)
 
     def update(self, q, u=None, t=0.0) -> None:
         self.neutral.update(q, u, t)
@@ -182,9 +183,6 @@ class FlexibleBand(OffsetContour):
     def offset_law(self):
         return OK.BAND, self.offset
 
-    def _offsets(self, xi):
-        return (self.offset, xi), (0.0, 1.0), (0.0, 0.0)
-
 
 class FlexibleCylinder(OffsetContour):
     """A cylinder of ``radius`` [m] around the neutral curve (MBSim's
@@ -199,7 +197,3 @@ class FlexibleCylinder(OffsetContour):
     @property
     def offset_law(self):
         return OK.CYLINDER, self.radius
-
-    def _offsets(self, xi):
-        c, s, r = np.cos(xi), np.sin(xi), self.radius
-        return (r * c, r * s), (-r * s, r * c), (-r * c, -r * s)

@@ -2,6 +2,7 @@
 
 import pytest
 
+from contours import Contour1sNeutralFFR
 from mbs import FlexibleBodyFFR
 from preprocess import Material, build_body
 from preprocess.geometry import box
@@ -36,3 +37,10 @@ def thesis_beam(thesis_beam_data):
     """A free FFR body of the thesis's beam with its first 8 modes (one per test module:
     a body joins at most one System)."""
     return FlexibleBodyFFR(thesis_beam_data, modes=8)
+
+
+@pytest.fixture(scope="module")
+def thesis_centre_line(thesis_beam):
+    """The beam's centre line as a degree-4 1s neutral contour, reference normal y: a C²
+    band and cylinder on it (module docstring of contours.derived)."""
+    return Contour1sNeutralFFR.along_line(thesis_beam, (0, 0.025, 0.025), (1, 0, 0), normal=(0, 1, 0), degree=4)

@@ -23,9 +23,8 @@ def beam(thesis_beam):
 
 
 @pytest.fixture(scope="module")
-def axis(beam):
-    """The centre line, degree 4: C² band and cylinder (module docstring of contours.derived)."""
-    return Contour1sNeutralFFR.along_line(beam, (0, H / 2, W / 2), (1, 0, 0), normal=(0, 1, 0), degree=4)
+def axis(thesis_centre_line):
+    return thesis_centre_line
 
 
 def finite_difference_checks(contour, body, q, u, eta, xi, tol=1e-7):

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from contact.search import Contact2sSearch
-from contours import Contour1sNeutralFFR, FlexibleBand, FlexibleCylinder
+from contours import FlexibleBand, FlexibleCylinder
 from validation.bench.common import moving_state
 
 L, H, W = 0.25, 0.05, 0.05
@@ -21,8 +21,8 @@ def beam(thesis_beam):
 
 
 @pytest.fixture(scope="module")
-def axis(beam):
-    return Contour1sNeutralFFR.along_line(beam, (0, H / 2, W / 2), (1, 0, 0), normal=(0, 1, 0), degree=4)
+def axis(thesis_centre_line):
+    return thesis_centre_line
 
 
 def contour_pair(kind, axis):
