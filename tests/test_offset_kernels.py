@@ -15,16 +15,6 @@ L, H, W = 0.25, 0.05, 0.05
 RTOL = 1e-12
 
 
-@pytest.fixture(scope="module")
-def beam(thesis_beam):
-    return thesis_beam
-
-
-@pytest.fixture(scope="module")
-def axis(thesis_centre_line):
-    return thesis_centre_line
-
-
 def contour_pair(kind, axis):
     """(compiled, reference) contours of ``kind`` on the neutral curve ``axis``."""
     if kind == "cylinder":
@@ -48,11 +38,11 @@ def assert_close(a, b, what):
 
 @pytest.mark.parametrize("kind", ["band", "offset band", "cylinder"])
 @pytest.mark.parametrize("seed", [0, 1, 2])
-def test_compiled_offset_contour_equals_the_numpy_reference(beam, axis, kind, seed):
-    compiled, reference = contour_pair(kind, axis)
+def test_compiled_offset_contour_equals_the_numpy_reference(thesis_beam, thesis_centre_line, kind, seed):
+    compiled, reference = contour_pair(kind, thesis_centre_line)
     assert compiled.compiled and not reference.compiled
     rng = np.random.default_rng(seed)
-    q, u = moving_state(beam, rng, 3e-3)
+    q, u = moving_state(thesis_beam, rng, 3e-3)
     compiled.update(q, u)   # both read the shared neutral contour's state
     pc, pr = compiled.new_point(), reference.new_point()
     for eta, xi in surface_coordinates(compiled, rng, 12):
@@ -64,15 +54,15 @@ def test_compiled_offset_contour_equals_the_numpy_reference(beam, axis, kind, se
         assert_close(pc.frame, pr.frame, f"{kind} frame at {(eta, xi)}")
         assert_close(pc.v, pr.v, f"{kind} velocity at {(eta, xi)}")
         assert_close(pc.J_T, pr.J_T, f"{kind} J_T at {(eta, xi)}")
-        elastic = slice(beam.nu - beam.n_modes, beam.nu)   # A Φ_P, Φ_P = Φ + G Φ_η
+        elastic = slice(thesis_beam.nu - thesis_beam.n_modes, thesis_beam.nu)   # A Φ_P, Φ_P = Φ + G Φ_η
         assert_close(pc.J_T[:, elastic], pr.J_T[:, elastic], f"{kind} J_T elastic block at {(eta, xi)}")
         assert_close(pc.J_R, pr.J_R, f"{kind} J_R at {(eta, xi)}")
 
 
-def test_compiled_band_without_velocity_or_jacobians_and_out_of_domain(beam, axis):
+def test_compiled_band_without_velocity_or_jacobians_and_out_of_domain(thesis_beam, thesis_centre_line):
     """Fields alone (no Φ formed), and η beyond the ends clipped like the reference."""
-    compiled, reference = contour_pair("offset band", axis)
-    q, _ = moving_state(beam, np.random.default_rng(5), 3e-3)
+    compiled, reference = contour_pair("offset band", thesis_centre_line)
+    q, _ = moving_state(thesis_beam, np.random.default_rng(5), 3e-3)
     compiled.update(q)
     pc, pr = compiled.new_point(), reference.new_point()
     for eta, xi in [(0.4, 0.01), (-0.1, 0.02), (1.2, -0.02)]:
@@ -83,15 +73,15 @@ def test_compiled_band_without_velocity_or_jacobians_and_out_of_domain(beam, axi
 
 
 @pytest.mark.parametrize("kind", ["band", "offset band", "cylinder"])
-def test_compiled_newton_on_offset_contours_follows_the_python_newton(beam, axis, kind):
+def test_compiled_newton_on_offset_contours_follows_the_python_newton(thesis_beam, thesis_centre_line, kind):
     """Same roots from the same starts (cold: the coarse level; warm) for points off the
     contour; tolerance 1e-13 so that the two agree to rounding (see
     tests/test_compiled_contact.py)."""
-    compiled, reference = contour_pair(kind, axis)
+    compiled, reference = contour_pair(kind, thesis_centre_line)
     searches = Contact2sSearch(compiled, tol=1e-13), Contact2sSearch(reference, tol=1e-13, compiled=False)
     assert searches[0].compiled and not searches[1].compiled
     rng = np.random.default_rng(11)
-    q, u = moving_state(beam, np.random.default_rng(12), 3e-3)
+    q, u = moving_state(thesis_beam, np.random.default_rng(12), 3e-3)
     compiled.update(q, u)
     (ea, eb), (xa, xb) = compiled.domain
     point, found_any = compiled.new_point(), 0
