@@ -16,12 +16,14 @@ Progress bars (preprocessing stages, export) are drawn on stderr only when it is
 terminal; ``FFRMBS_PROGRESS=1`` forces them on, ``FFRMBS_PROGRESS=0`` off (ffrmbs.progress).
 
 Errors the user can cause (:class:`ffrmbs.errors.FfrmbsError`) are printed as one
-line ``ffrmbs: error: …`` and exit with status 2, without a traceback.
+line ``ffrmbs: error: …`` and exit with status 2, without a traceback. A reader that
+closes the pipe early (``ffrmbs info … | head``) ends the command quietly (status 141).
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
 
@@ -245,7 +247,23 @@ def main(argv=None):
     except KeyboardInterrupt:
         print("ffrmbs: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:
+        return _reader_gone()
+    try:
+        sys.stdout.flush()             # a reader that left after our last line (`| head`)
+    except BrokenPipeError:
+        return _reader_gone()
     return 0
+
+
+def _reader_gone():
+    """The reader of stdout closed the pipe (``ffrmbs info ... | head``): stop quietly,
+    as other command-line tools do, with the shell's status for SIGPIPE (128 + 13).
+    stdout is pointed at /dev/null so that the interpreter's final flush cannot fail."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, sys.stdout.fileno())
+    os.close(devnull)
+    return 141
 
 
 if __name__ == "__main__":
