@@ -70,3 +70,24 @@ def test_compilation_inside_the_run_is_not_in_the_per_step_cost(tmp_path):
     assert summary["wall_s"] < SLEEP_S / 3, summary["wall_s"]
     assert any("compiling numba kernels" in line for line in lines)
     assert any(line.startswith("kernels: 1 compiled") for line in lines)
+
+
+def test_validation_timing_excludes_compilation():
+    """validation.harness.timed: the CPU seconds of a call that compiles a kernel (made
+    slow by SLEEP_S of busy CPU inside numba's lock) do not contain the compilation."""
+    from validation import timed
+
+    class BusyCompile(event.Listener):
+        def on_start(self, ev):
+            end = time.process_time() + SLEEP_S
+            while time.process_time() < end:
+                pass
+
+        def on_end(self, ev):
+            pass
+
+    kernel = _fresh_kernel()
+    with event.install_listener("numba:compile", BusyCompile()):
+        value, cpu = timed(kernel, 1.5)
+    assert value == 3.0
+    assert cpu < SLEEP_S / 3, cpu

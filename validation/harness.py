@@ -36,6 +36,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.ticker import NullFormatter
 
+from ffrmbs.compile_clock import CompileClock
 from ffrmbs.errors import FfrmbsError, ModelError
 
 ROW_KEYS = ("case", "code", "config", "cpu_s", "error", "error_kind", "reference")
@@ -88,11 +89,15 @@ def timed(fn, *args, **kw):
 
     ``cpu_s`` [s] is the CPU time of this process (``time.process_time``: user + system,
     summed over all its threads, so a multi-threaded BLAS counts every core it uses;
-    sleeping and waiting are not counted).
+    sleeping and waiting are not counted), less the time numba spent compiling kernels
+    or loading them from its cache during the call (:class:`ffrmbs.compile_clock.CompileClock`):
+    compilation is never run time.
     """
-    start = time.process_time()
-    result = fn(*args, **kw)
-    return result, time.process_time() - start
+    with CompileClock() as clock:
+        start = time.process_time()
+        result = fn(*args, **kw)
+        cpu = time.process_time() - start
+    return result, max(cpu - clock.seconds, 0.0)
 
 
 class CpuTiming(NamedTuple):
