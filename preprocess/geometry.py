@@ -16,6 +16,7 @@ single-threaded so that it is deterministic.
 
 from __future__ import annotations
 
+import math
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -72,13 +73,20 @@ def mesh_from_gmsh_model(gmsh, source) -> Mesh:
     return canonical_mesh(points, blocks[0], groups, source)
 
 
+def check_mesh_size(mesh_size) -> float:
+    """``mesh_size`` as a float if it is a usable maximum element size (finite, > 0),
+    else a ModelError."""
+    size = float(mesh_size)
+    if not (math.isfinite(size) and size > 0):
+        raise ModelError(f"mesh size must be a positive finite length, not {size!r}")
+    return size
+
+
 def _generate(gmsh, order, mesh_size):
     if order not in (1, 2):
         raise ModelError(f"element order must be 1 or 2, not {order}")
     if mesh_size is not None:
-        if not mesh_size > 0:
-            raise ModelError(f"mesh size must be positive, not {mesh_size}")
-        gmsh.option.setNumber("Mesh.MeshSizeMax", float(mesh_size))
+        gmsh.option.setNumber("Mesh.MeshSizeMax", check_mesh_size(mesh_size))
     gmsh.option.setNumber("Mesh.SecondOrderLinear", 1)  # straight mid-edge nodes
     gmsh.model.mesh.generate(3)
     if order == 2:
@@ -157,8 +165,8 @@ def box(lx, ly, lz, mesh_size, order=2, divisions=None) -> Mesh:
     with the straight mid-edge nodes of order 2 — the node matrix O of thesis eq. 3.24
     (see :func:`contours.node_grid.node_matrix`).
     """
-    if min(lx, ly, lz) <= 0:
-        raise ModelError(f"box dimensions must be positive, got {lx}, {ly}, {lz}")
+    if not all(math.isfinite(v) and v > 0 for v in (lx, ly, lz)):
+        raise ModelError(f"box dimensions must be positive and finite, got {lx}, {ly}, {lz}")
     if divisions is not None:
         divisions = _check_divisions(divisions)
     return _mesh_occ("box", lambda occ: occ.addBox(0, 0, 0, lx, ly, lz), mesh_size, order, divisions)
