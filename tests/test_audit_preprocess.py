@@ -394,3 +394,16 @@ def test_a_foreign_file_as_a_body_file_is_quoted_in_short(small_body, tmp_path):
     assert not any(secret[i:i + 21] in message for i in range(len(secret) - 20)), message
     assert secret[:10] in message
 
+
+
+def test_a_foreign_file_as_a_force_file_is_quoted_in_short(tmp_path):
+    from mbs.loads import read_force_file
+
+    secret = "root:x:0:0:root:/root:/bin/bash"
+    path = tmp_path / "passwd"
+    path.write_text(secret + "\n")
+    with pytest.raises(InputFileError) as info:
+        read_force_file(path, 1)
+    message = str(info.value)
+    assert info.value.line == 1 and secret[:10] in message
+    assert not any(secret[i:i + 21] in message for i in range(len(secret) - 20)), message
