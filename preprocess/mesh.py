@@ -220,13 +220,14 @@ _VOLUME_CELLS = ("hexahedron", "wedge", "pyramid", "tetra")   # prefixes of mesh
 def _read_meshio(path) -> Mesh:
     import meshio
 
-    formats = meshio.extension_to_filetypes.get(path.suffix.lower())
-    if not formats:
+    # the format's own reader: meshio.read prints a ReadError and exits the process
+    formats = meshio.extension_to_filetypes.get(path.suffix.lower(), [""])
+    reader = getattr(getattr(meshio, formats[0], None), "read", None)
+    if reader is None:
         raise InputFileError(path, None, f"unknown mesh format {quote(path.suffix)} "
                                          "(.geo, .msh, .inp or another format meshio reads)")
     try:
-        # the format's own reader: meshio.read prints and exits the process on a ReadError
-        m = getattr(meshio, formats[0]).read(str(path))
+        m = reader(str(path))
     except Exception as exc:  # meshio raises ReadError, ValueError, KeyError, ...
         raise _meshio_error(path, exc) from None
     other = sorted({c.type for c in m.cells if c.type.startswith(_VOLUME_CELLS)} - set(_TET_CELLS))

@@ -407,3 +407,22 @@ def test_a_foreign_file_as_a_force_file_is_quoted_in_short(tmp_path):
     message = str(info.value)
     assert info.value.line == 1 and secret[:10] in message
     assert not any(secret[i:i + 21] in message for i in range(len(secret) - 20)), message
+
+
+def test_other_volume_elements_are_refused_not_dropped(tmp_path):
+    """A hexahedron beside the tetrahedra: meshio reads it, the mesh would lose it."""
+    hexahedron = "".join(f"{10 + i}, {x}.0, {y}.0, {z}.0\n" for i, (x, y, z) in enumerate(
+        [(0, 0, 3), (1, 0, 3), (1, 1, 3), (0, 1, 3), (0, 0, 4), (1, 0, 4), (1, 1, 4), (0, 1, 4)]))
+    text = INP.replace("*Element, type=C3D4", hexahedron + "*Element, type=C3D4") + \
+        "*Element, type=C3D8\n4, 10, 11, 12, 13, 14, 15, 16, 17\n"
+    with pytest.raises(InputFileError, match="hexahedron are not supported"):
+        read_mesh(write_inp(tmp_path, text))
+
+
+def test_a_vtu_mesh_is_read_through_its_own_reader(tmp_path):
+    import meshio
+
+    mesh = box(0.25, 0.05, 0.05, None, order=1, divisions=(4, 1, 2))
+    meshio.write(tmp_path / "b.vtu", meshio.Mesh(mesh.points, [("tetra", mesh.tets)]))
+    back = read_mesh(tmp_path / "b.vtu")
+    np.testing.assert_array_equal(back.tets, mesh.tets)
