@@ -61,8 +61,9 @@ def inp_fault(path, error: Exception) -> tuple[int | None, str] | None:
     if unknown:
         fault = f"element type {quote(unknown[1])} not supported (supported: {', '.join(TET_TYPES)})"
         for lineno, line in enumerate(lines, start=1):
-            if line.startswith("*") and not line.startswith("**"):
-                keyword, params = _keyword(line.strip())
+            text = line.strip()
+            if text.startswith("*") and not text.startswith("**"):
+                keyword, params = _keyword(text)
                 if keyword == "ELEMENT" and params.get("TYPE") == unknown[1]:
                     return lineno, fault
         return None, fault
