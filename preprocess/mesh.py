@@ -23,7 +23,6 @@ Readers (regular files only, :mod:`preprocess.inputfiles`):
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 import scipy.sparse as sp
