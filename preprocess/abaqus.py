@@ -1,22 +1,27 @@
-"""Faults of Abaqus ``.inp`` files that meshio reports without a line or in its own words.
+"""Abaqus ``.inp`` files: what meshio does not check, or reports without a line.
 
-meshio reads ``.inp`` files (:mod:`preprocess.mesh`); when it fails, :func:`inp_fault`
-scans the file once more, only then, for the line of the fault: an element type it
-cannot read, or an element or node set that refers to a node no ``*NODE`` block
-defines. Abaqus keyword lines start with ``*`` (``**`` is a comment); a data line
-ending with a comma continues on the next line.
+meshio reads ``.inp`` files (:mod:`preprocess.mesh`). Before it does,
+:func:`check_includes` makes sure every file an ``*INCLUDE`` pulls in is a regular
+file (meshio would block on a FIFO). When meshio fails, :func:`inp_fault` scans the
+file once more, only then, for the line of the fault: an element type it cannot read,
+or an element or node set that refers to a node no ``*NODE`` block defines. Abaqus
+keyword lines start with ``*`` (``**`` is a comment); a data line ending with a comma
+continues on the next line.
 """
 
 from __future__ import annotations
 
 import re
+from pathlib import Path
 
 from ffrmbs.errors import quote
+from preprocess.inputfiles import regular_file
 
 #: Abaqus element types read as tetrahedra (tet4, tet10)
 TET_TYPES = ("C3D4", "C3D10", "C3D10H", "C3D10I", "C3D10M", "C3D10MH")
 
 _UNKNOWN_TYPE = re.compile(r"Element type not available: (\S+)")
+_INCLUDE = re.compile(r"^[ \t]*\*[ \t]*INCLUDE\b.*$", re.IGNORECASE | re.MULTILINE)
 
 
 def _keyword(line: str) -> tuple[str, dict]:
@@ -27,6 +32,22 @@ def _keyword(line: str) -> tuple[str, dict]:
         key, _, value = word.partition("=")
         params[key.strip().upper()] = value.strip()
     return words[0].strip().upper(), params
+
+
+def check_includes(path) -> None:
+    """InputFileError if ``path`` or a file it includes (``*INCLUDE, INPUT=...``, at any
+    depth) is not a regular file. Included paths are resolved as meshio does: as given,
+    else relative to the including file's directory."""
+    pending, seen = [Path(path)], set()
+    while pending:
+        current = regular_file(pending.pop())
+        if current.resolve() in seen:
+            continue
+        seen.add(current.resolve())
+        with open(current, encoding="utf-8", errors="replace") as f:
+            for line in _INCLUDE.findall(f.read()):
+                included = Path(line.split("=")[-1].strip())
+                pending.append(included if included.exists() else current.parent / included)
 
 
 def _records(lines):

@@ -219,6 +219,10 @@ _VOLUME_CELLS = ("hexahedron", "wedge", "pyramid", "tetra")   # prefixes of mesh
 def _read_meshio(path) -> Mesh:
     import meshio
 
+    from preprocess.abaqus import check_includes
+
+    if path.suffix.lower() == ".inp":
+        check_includes(path)
     # the format's own reader: meshio.read prints a ReadError and exits the process
     formats = meshio.extension_to_filetypes.get(path.suffix.lower(), [""])
     reader = getattr(getattr(meshio, formats[0], None), "read", None)

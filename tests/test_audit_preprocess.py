@@ -369,6 +369,28 @@ def test_a_fifo_as_a_mesh_file_is_refused_without_hanging(tmp_path, name):
     assert "not a regular file" in res.stdout
 
 
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no FIFOs on this platform")
+def test_a_fifo_included_by_an_abaqus_file_is_refused_without_hanging(tmp_path):
+    os.mkfifo(tmp_path / "nodes.inp")
+    path = write_inp(tmp_path, INP.replace("*Node\n", "*Node\n*INCLUDE, INPUT=nodes.inp\n"))
+    res = run_isolated(textwrap.dedent(f"""\
+        from ffrmbs.errors import InputFileError
+        from preprocess import read_mesh
+        try:
+            read_mesh({str(path)!r})
+        except InputFileError as exc:
+            print(exc)
+        """), tmp_path)
+    assert res.returncode == 0, res.stderr
+    assert "nodes.inp: not a regular file (a FIFO)" in res.stdout
+
+
+def test_an_abaqus_include_is_still_read(tmp_path):
+    write_inp(tmp_path, INP, "mesh.inp")
+    mesh = read_mesh(write_inp(tmp_path, "*Heading\nthe mesh is included\n*INCLUDE, INPUT=mesh.inp\n"))
+    assert mesh.n_nodes == 9 and mesh.n_elements == 3
+
+
 def test_a_directory_as_a_mesh_file_is_refused(tmp_path):
     (tmp_path / "part.inp").mkdir()
     with pytest.raises(InputFileError, match="not a regular file"):
