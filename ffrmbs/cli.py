@@ -57,16 +57,21 @@ def _stage(label, fn, *args, **kwargs):
 
 def _preprocess(spec, modes, clamp, units, density, young, poisson, order, mesh_size, out):
     from preprocess.bodyfiles import write_body
-    from preprocess.pipeline import Material, build_body, mesh_source, mesh_statistics
+    from preprocess.geometry import check_mesh_size
+    from preprocess.pipeline import Material, build_body, check_n_modes, mesh_source, mesh_statistics
 
     from ffrmbs.progress import stage_bar, write
 
+    material = Material(density, young, poisson)        # every option checked before meshing
+    check_n_modes(modes)
+    if mesh_size is not None:
+        check_mesh_size(mesh_size)
     with stage_bar(4 if out is not None else 3, "preprocess") as bar:
         bar.stage("meshing")
         mesh = _stage(f"meshing {spec}", mesh_source, spec, order, mesh_size)
         write(mesh_statistics(mesh), sys.stdout)
         params = dict(input=spec, mesh_size=mesh_size)
-        body = build_body(mesh, Material(density, young, poisson), modes, clamp=clamp,
+        body = build_body(mesh, material, modes, clamp=clamp,
                           units=units, params=params, log=_log, progress=bar.stage)
         if out is not None:
             bar.stage("writing body files")

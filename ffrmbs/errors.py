@@ -2,7 +2,7 @@
 
 Every error a user can cause by their input or their model derives from
 :class:`FfrmbsError`; the command line prints its message and exits non-zero
-without a traceback.
+without a traceback. :func:`quote` shows file content in such a message safely.
 """
 
 from __future__ import annotations
@@ -64,3 +64,13 @@ class RunInterrupted(FfrmbsError):
         self.reason = reason
         self.result = None
         super().__init__(f"run interrupted at t = {t:.6g} s (step {step}): {reason}")
+
+
+def quote(text: str, limit: int = 20) -> str:
+    """``text`` quoted for an error message: at most ``limit`` characters, in single
+    quotes, every non-printable character (control codes, escapes) shown as ``?`` and a
+    cut marked with ``…`` — so a message never echoes more than a short, harmless
+    prefix of a file's content."""
+    text = str(text)
+    shown = "".join(c if c.isprintable() else "?" for c in text[:limit])
+    return f"'{shown}{'…' if len(text) > limit else ''}'"

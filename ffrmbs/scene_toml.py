@@ -757,8 +757,7 @@ class _SceneReader:
     def _body_data(self, t: _Table, name):
         """The BodyData of ``source`` (read once per file), its files added to inputs."""
         from preprocess import read_body
-        from preprocess.bodyfiles import HDF5_FILE
-        from preprocess.textfiles import TEXT_FILES
+        from preprocess.bodyfiles import body_files
         from preprocess.units import UNIT_SYSTEMS
 
         source = t.string("source")
@@ -782,10 +781,7 @@ class _SceneReader:
                                                          f"{self.path})") from None
             except FfrmbsError as exc:
                 t.fail("source", f"cannot read body file {str(path)!r}: {exc}")
-        if path.is_dir():
-            files = [path / f for f in TEXT_FILES if (path / f).exists()] or [path / HDF5_FILE]
-        else:
-            files = [path]
+        files = body_files(path)
         for f in files:
             label = f"body {name!r}" if len(files) == 1 else f"body {name!r} {f.name}"
             self.inputs[label] = str(f)

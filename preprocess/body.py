@@ -30,6 +30,13 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
+#: largest magnitude a body file may hold: a product of three such values (e.g. qᵀ K q)
+#: stays finite, while 1e308 or 1e201 overflow in the first energy they enter
+MAX_MAGNITUDE = 1e100
+
+#: K must equal Kᵀ within this tolerance relative to max|K|
+SYMMETRY_RTOL = 1e-9
+
 
 @dataclass
 class BodyData:

@@ -3,7 +3,8 @@
 A body directory holds ``u0.dat``, ``modeShapeMatrix.dat``, ``mij.dat``,
 ``stiffnessMatrix.dat`` (:mod:`preprocess.textfiles`, Listings 4.1-4.5) and
 ``body.h5`` (:mod:`preprocess.hdf5file`, which also keeps eigenvalues, node groups,
-surface, material and params). :func:`write_body` writes all five atomically.
+surface, material and params). :func:`write_body` writes all five atomically;
+:func:`read_body` reads a directory's ``body.h5``, the text files being the fallback.
 """
 
 from __future__ import annotations
@@ -26,23 +27,33 @@ HDF5_SUFFIXES = (".h5", ".hdf5")
 def read_body(path, units: str = "si") -> BodyData:
     """The body at ``path``, in SI units.
 
-    ``path`` is a directory — its text files if any of them is present (read in
-    ``units``), else its ``body.h5`` — or a ``.h5``/``.hdf5`` file (always SI; ``units``
-    applies to text files only). Anything else raises InputFileError.
+    ``path`` is a directory — its ``body.h5`` if present (with node groups, surface,
+    eigenvalues, material and params), else its text files (read in ``units``) — or a
+    ``.h5``/``.hdf5`` file (always SI; ``units`` applies to text files only). Anything
+    else raises InputFileError.
     """
     unit_system(units)
     path = Path(path)
     if path.is_dir():
-        if any((path / name).exists() for name in TEXT_FILES):
-            return read_text_body(path, units)
-        if (path / HDF5_FILE).exists():
-            return read_hdf5(path / HDF5_FILE)
-        raise InputFileError(path, None, f"no body files: expected {', '.join(TEXT_FILES)}"
-                                         f" or {HDF5_FILE}")
+        if not any(f.exists() for f in body_files(path)):
+            raise InputFileError(path, None, f"no body files: expected {HDF5_FILE} or "
+                                             f"{', '.join(TEXT_FILES)}")
+        return read_hdf5(path / HDF5_FILE) if (path / HDF5_FILE).exists() else read_text_body(path, units)
     if path.suffix.lower() in HDF5_SUFFIXES:
         return read_hdf5(path)
     fault = "not a body directory or .h5/.hdf5 file" if path.exists() else "not found"
     raise InputFileError(path, None, fault)
+
+
+def body_files(path) -> list[Path]:
+    """The files :func:`read_body` reads for ``path``: a directory's ``body.h5`` if it
+    exists, else its four text files; any other path itself."""
+    path = Path(path)
+    if not path.is_dir():
+        return [path]
+    if (path / HDF5_FILE).exists():
+        return [path / HDF5_FILE]
+    return [path / name for name in TEXT_FILES]
 
 
 def write_body(directory, body: BodyData, units: str = "si") -> None:

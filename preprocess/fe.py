@@ -28,12 +28,19 @@ from preprocess.mesh import TET10_EDGES, Mesh
 _CHUNK = 20000  # elements per vectorized block (bounds memory: chunk * 30 * 30 doubles)
 
 
+def check_positive(name: str, value) -> float:
+    """``value`` as a float if it is finite and > 0, else a ModelError naming ``name``."""
+    value = float(value)
+    if not (math.isfinite(value) and value > 0):
+        raise ModelError(f"{name} must be positive and finite, not {value!r}")
+    return value
+
+
 def lame(young, poisson):
     """Lamé constants (λ, μ) [Pa] from Young's modulus E [Pa] and Poisson's ratio ν."""
-    if not young > 0:
-        raise ModelError(f"Young's modulus must be positive, not {young}")
+    check_positive("Young's modulus", young)
     if not -1.0 < poisson < 0.5:
-        raise ModelError(f"Poisson's ratio must lie in (-1, 0.5), not {poisson}")
+        raise ModelError(f"Poisson's ratio must lie in (-1, 0.5), not {poisson!r}")
     lam = young * poisson / ((1 + poisson) * (1 - 2 * poisson))
     return lam, young / (2 * (1 + poisson))
 
@@ -120,8 +127,7 @@ def stiffness_matrix(mesh: Mesh, young, poisson) -> sp.csr_matrix:
 
 def lumped_masses(mesh: Mesh, density) -> np.ndarray:
     """Lumped node masses m_j [kg for SI input], shape (N,): row sum (tet4), HRZ (tet10)."""
-    if not density > 0:
-        raise ModelError(f"density must be positive, not {density}")
+    check_positive("density", density)
     masses = np.zeros(mesh.n_nodes)
     for start in range(0, mesh.n_elements, _CHUNK):
         tets = mesh.tets[start:start + _CHUNK]

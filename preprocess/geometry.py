@@ -9,11 +9,14 @@ Built-in bodies (OpenCASCADE kernel, meshed with tetrahedra of order 1 or 2):
 
 Every built-in body carries node groups for its six bounding faces, named
 ``x0, x1, y0, y1, z0, z1`` (nodes on the plane x = min, x = max, ...), and
-``body`` (all nodes). Meshing is single-threaded so that it is deterministic.
+``body`` (all nodes), found on the mesh nodes with a tolerance relative to the
+body's own size (:func:`bounding_face_groups`), so at any scale. Meshing is
+single-threaded so that it is deterministic.
 """
 
 from __future__ import annotations
 
+import math
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -23,6 +26,7 @@ from ffrmbs.errors import InputFileError, ModelError
 from preprocess.mesh import Mesh, canonical_mesh
 
 _GMSH_TET = {1: 4, 2: 11}  # gmsh element type numbers of tet4 and tet10
+PLANE_RTOL = 1e-9          # a node on a bounding plane: within this x the body's size
 
 
 @contextmanager
@@ -69,13 +73,20 @@ def mesh_from_gmsh_model(gmsh, source) -> Mesh:
     return canonical_mesh(points, blocks[0], groups, source)
 
 
+def check_mesh_size(mesh_size) -> float:
+    """``mesh_size`` as a float if it is a usable maximum element size (finite, > 0),
+    else a ModelError."""
+    size = float(mesh_size)
+    if not (math.isfinite(size) and size > 0):
+        raise ModelError(f"mesh size must be a positive finite length, not {size!r}")
+    return size
+
+
 def _generate(gmsh, order, mesh_size):
     if order not in (1, 2):
         raise ModelError(f"element order must be 1 or 2, not {order}")
     if mesh_size is not None:
-        if not mesh_size > 0:
-            raise ModelError(f"mesh size must be positive, not {mesh_size}")
-        gmsh.option.setNumber("Mesh.MeshSizeMax", float(mesh_size))
+        gmsh.option.setNumber("Mesh.MeshSizeMax", check_mesh_size(mesh_size))
     gmsh.option.setNumber("Mesh.SecondOrderLinear", 1)  # straight mid-edge nodes
     gmsh.model.mesh.generate(3)
     if order == 2:
@@ -96,20 +107,23 @@ def mesh_geo_file(path, order=2, mesh_size=None) -> Mesh:
         return mesh_from_gmsh_model(gmsh, path)
 
 
-def _add_face_groups(gmsh, lo, hi):
-    """Physical surface groups x0..z1 on the bounding planes and a volume group 'body'."""
-    eps = 1e-6 * max(hi - lo)  # OCC pads bounding boxes by its tolerance
+def bounding_face_groups(points) -> dict:
+    """Node groups on the six bounding planes of ``points`` (N, 3) and ``body``.
+
+    ``x0`` holds the nodes with x = min x, ``x1`` those with x = max x, likewise
+    ``y0 .. z1``; ``body`` holds all nodes. A node lies on a plane when its coordinate
+    is within PLANE_RTOL x the body's size (its largest extent or coordinate, whichever
+    is larger) of it: the rounding of node placement, far below any element size.
+    """
+    points = np.asarray(points, dtype=float)
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    tol = PLANE_RTOL * max(float((hi - lo).max()), float(np.abs(points).max()))
+    groups = {}
     for axis, name in enumerate("xyz"):
         for side, value in (("0", lo[axis]), ("1", hi[axis])):
-            tags = []
-            for dim, tag in gmsh.model.getEntities(2):
-                bb = np.array(gmsh.model.getBoundingBox(dim, tag))
-                if abs(bb[axis] - value) < eps and abs(bb[axis + 3] - value) < eps:
-                    tags.append(tag)
-            if tags:
-                gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, tags), name + side)
-    volumes = [tag for _, tag in gmsh.model.getEntities(3)]
-    gmsh.model.setPhysicalName(3, gmsh.model.addPhysicalGroup(3, volumes), "body")
+            groups[name + side] = np.flatnonzero(np.abs(points[:, axis] - value) <= tol)
+    groups["body"] = np.arange(len(points))
+    return groups
 
 
 def _set_transfinite_box(gmsh, divisions):
@@ -129,12 +143,12 @@ def _mesh_occ(name, build, mesh_size, order, divisions=None) -> Mesh:
         gmsh.model.add(name)
         build(gmsh.model.occ)
         gmsh.model.occ.synchronize()
-        bb = np.array(gmsh.model.getBoundingBox(-1, -1))
-        _add_face_groups(gmsh, bb[:3], bb[3:])
         if divisions is not None:
             _set_transfinite_box(gmsh, divisions)
         _generate(gmsh, order, mesh_size)
-        return mesh_from_gmsh_model(gmsh, f"<builtin {name}>")
+        mesh = mesh_from_gmsh_model(gmsh, f"<builtin {name}>")
+    mesh.node_groups.update(bounding_face_groups(mesh.points))
+    return mesh
 
 
 def box(lx, ly, lz, mesh_size, order=2, divisions=None) -> Mesh:
@@ -151,8 +165,8 @@ def box(lx, ly, lz, mesh_size, order=2, divisions=None) -> Mesh:
     with the straight mid-edge nodes of order 2 — the node matrix O of thesis eq. 3.24
     (see :func:`contours.node_grid.node_matrix`).
     """
-    if min(lx, ly, lz) <= 0:
-        raise ModelError(f"box dimensions must be positive, got {lx}, {ly}, {lz}")
+    if not all(math.isfinite(v) and v > 0 for v in (lx, ly, lz)):
+        raise ModelError(f"box dimensions must be positive and finite, got {lx}, {ly}, {lz}")
     if divisions is not None:
         divisions = _check_divisions(divisions)
     return _mesh_occ("box", lambda occ: occ.addBox(0, 0, 0, lx, ly, lz), mesh_size, order, divisions)

@@ -20,8 +20,9 @@ Layout (N nodes, n_f modes, indices 0-based)::
     /material              group, attrs density [kg/m³], young [Pa], poisson [-] (those known)
 
 :func:`read_hdf5` checks the format attributes, the presence, shape, type and
-finiteness of every dataset, and index ranges; any fault (also a file that is not
-HDF5) raises :class:`~ffrmbs.errors.InputFileError` naming the dataset.
+finiteness of every dataset, magnitudes (at most :data:`~preprocess.body.MAX_MAGNITUDE`),
+index ranges and the symmetry of K; any fault (also a file that is not a regular HDF5
+file) raises :class:`~ffrmbs.errors.InputFileError` naming the dataset.
 """
 
 from __future__ import annotations
@@ -33,8 +34,9 @@ import h5py
 import numpy as np
 import scipy.sparse as sp
 
-from ffrmbs.errors import InputFileError, ModelError
-from preprocess.body import BodyData
+from ffrmbs.errors import InputFileError, ModelError, quote
+from preprocess.body import MAX_MAGNITUDE, SYMMETRY_RTOL, BodyData
+from preprocess.inputfiles import regular_file
 
 FORMAT = "ffrmbs-body"
 FORMAT_VERSION = 1
@@ -95,6 +97,8 @@ class _Reader:
             return a.astype(np.int64)
         if not np.isfinite(a).all():
             self.fail(f"dataset '{name}' contains NaN or inf")
+        if a.size and np.abs(a).max() > MAX_MAGNITUDE:
+            self.fail(f"dataset '{name}' holds values out of range (|value| > {MAX_MAGNITUDE:g})")
         return a.astype(np.float64)
 
     def indices(self, name: str, n_nodes: int, shape: tuple) -> np.ndarray:
@@ -131,6 +135,9 @@ def _stiffness(r: _Reader, n_dof: int) -> sp.csr_matrix:
         k.check_format(full_check=True)
     except ValueError as exc:
         r.fail(f"group 'stiffness' is not a valid CSR matrix: {exc}")
+    if k.nnz and abs(k - k.T).max() > SYMMETRY_RTOL * abs(k).max():
+        r.fail("the stiffness matrix in group 'stiffness' is not symmetric "
+               f"(relative tolerance {SYMMETRY_RTOL:g} of max|K|)")
     return k
 
 
@@ -138,10 +145,10 @@ def _read(r: _Reader) -> BodyData:
     if r.text_attr("format") != FORMAT:
         r.fail(f"not an ffrmbs body file (root attribute 'format' is not '{FORMAT}')")
     if r.f.attrs.get("format_version") != FORMAT_VERSION:
-        r.fail(f"unsupported format_version {r.f.attrs.get('format_version')!r}, "
+        r.fail(f"unsupported format_version {quote(str(r.f.attrs.get('format_version')))}, "
                f"expected {FORMAT_VERSION}")
     if r.text_attr("units") != "si":
-        r.fail(f"unsupported units {r.text_attr('units')!r}, expected 'si'")
+        r.fail(f"unsupported units {quote(str(r.text_attr('units')))}, expected 'si'")
     u0 = r.array("u0", shape=(None, 3))
     n = u0.shape[0]
     masses = r.array("masses", shape=(n,))
@@ -179,10 +186,8 @@ def _read(r: _Reader) -> BodyData:
 
 def read_hdf5(path) -> BodyData:
     """The body stored in the HDF5 file ``path`` (SI units), validated (see module docstring)."""
-    path = Path(path)
-    if not path.exists():
-        raise InputFileError(path, None, "file not found")
-    if not path.is_file() or not h5py.is_hdf5(path):
+    path = regular_file(path)
+    if not h5py.is_hdf5(path):
         raise InputFileError(path, None, "not an HDF5 file")
     try:
         with h5py.File(path, "r") as f:

@@ -11,20 +11,25 @@ so tet10 elements are brought into this order geometrically: each mid-edge
 node is matched to the edge whose midpoint it lies closest to. This accepts any
 tool's convention and catches corrupt connectivity.
 
-Readers:
+Readers (regular files only, :mod:`preprocess.inputfiles`):
 * ``.geo`` and ``.msh``: the gmsh Python API (``.geo`` is meshed, see
   :func:`preprocess.geometry.mesh_current_model`); physical groups become node groups.
-* ``.inp`` and other formats meshio reads: node sets and element sets become node groups.
+* ``.inp`` and other formats meshio reads: node sets and element sets become node groups;
+  surface and line elements are ignored, other volume elements refused. A fault meshio
+  finds is one line naming the file (for ``.inp`` also the line and the fault,
+  :mod:`preprocess.abaqus`).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
 
-from ffrmbs.errors import InputFileError
+from ffrmbs.errors import InputFileError, quote
+from preprocess.inputfiles import regular_file
 
 #: mid-edge node k (local index 4 + k) sits on edge TET10_EDGES[k]
 TET10_EDGES = np.array([(0, 1), (1, 2), (0, 2), (0, 3), (1, 3), (2, 3)])
@@ -109,6 +114,17 @@ class Mesh:
         """Sorted indices of all nodes on the surface."""
         return np.unique(self.surface_triangles())
 
+    def parts(self) -> tuple[int, np.ndarray]:
+        """Connected parts: (number of parts, part label (N,) of every node, 0-based).
+
+        Two nodes are in one part when a chain of elements, each sharing a node with
+        the next, joins them.
+        """
+        n_per = self.tets.shape[1]
+        graph = sp.coo_matrix((np.ones(self.tets.size), (np.repeat(self.tets[:, 0], n_per), self.tets.ravel())),
+                              shape=(self.n_nodes, self.n_nodes))
+        return connected_components(graph, directed=False)
+
     def element_volumes(self) -> np.ndarray:
         """Volumes of the straight-sided tetrahedra spanned by the corners, shape (E,)."""
         p = self.points[self.tets[:, :4]]
@@ -176,9 +192,7 @@ def read_mesh(path, order=2, mesh_size=None) -> Mesh:
     ``order`` (1 or 2) and ``mesh_size`` (maximum element size, file units) apply
     to ``.geo`` files, which are meshed here; meshes read from files keep theirs.
     """
-    path = Path(path)
-    if not path.exists():
-        raise InputFileError(path, None, "file not found")
+    path = regular_file(path)
     suffix = path.suffix.lower()
     if suffix in (".geo", ".msh"):
         from preprocess.geometry import mesh_geo_file
@@ -198,14 +212,32 @@ def _read_gmsh_msh(path) -> Mesh:
         return mesh_from_gmsh_model(gmsh, path)
 
 
+_TET_CELLS = ("tetra", "tetra10")
+_VOLUME_CELLS = ("hexahedron", "wedge", "pyramid", "tetra")   # prefixes of meshio's volume cell types
+
+
 def _read_meshio(path) -> Mesh:
     import meshio
 
+    from preprocess.abaqus import check_includes
+
+    if path.suffix.lower() == ".inp":
+        check_includes(path)
+    # the format's own reader: meshio.read prints a ReadError and exits the process
+    formats = meshio.extension_to_filetypes.get(path.suffix.lower(), [""])
+    reader = getattr(getattr(meshio, formats[0], None), "read", None)
+    if reader is None:
+        raise InputFileError(path, None, f"unknown mesh format {quote(path.suffix)} "
+                                         "(.geo, .msh, .inp or another format meshio reads)")
     try:
-        m = meshio.read(path)
+        m = reader(str(path))
     except Exception as exc:  # meshio raises ReadError, ValueError, KeyError, ...
-        raise InputFileError(path, None, f"cannot read the mesh: {exc}") from None
-    blocks = [(i, c) for i, c in enumerate(m.cells) if c.type in ("tetra", "tetra10")]
+        raise _meshio_error(path, exc) from None
+    other = sorted({c.type for c in m.cells if c.type.startswith(_VOLUME_CELLS)} - set(_TET_CELLS))
+    if other:
+        raise InputFileError(path, None, f"volume elements of type {', '.join(other)} are not supported "
+                                         "(tetrahedra only: tet4 or tet10)")
+    blocks = [(i, c) for i, c in enumerate(m.cells) if c.type in _TET_CELLS]
     if not blocks:
         raise InputFileError(path, None, "no tetrahedra (tet4 or tet10) in the mesh")
     if len({c.type for _, c in blocks}) > 1:
@@ -218,3 +250,21 @@ def _read_meshio(path) -> Mesh:
         if nodes:
             groups.setdefault(name, np.unique(np.concatenate(nodes)))
     return canonical_mesh(m.points, tets, groups, path)
+
+
+def _meshio_error(path, exc: Exception) -> InputFileError:
+    """The InputFileError for meshio's exception ``exc`` reading ``path``: for ``.inp``
+    the line and fault found by :func:`preprocess.abaqus.inp_fault`, else meshio's
+    words, quoted short (they may hold file content)."""
+    from preprocess.abaqus import inp_fault
+
+    found = None
+    if path.suffix.lower() == ".inp":
+        try:
+            found = inp_fault(path, exc)
+        except OSError:
+            found = None
+    if found is not None:
+        return InputFileError(path, *found)
+    words = str(exc) or type(exc).__name__
+    return InputFileError(path, None, f"cannot read the mesh: {quote(words, 80)}")

@@ -52,10 +52,19 @@ def _mass_orthonormalize(V, m3):
 def _eigsh(K, m, k, sigma):
     """Shift-invert Lanczos from a fixed generic start vector: without one ARPACK draws it
     from a generator whose state depends on earlier calls, and the same mesh gave modes
-    differing in the last digits from one run (or call order) to the next."""
+    differing in the last digits from one run (or call order) to the next. A singular
+    K − σM (which the mesh checks of :func:`preprocess.pipeline.build_body` should have
+    caught) is a ModelError."""
     M = sp.diags(m)
     v0 = np.random.default_rng(0).standard_normal(K.shape[0])
-    vals, vecs = sla.eigsh(K.tocsc(), k=k, M=M.tocsc(), sigma=sigma, which="LM", v0=v0)
+    try:
+        vals, vecs = sla.eigsh(K.tocsc(), k=k, M=M.tocsc(), sigma=sigma, which="LM", v0=v0)
+    except RuntimeError as exc:     # SuperLU: "Factor is exactly singular"
+        if "singular" not in str(exc):
+            raise
+        raise ModelError("the stiffness matrix is singular (K - σM cannot be factored): part of the body "
+                         "moves without deforming, i.e. a part with no clamped node, a mechanism, or too "
+                         "few clamped nodes (one clamped node leaves the rotations free)") from None
     order = np.argsort(vals)
     return vals[order], vecs[:, order]
 

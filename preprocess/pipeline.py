@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ffrmbs.errors import ModelError
+from ffrmbs.errors import InputFileError, ModelError
 from preprocess import fe, geometry, modes, units as unitsys
 from preprocess.body import BodyData
 from preprocess.mesh import Mesh, read_mesh
@@ -26,12 +26,17 @@ BUILTINS = ("box:LX,LY,LZ", "stepped-beam")
 class Material:
     """Linear elastic isotropic material in the units of its source.
 
-    density [kg/m³ or t/mm³], young [Pa or N/mm²], poisson [-].
+    density [kg/m³ or t/mm³], young [Pa or N/mm²], poisson [-]; density and young
+    positive and finite, poisson in (-1, 0.5), else a ModelError on construction.
     """
 
     density: float
     young: float
     poisson: float
+
+    def __post_init__(self):
+        fe.check_positive("density", self.density)
+        fe.lame(self.young, self.poisson)
 
     def to_si(self, units: str) -> "Material":
         f = unitsys.unit_system(units)
@@ -41,16 +46,19 @@ class Material:
 def mesh_source(spec: str, order=2, mesh_size=None) -> Mesh:
     """The mesh named by ``spec``: a file path, ``box:LX,LY,LZ`` or ``stepped-beam``.
 
-    Built-in sizes and ``mesh_size`` are in the units of the run (m for SI, mm for SI(mm)).
+    Built-in sizes and ``mesh_size`` are in the units of the run (m for SI, mm for SI(mm));
+    ``mesh_size`` must be positive and finite (ModelError) or None (a default).
     """
+    if mesh_size is not None:
+        geometry.check_mesh_size(mesh_size)
     if spec.startswith("box:"):
         try:
             lx, ly, lz = (float(v) for v in spec[4:].split(","))
         except ValueError:
             raise ModelError(f"built-in box needs three lengths, e.g. box:1,1,5 — got {spec!r}") from None
-        return geometry.box(lx, ly, lz, mesh_size if mesh_size else min(lx, ly, lz) / 2, order)
+        return geometry.box(lx, ly, lz, min(lx, ly, lz) / 2 if mesh_size is None else mesh_size, order)
     if spec == "stepped-beam":
-        return geometry.stepped_beam(mesh_size if mesh_size else 5.0, order)
+        return geometry.stepped_beam(5.0 if mesh_size is None else mesh_size, order)
     return read_mesh(Path(spec), order, mesh_size)
 
 
@@ -65,12 +73,12 @@ def build_body(mesh: Mesh, material: Material, n_modes: int, clamp: str | None =
     """
     log = log or (lambda msg: None)
     progress = progress or (lambda label: None)
-    if n_modes < 1:
-        raise ModelError(f"the number of modes must be at least 1, not {n_modes}")
+    check_n_modes(n_modes)
     f = unitsys.unit_system(units)
     mesh_si = mesh.scaled(f.length)
     mat = material.to_si(units)
     clamped = mesh.group(clamp) if clamp is not None else None
+    check_parts(mesh, clamp)
 
     progress("assembling K")
     t0 = time.perf_counter()
@@ -97,6 +105,47 @@ def build_body(mesh: Mesh, material: Material, n_modes: int, clamp: str | None =
         material=dict(density=mat.density, young=mat.young, poisson=mat.poisson),
         params=all_params,
     )
+
+
+def check_n_modes(n_modes) -> None:
+    """ModelError unless ``n_modes`` is a whole number >= 1."""
+    if isinstance(n_modes, bool) or not isinstance(n_modes, (int, np.integer)) or n_modes < 1:
+        raise ModelError(f"the number of modes must be a whole number >= 1, not {n_modes!r}")
+
+
+def check_parts(mesh: Mesh, clamp: str | None) -> None:
+    """InputFileError naming the mesh's source if a part of it could move as a rigid body.
+
+    Free-free modes need one connected mesh; clamped modes need a node of the clamped
+    group ``clamp`` in every part. Checked before K is factored, which would fail as
+    "exactly singular" without saying where.
+    """
+    n_parts, label = mesh.parts()
+    if clamp is None:
+        if n_parts > 1:
+            sizes = np.bincount(label)
+            smallest = label == np.argmin(sizes)
+            raise InputFileError(mesh.source, None, f"the mesh is not connected: {n_parts} parts; "
+                                 f"{_describe_part(mesh, smallest)} shares no node with the largest part "
+                                 f"({sizes.max()} nodes), and free-free modes need one body")
+        return
+    clamped = mesh.group(clamp)
+    if clamped.size == 0:
+        raise ModelError(f"the clamped node group {clamp!r} is empty")
+    loose = np.setdiff1d(np.arange(n_parts), label[clamped])
+    if loose.size:
+        raise InputFileError(mesh.source, None, f"{_describe_part(mesh, label == loose[0])} holds no node "
+                             f"of the clamped group {clamp!r}: it is unconstrained (free to move as a rigid "
+                             f"body; the mesh has {n_parts} parts); clamp it too or remove it")
+
+
+def _describe_part(mesh: Mesh, in_part: np.ndarray, shown: int = 6) -> str:
+    """'a part of n nodes (nodes i, j, ..., the first at (x, y, z))', node numbers
+    1-based as in u0.dat, the position in the mesh's units."""
+    nodes = np.flatnonzero(in_part)
+    listed = ", ".join(str(i + 1) for i in nodes[:shown]) + (", …" if nodes.size > shown else "")
+    x, y, z = mesh.points[nodes[0]]
+    return f"a part of {nodes.size} nodes (nodes {listed}, the first at ({x:g}, {y:g}, {z:g}))"
 
 
 def mesh_statistics(mesh: Mesh) -> str:

@@ -15,11 +15,14 @@ A body of N nodes and n_f modes is stored in one directory as (indices 1-based):
 Reading is tolerant of files written by other tools: ``%`` and ``#`` comments
 (whole-line or trailing), blank lines, tabs / spaces / commas in any mix as
 separators, Fortran exponents (``1.0E+05``, ``1.0D+05``, ``1.0d-3``, ``1.0-100``).
-The stiffness file may hold the lower triangle, the upper triangle or the full
-matrix: an entry present on both sides must agree (relative tolerance 1e-9 of
-max|K|), an entry present on one side only is mirrored. Every fault raises
+Every value must be finite and at most :data:`~preprocess.body.MAX_MAGNITUDE` in
+magnitude. The stiffness file may hold the lower triangle, the upper triangle or the
+full matrix: an entry present on both sides must agree (relative tolerance 1e-9 of
+max|K|), an entry present on one side only is mirrored. Only regular files are read
+(:mod:`preprocess.inputfiles`). Every fault raises
 :class:`~ffrmbs.errors.InputFileError` with the 1-based line (None for faults of the
-whole file).
+whole file); file content in a message is a short sanitized quote
+(:func:`ffrmbs.errors.quote`).
 
 Units (see :mod:`preprocess.units`): with ``units="si-mm"`` positions are read in
 mm, masses in t and K in N/mm, and converted to SI. Mode shapes carry no unit of
@@ -45,8 +48,9 @@ from pathlib import Path
 import numpy as np
 import scipy.sparse as sp
 
-from ffrmbs.errors import InputFileError, ModelError
-from preprocess.body import BodyData
+from ffrmbs.errors import InputFileError, ModelError, quote
+from preprocess.body import MAX_MAGNITUDE, SYMMETRY_RTOL, BodyData
+from preprocess.inputfiles import regular_file
 from preprocess.units import unit_system
 
 U0_FILE = "u0.dat"
@@ -55,7 +59,6 @@ MASSES_FILE = "mij.dat"
 STIFFNESS_FILE = "stiffnessMatrix.dat"
 TEXT_FILES = (U0_FILE, MODES_FILE, MASSES_FILE, STIFFNESS_FILE)
 
-SYMMETRY_RTOL = 1e-9        # relative to max|K|
 NORMALIZED_TOL = 1e-6       # max|Φᵀ M Φ − I| of mass-normalized modes
 
 _NUMBER = re.compile(
@@ -64,11 +67,10 @@ _NON_FINITE = re.compile(r"[+-]?(?:nan|inf|infinity)", re.IGNORECASE)
 
 
 def read_text(path: Path) -> str:
-    """The text of ``path``; a missing or unreadable file raises InputFileError."""
+    """The text of the regular file ``path``; a missing, special or unreadable file
+    raises InputFileError."""
     try:
-        return path.read_text(encoding="utf-8", errors="replace")
-    except FileNotFoundError:
-        raise InputFileError(path, None, "file not found") from None
+        return regular_file(path).read_text(encoding="utf-8", errors="replace")
     except OSError as exc:
         raise InputFileError(path, None, f"cannot read file: {exc.strerror}") from None
 
@@ -92,11 +94,11 @@ def _number(token: str, path: Path, lineno: int) -> float:
     if match is None:
         fault = ("non-finite value" if _NON_FINITE.fullmatch(token)
                  else "cannot parse number")
-        raise InputFileError(path, lineno, f"{fault} {token!r}")
+        raise InputFileError(path, lineno, f"{fault} {quote(token)}")
     exponent = match["exp"] or match["fortran"]
     value = float(match["mantissa"] + ("e" + exponent if exponent else ""))
     if not math.isfinite(value):
-        raise InputFileError(path, lineno, f"non-finite value {token!r} (overflow)")
+        raise InputFileError(path, lineno, f"non-finite value {quote(token)} (overflow)")
     return value
 
 
@@ -105,7 +107,8 @@ def _table(path, n_cols: int | None = None) -> tuple[np.ndarray, np.ndarray]:
 
     ``n_cols=None`` requires every row to have the column count of the first row.
     Plain numbers are converted in one vectorized pass; only if that fails (Fortran
-    exponents, faults) is each token parsed and checked on its own.
+    exponents, faults) is each token parsed and checked on its own. A value beyond
+    MAX_MAGNITUDE is refused with its line.
     """
     path = Path(path)
     rows = _data_rows(path)
@@ -118,11 +121,16 @@ def _table(path, n_cols: int | None = None) -> tuple[np.ndarray, np.ndarray]:
     lines = np.array([lineno for lineno, _ in rows])
     try:
         table = np.array([tokens for _, tokens in rows], dtype=np.float64)
-        if np.isfinite(table).all():
-            return table, lines
+        if not np.isfinite(table).all():
+            raise ValueError("non-finite")
     except ValueError:
-        pass
-    return np.array([[_number(t, path, lineno) for t in tokens] for lineno, tokens in rows]), lines
+        table = np.array([[_number(t, path, lineno) for t in tokens] for lineno, tokens in rows])
+    large = np.abs(table) > MAX_MAGNITUDE
+    if large.any():
+        r, c = np.argwhere(large)[0]
+        raise InputFileError(path, int(lines[r]), f"value {table[r, c]:.3g} in column {c + 1} is out of range "
+                                                  f"(|value| > {MAX_MAGNITUDE:g})")
+    return table, lines
 
 
 def parse_u0(path) -> np.ndarray:

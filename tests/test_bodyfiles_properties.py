@@ -1,4 +1,5 @@
-"""Property: any finite body survives the thesis's text files bit for bit (SI)."""
+"""Property: any body of accepted values (finite, |value| <= MAX_MAGNITUDE) survives the
+thesis's text files bit for bit (SI)."""
 
 import numpy as np
 import scipy.sparse as sp
@@ -6,11 +7,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from preprocess.body import BodyData
+from preprocess.body import MAX_MAGNITUDE, BodyData
 from preprocess.textfiles import read_text_body, write_text_body
 
-finite = st.floats(allow_nan=False, allow_infinity=False, width=64)
-positive = st.floats(min_value=1e-300, max_value=1e300, allow_nan=False)
+finite = st.floats(min_value=-MAX_MAGNITUDE, max_value=MAX_MAGNITUDE, width=64)
+positive = st.floats(min_value=1e-300, max_value=MAX_MAGNITUDE)
 
 
 @st.composite

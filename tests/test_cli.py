@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from preprocess import read_body
-from preprocess.textfiles import TEXT_FILES
+from preprocess.textfiles import TEXT_FILES, read_text_body
 
 
 def ffrmbs(*args, cwd=None):
@@ -33,7 +33,7 @@ def test_preprocess_writes_body_files_and_prints_statistics(preprocessed):
     body = read_body(out / "body.h5")
     # first bending pair of the clamped report beam, Akantu's assembly gives 197.6 rad/s
     assert body.frequencies()[0][0] == pytest.approx(197.6, rel=2e-3)
-    text = read_body(out)
+    text = read_text_body(out)
     np.testing.assert_array_equal(text.phi, body.phi)
 
 
