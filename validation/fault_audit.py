@@ -126,12 +126,13 @@ def classify(returncode, stderr: str, expect, timed_out=False, executed=False) -
     if returncode < 0:
         return "unclear", f"killed by {signal.Signals(-returncode).name}; " + message
     clear = ((message.startswith(ERROR_PREFIX) or argparse_error) and len(message) <= MAX_MESSAGE
-             and any(_words(e) in _words(message) for e in expect))
+             and any(_words(e.lstrip("-")) in _words(message) for e in expect))
     return ("clear" if clear else "unclear"), message
 
 
 def _words(s: str) -> str:
-    """``s`` lower-cased with '-' and '_' as spaces: "--mesh-size", "mesh_size" and "Mesh size" match."""
+    """``s`` lower-cased with '-' and '_' as spaces, so that "mesh-size" (of "--mesh-size"),
+    "mesh_size" and "Mesh size" match."""
     return s.lower().replace("-", " ").replace("_", " ")
 
 
@@ -831,7 +832,7 @@ def markdown(doc) -> str:
     lines += ["", f"Controls (valid inputs): {len(doc['controls']) - len(failed)} of {len(doc['controls'])} ran cleanly"
               + (": failed " + ", ".join(c["case"] for c in failed) if failed else "."), "",
               "| case | kind | outcome | exit | s | message |", "|---|---|---|---|---|---|"]
-    lines += [f"| {r['case']} | {r['kind']} | {r['outcome']} | {_cell(r['returncode'])} | {r['seconds']:.1f} | "
+    lines += [f"| {_cell(r['case'])} | {r['kind']} | {r['outcome']} | {_cell(r['returncode'])} | {r['seconds']:.1f} | "
               f"{_cell(r['message'][:100])} |" for r in doc["cases"]]
     return "\n".join(lines) + "\n"
 
