@@ -37,7 +37,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import os
 import pickle
 import resource
@@ -291,7 +290,7 @@ audit cube: 0.1 m, six tet4
 4, 1, 8, 5, 7
 5, 1, 5, 6, 7
 6, 1, 6, 2, 7
-*NSET, NSET=X0
+*NSET, NSET=x0
 1, 4, 5, 8
 """
 
@@ -307,13 +306,19 @@ TEXT_BODY_CONTACT = ('contour2 = { kind = "2s", body = "beam", nodes = "y1" }',
 """The base scene's edit for a body read from text files, which carry no node groups: the
 point mass hits a ground plane instead of the beam's top face."""
 
-MATERIAL = ("--density", "1000", "--young", "1e7", "--poisson", "0.3")
+def _material(density="1000", young="1e7", poisson="0.3"):
+    """The material options of ``ffrmbs preprocess`` [kg/m³, Pa, -]."""
+    return ("--density", density, "--young", young, "--poisson", poisson)
+
+
+MATERIAL = _material()
 
 
 def build_shared(shared: Path) -> None:
     """The valid inputs: ``body/`` (the thesis's four text files of a 250 x 50 x 50 mm tet4
     beam, 5 x 2 x 3 divisions, 72 nodes, clamped at x = 0, 6 modes), ``body.h5`` (the same
-    body), ``scene.toml`` (:data:`BASE_SCENE`, for ``--dt`` beside a scene), ``cube.inp``, ``bar.geo`` and ``notes.txt``."""
+    body), ``scene.toml`` (:data:`BASE_SCENE`, for ``--dt`` beside a scene), ``cube.inp``,
+    ``bar.geo`` and ``notes.txt``."""
     from preprocess import Material, box, build_body, write_body
     from preprocess.bodyfiles import HDF5_FILE
 
@@ -327,14 +332,18 @@ def build_shared(shared: Path) -> None:
     (shared / "notes.txt").write_text("not a result file\n")
 
 
-def scene_text(*edits, source=BODY_SOURCE) -> str:
-    """:data:`BASE_SCENE` with each (old, new) edit applied; ``old`` must occur once."""
-    content = BASE_SCENE.replace("SOURCE", source)
+def edited_text(content: str, edits) -> str:
+    """``content`` with each (old, new) edit applied; ``old`` must occur exactly once."""
     for old, new in edits:
         if content.count(old) != 1:
-            raise ValueError(f"scene edit {old!r} does not match exactly once")
+            raise ValueError(f"edit {old!r} does not match exactly once")
         content = content.replace(old, new)
     return content
+
+
+def scene_text(*edits, source=BODY_SOURCE) -> str:
+    """:data:`BASE_SCENE` with its body file ``source`` and each (old, new) edit applied."""
+    return edited_text(BASE_SCENE.replace("SOURCE", source), edits)
 
 
 def scene_case(name, expect, *edits, source=BODY_SOURCE, extra=(), kind="scene") -> Case:
@@ -576,72 +585,73 @@ def _replacing(build):
     return run
 
 
-def _preprocess(source, *options, clamp=("--clamp", "X0"), material=MATERIAL, modes=("--modes", "2")):
-    return ("preprocess", source, *modes, *clamp, *material, *options, "--out", OUT)
+def _preprocess(source, *options):
+    """``ffrmbs preprocess source`` with valid options (2 modes, the face x = 0 clamped, a soft
+    material) followed by ``options``: argparse keeps the last value of a repeated option."""
+    return ("preprocess", source, "--modes", "2", "--clamp", "x0", *MATERIAL, *options, "--out", OUT)
 
 
-def _cube(*lines_changed):
+def _cube(*edits):
     """cube.inp with (old, new) edits."""
-    content = CUBE_INP
-    for old, new in lines_changed:
-        if content.count(old) != 1:
-            raise ValueError(f"mesh edit {old!r} does not match exactly once")
-        content = content.replace(old, new)
-    return text(content)
+    return text(edited_text(CUBE_INP, edits))
 
 
 BOX = "box:0.2,0.05,0.05"
+CUBE = "{shared}/cube.inp"
+EXTRA_TET = (("8, 0.0, 0.1, 0.1\n", "8, 0.0, 0.1, 0.1\n9, 1.0, 1.0, 1.0\n10, 1.1, 1.0, 1.0\n11, 1.0, 1.1, 1.0\n"
+              "12, 1.0, 1.0, 1.1\n"), ("6, 1, 6, 2, 7\n", "6, 1, 6, 2, 7\n7, 9, 10, 11, 12\n"))
+"""cube.inp plus a tetrahedron that touches nothing: a part left unconstrained by the clamp."""
 
-#: (case, argv, expected substrings, files)
-MESH_CASES = [
-    ("inp_unknown_element", _preprocess("{case}/m.inp"), ("m.inp",), (("m.inp", _cube(("C3D4", "C3D99"))),)),
-    ("inp_missing_node", _preprocess("{case}/m.inp"), ("m.inp",), (("m.inp", _cube(("6, 1, 6, 2, 7", "6, 1, 6, 2, 99"))),)),
-    ("inp_disconnected", _preprocess("{case}/m.inp"), ("m.inp",),
-     (("m.inp", _cube(("8, 0.0, 0.1, 0.1\n", "8, 0.0, 0.1, 0.1\n9, 1.0, 1.0, 1.0\n10, 1.1, 1.0, 1.0\n"
-                       "11, 1.0, 1.1, 1.0\n12, 1.0, 1.0, 1.1\n"), ("6, 1, 6, 2, 7\n", "6, 1, 6, 2, 7\n7, 9, 10, 11, 12\n"))),)),
-    ("inp_degenerate", _preprocess("{case}/m.inp"), ("m.inp",), (("m.inp", _cube(("1, 1, 2, 3, 7", "1, 1, 2, 3, 3"))),)),
-    ("inp_nan_coordinate", _preprocess("{case}/m.inp"), ("m.inp",), (("m.inp", _cube(("2, 0.1, 0.0, 0.0", "2, nan, 0.0, 0.0"))),)),
-    ("inp_empty", _preprocess("{case}/m.inp"), ("m.inp",), (("m.inp", raw(b"")),)),
-    ("inp_garbage", _preprocess("{case}/m.inp"), ("m.inp",), (("m.inp", text("*NODE\n1, a, b\n*ELEMENT\n?\n")),)),
-    ("inp_binary", _preprocess("{case}/m.inp"), ("m.inp",), (("m.inp", raw(bytes(range(256)) * 8)),)),
-    ("inp_fifo", _preprocess("{case}/m.inp"), ("m.inp",), (("m.inp", fifo()),)),
-    ("inp_missing", _preprocess("{case}/missing.inp"), ("missing.inp",), ()),
-    ("inp_directory", _preprocess("{case}/d.inp"), ("d.inp",), (("d.inp", folder()),)),
-    ("geo_syntax", _preprocess("{case}/m.geo", clamp=("--clamp", "x0")), ("m.geo",),
-     (("m.geo", text(BAR_GEO.replace("Box(1) = {", "Box(1) = {{"))),)),
-    ("geo_no_volume", _preprocess("{case}/m.geo", clamp=("--clamp", "x0")), ("m.geo",),
-     (("m.geo", text('SetFactory("OpenCASCADE");\nRectangle(1) = {0, 0, 0, 1, 1};\n')),)),
-    ("geo_empty", _preprocess("{case}/m.geo", clamp=("--clamp", "x0")), ("m.geo",), (("m.geo", raw(b"")),)),
-    ("msh_garbage", _preprocess("{case}/m.msh"), ("m.msh",), (("m.msh", text("$MeshFormat\ngarbage\n$EndMeshFormat\n")),)),
-    ("msh_empty", _preprocess("{case}/m.msh"), ("m.msh",), (("m.msh", raw(b"")),)),
-    ("unknown_suffix", _preprocess("{case}/m.stl"), ("m.stl",), (("m.stl", text("solid x\nendsolid x\n")),)),
-    ("box_zero", _preprocess("box:0,1,1", clamp=("--clamp", "x0")), ("box",), ()),
-    ("box_letters", _preprocess("box:a,b,c", clamp=("--clamp", "x0")), ("box",), ()),
-    ("box_negative", _preprocess("box:-1,1,1", clamp=("--clamp", "x0")), ("box",), ()),
-    ("box_nan", _preprocess("box:nan,1,1", clamp=("--clamp", "x0")), ("box",), ()),
-    ("box_two_lengths", _preprocess("box:1,1", clamp=("--clamp", "x0")), ("box",), ()),
-    ("mesh_size_zero", _preprocess(BOX, "--mesh-size", "0", clamp=("--clamp", "x0")), ("mesh-size", "mesh_size"), ()),
-    ("mesh_size_negative", _preprocess(BOX, "--mesh-size", "-1", clamp=("--clamp", "x0")), ("mesh-size", "mesh_size"), ()),
-    ("mesh_size_nan", _preprocess(BOX, "--mesh-size", "nan", clamp=("--clamp", "x0")), ("mesh-size", "mesh_size"), ()),
-    ("modes_zero", _preprocess("{shared}/cube.inp", modes=("--modes", "0")), ("modes",), ()),
-    ("modes_negative", _preprocess("{shared}/cube.inp", modes=("--modes", "-3")), ("modes",), ()),
-    ("modes_above_dofs", _preprocess("{shared}/cube.inp", modes=("--modes", "100000")), ("modes",), ()),
-    ("clamp_unknown", _preprocess("{shared}/cube.inp", clamp=("--clamp", "nosuchgroup")), ("nosuchgroup",), ()),
-    ("poisson_half", _preprocess("{shared}/cube.inp", material=("--density", "1000", "--young", "1e7", "--poisson", "0.5")),
-     ("poisson",), ()),
-    ("poisson_negative", _preprocess("{shared}/cube.inp", material=("--density", "1000", "--young", "1e7", "--poisson", "-1.5")),
-     ("poisson",), ()),
-    ("density_negative", _preprocess("{shared}/cube.inp", material=("--density", "-1", "--young", "1e7", "--poisson", "0.3")),
-     ("density",), ()),
-    ("density_zero", _preprocess("{shared}/cube.inp", material=("--density", "0", "--young", "1e7", "--poisson", "0.3")),
-     ("density",), ()),
-    ("young_zero", _preprocess("{shared}/cube.inp", material=("--density", "1000", "--young", "0", "--poisson", "0.3")),
-     ("young",), ()),
-    ("young_nan", _preprocess("{shared}/cube.inp", material=("--density", "1000", "--young", "nan", "--poisson", "0.3")),
-     ("young",), ()),
-    ("out_is_a_file", ("preprocess", "{shared}/cube.inp", "--modes", "2", "--clamp", "X0", *MATERIAL, "--out",
-                       "{shared}/notes.txt"), ("notes.txt",), ()),
+#: bad mesh files: (case, file name, builder; None: the file is missing)
+MESH_FILES = [
+    ("inp_unknown_element", "m.inp", _cube(("C3D4", "C3D99"))),
+    ("inp_missing_node", "m.inp", _cube(("6, 1, 6, 2, 7", "6, 1, 6, 2, 99"))),
+    ("inp_disconnected", "m.inp", _cube(*EXTRA_TET)),
+    ("inp_degenerate", "m.inp", _cube(("1, 1, 2, 3, 7", "1, 1, 2, 3, 3"))),
+    ("inp_nan_coordinate", "m.inp", _cube(("2, 0.1, 0.0, 0.0", "2, nan, 0.0, 0.0"))),
+    ("inp_empty", "m.inp", raw(b"")),
+    ("inp_garbage", "m.inp", text("*NODE\n1, a, b\n*ELEMENT\n?\n")),
+    ("inp_binary", "m.inp", raw(bytes(range(256)) * 8)),
+    ("inp_fifo", "m.inp", fifo()),
+    ("inp_missing", "missing.inp", None),
+    ("inp_directory", "d.inp", folder()),
+    ("geo_syntax", "m.geo", text(BAR_GEO.replace("Box(1) = {", "Box(1) = {{"))),
+    ("geo_no_volume", "m.geo", text('SetFactory("OpenCASCADE");\nRectangle(1) = {0, 0, 0, 1, 1};\n')),
+    ("geo_empty", "m.geo", raw(b"")),
+    ("msh_garbage", "m.msh", text("$MeshFormat\ngarbage\n$EndMeshFormat\n")),
+    ("msh_empty", "m.msh", raw(b"")),
+    ("unknown_suffix", "m.stl", text("solid x\nendsolid x\n")),
 ]
+
+#: bad built-in geometries and options: (case, input, options, expected substrings)
+MESH_OPTIONS = [
+    ("box_zero", "box:0,1,1", (), ("box",)),
+    ("box_letters", "box:a,b,c", (), ("box",)),
+    ("box_negative", "box:-1,1,1", (), ("box",)),
+    ("box_nan", "box:nan,1,1", (), ("box",)),
+    ("box_two_lengths", "box:1,1", (), ("box",)),
+    ("mesh_size_zero", BOX, ("--mesh-size", "0"), ("mesh-size",)),
+    ("mesh_size_negative", BOX, ("--mesh-size", "-1"), ("mesh-size",)),
+    ("mesh_size_nan", BOX, ("--mesh-size", "nan"), ("mesh-size",)),
+    ("modes_zero", CUBE, ("--modes", "0"), ("modes",)),
+    ("modes_negative", CUBE, ("--modes", "-3"), ("modes",)),
+    ("modes_above_dofs", CUBE, ("--modes", "100000"), ("modes",)),
+    ("clamp_unknown", CUBE, ("--clamp", "nosuchgroup"), ("nosuchgroup",)),
+    ("poisson_half", CUBE, ("--poisson", "0.5"), ("poisson",)),
+    ("poisson_negative", CUBE, ("--poisson", "-1.5"), ("poisson",)),
+    ("density_negative", CUBE, ("--density", "-1"), ("density",)),
+    ("density_zero", CUBE, ("--density", "0"), ("density",)),
+    ("young_zero", CUBE, ("--young", "0"), ("young",)),
+    ("young_nan", CUBE, ("--young", "nan"), ("young",)),
+    ("out_is_a_file", CUBE, ("--out", "{shared}/notes.txt"), ("notes.txt",)),
+]
+
+
+def mesh_cases() -> list[Case]:
+    cases = [Case(f"mesh_{name}", "mesh", _preprocess(f"{{case}}/{file}"), (file,),
+                  () if build is None else ((file, build),)) for name, file, build in MESH_FILES]
+    return cases + [Case(f"mesh_{name}", "mesh", _preprocess(source, *options), expect)
+                    for name, source, options, expect in MESH_OPTIONS]
 
 
 def _run(*options):
@@ -653,6 +663,7 @@ def _resume(files=(), marker=None, expect=("ckpt", "checkpoint")):
 
 
 CKPT = "out/point_mass_beam.h5.ckpt"
+SEED = "{shared}/seed/point_mass_beam.h5"      # the result file of control_default_run
 RESULT = (("out", folder()), ("out/point_mass_beam.h5", copy("seed/point_mass_beam.h5")))
 
 #: (case, argv, expected substrings) of the default scene's options
@@ -664,15 +675,15 @@ RUN_OPTIONS = [
     ("dt_negative", _run("--dt", "-1"), ("dt",)),
     ("dt_nan", _run("--dt", "nan"), ("dt",)),
     ("dt_inf", _run("--dt", "inf"), ("dt",)),
-    ("t_end_nan", ("run", "--t-end", "nan", "--no-check", "--no-export", "--out", OUT), ("t_end", "t-end")),
-    ("t_end_zero", ("run", "--t-end", "0", "--no-check", "--no-export", "--out", OUT), ("t_end", "t-end")),
-    ("t_end_inf", ("run", "--t-end", "inf", "--no-check", "--no-export", "--out", OUT), ("t_end", "t-end")),
-    ("t_end_1e300", ("run", "--t-end", "1e300", "--no-check", "--no-export", "--out", OUT), ("t_end", "t-end", "steps")),
+    ("t_end_nan", _run("--t-end", "nan"), ("t_end",)),
+    ("t_end_zero", _run("--t-end", "0"), ("t_end",)),
+    ("t_end_inf", _run("--t-end", "inf"), ("t_end",)),
+    ("t_end_1e300", _run("--t-end", "1e300"), ("t_end", "steps")),
     ("e_two", _run("--e", "2"), E_KEY),
     ("e_negative", _run("--e", "-1"), E_KEY),
     ("e_nan", _run("--e", "nan"), E_KEY),
-    ("checkpoint_every_negative", _run("--checkpoint-every", "-5"), ("checkpoint-every", "checkpoint_every")),
-    ("checkpoint_every_nan", _run("--checkpoint-every", "nan"), ("checkpoint-every", "checkpoint_every")),
+    ("checkpoint_every_negative", _run("--checkpoint-every", "-5"), ("checkpoint-every",)),
+    ("checkpoint_every_nan", _run("--checkpoint-every", "nan"), ("checkpoint-every",)),
     ("scene_with_default_options", ("run", "{shared}/scene.toml", "--dt", "1e-3", "--out", OUT), ("--dt",)),
     ("out_is_a_file", ("run", *FAST_RUN, "--out", "{shared}/notes.txt"), ("notes.txt",)),
 ]
@@ -695,19 +706,15 @@ RESULT_CASES = [
     ("plot_body_file", ("plot", "{shared}/body.h5", "--out", "{case}/p.png"), ("body.h5",), ()),
     ("plot_text_file", ("plot", "{shared}/notes.txt", "--out", "{case}/p.png"), ("notes.txt",), ()),
     ("plot_truncated", ("plot", "{case}/r.h5"), ("r.h5",), (("r.h5", truncated("seed/point_mass_beam.h5", 2048)),)),
-    ("plot_unknown_name", ("plot", "{shared}/seed/point_mass_beam.h5", "nosuchname", "--out", "{case}/p.png"),
-     ("nosuchname",), ()),
+    ("plot_unknown_name", ("plot", SEED, "nosuchname", "--out", "{case}/p.png"), ("nosuchname",), ()),
     ("plot_fifo", ("plot", "{case}/r.h5"), ("r.h5",), (("r.h5", fifo()),)),
     ("export_missing", ("export", "{case}/missing.h5"), ("missing.h5",), ()),
     ("export_body_file", ("export", "{shared}/body.h5", "--out", "{case}/pv"), ("body.h5",), ()),
     ("export_text_file", ("export", "{shared}/notes.txt", "--out", "{case}/pv"), ("notes.txt",), ()),
     ("export_truncated", ("export", "{case}/r.h5"), ("r.h5",), (("r.h5", truncated("seed/point_mass_beam.h5", 2048)),)),
-    ("export_every_zero", ("export", "{shared}/seed/point_mass_beam.h5", "--every", "0", "--out", "{case}/pv"),
-     ("every",), ()),
-    ("export_every_negative", ("export", "{shared}/seed/point_mass_beam.h5", "--every", "-2", "--out", "{case}/pv"),
-     ("every",), ()),
-    ("export_unknown_body", ("export", "{shared}/seed/point_mass_beam.h5", "--body", "nosuchbody", "--out", "{case}/pv"),
-     ("nosuchbody",), ()),
+    ("export_every_zero", ("export", SEED, "--every", "0", "--out", "{case}/pv"), ("every",), ()),
+    ("export_every_negative", ("export", SEED, "--every", "-2", "--out", "{case}/pv"), ("every",), ()),
+    ("export_unknown_body", ("export", SEED, "--body", "nosuchbody", "--out", "{case}/pv"), ("nosuchbody",), ()),
     ("info_etc_passwd", ("info", "/etc/passwd"), ("/etc/passwd",), ()),
     ("info_missing", ("info", "{case}/missing"), ("missing",), ()),
 ]
@@ -716,7 +723,7 @@ RESULT_CASES = [
 def all_cases() -> list[Case]:
     """Every case, in a fixed order; names are unique."""
     cases = scene_cases() + body_cases()
-    cases += [Case(f"mesh_{name}", "mesh", argv, expect, files) for name, argv, expect, files in MESH_CASES]
+    cases += mesh_cases()
     cases += [Case(f"run_{name}", "run", argv, expect) for name, argv, expect in RUN_OPTIONS]
     cases += [Case(f"run_{name}", "run", **kwargs) for name, kwargs in RESUME_CASES]
     cases += [Case(f"result_{name}", "result", argv, expect, files) for name, argv, expect, files in RESULT_CASES]
@@ -736,10 +743,9 @@ def controls() -> list[Case]:
         scene_case("control_scene_text_body", (), TEXT_BODY_CONTACT, source='"body"', extra=(("body", copy("body")),)),
         Case("control_info_text", "body", ("info", "{shared}/body"), ()),
         Case("control_info_h5", "body", ("info", "{shared}/body.h5"), ()),
-        Case("control_inp", "mesh", _preprocess("{shared}/cube.inp"), ()),
-        Case("control_geo", "mesh", _preprocess("{shared}/bar.geo", "--order", "1", "--mesh-size", "0.05",
-                                                clamp=("--clamp", "x0")), ()),
-        Case("control_box", "mesh", _preprocess(BOX, "--order", "1", clamp=("--clamp", "x0")), ()),
+        Case("control_inp", "mesh", _preprocess(CUBE), ()),
+        Case("control_geo", "mesh", _preprocess("{shared}/bar.geo", "--order", "1", "--mesh-size", "0.05"), ()),
+        Case("control_box", "mesh", _preprocess(BOX, "--order", "1"), ()),
     ]
 
 
