@@ -210,7 +210,9 @@ def test_a_case_without_its_peer_says_skipped_and_why(tmp_path, monkeypatch, nam
     from validation.peers import akantu_dynamics
 
     monkeypatch.setattr(akantu_dynamics, "available", lambda: False)
-    run_validation(tmp_path, quick=True, only=name, progress=None)
+    lines = []
+    run_validation(tmp_path, quick=True, only=name, progress=lines.append)
+    assert f"[1/1] {name}: skipped (akantu not installed)" in lines
     doc, report = read_outputs(tmp_path)
     assert doc["cases"][name]["status"] == "skipped (akantu not installed)"
     assert f"| {name} | 0 | skipped (akantu not installed) |" in report

@@ -499,6 +499,8 @@ def run_validation(out_dir, quick=False, only=None, cases=None, progress=print):
         outcome = _run_case(registry, name, quick)
         if outcome.failure is not None:
             say(f"[{i}/{len(names)}] {name}: FAILED: {outcome.failure}")
+        elif not outcome.result.rows and outcome.result.skipped:
+            say(f"[{i}/{len(names)}] {name}: {_status(outcome)}")
         else:
             say(f"[{i}/{len(names)}] {name}: {len(outcome.result.rows)} rows, "
                 f"{outcome.cpu_s:.3g} s CPU")
