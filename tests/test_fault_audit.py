@@ -52,6 +52,20 @@ def test_the_case_table_covers_every_kind_with_at_least_102_cases():
     assert sum(c.marker is not None for c in cases) == 2      # the planted pickles, with and without the header
 
 
+@pytest.mark.parametrize("name, source, options, expect", fa.MESH_OPTIONS, ids=[c[0] for c in fa.MESH_OPTIONS])
+def test_bad_preprocess_options_reach_the_command(name, source, options, expect):
+    """The bad value of an option appended to a valid command is the one the parser keeps (a
+    repeated option keeps its last value; nothing after it overrides it)."""
+    from ffrmbs.cli import build_parser
+
+    argv = [a.format(case="/c", shared="/s") for a in fa.all_cases_by_name()[f"mesh_{name}"].argv]
+    args = build_parser().parse_args(argv)
+    for flag, value in zip(options[::2], options[1::2]):
+        got = getattr(args, flag[2:].replace("-", "_"))
+        want = type(got)(value.format(case="/c", shared="/s"))
+        assert got == want or (got != got and want != want), (flag, got, value)
+
+
 def test_the_planted_pickle_runs_its_command_when_loaded(tmp_path):
     """The planted checkpoint is a real threat: unpickling it creates the marker."""
     ckpt = tmp_path / "x.h5.ckpt"
@@ -72,7 +86,7 @@ def audit_root(tmp_path_factory):
 
 
 def _case(name):
-    return next(c for c in fa.all_cases() if c.name == name)
+    return fa.all_cases_by_name()[name]
 
 
 @pytest.mark.parametrize("name, fragment", [

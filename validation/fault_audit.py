@@ -587,8 +587,9 @@ def _replacing(build):
 
 def _preprocess(source, *options):
     """``ffrmbs preprocess source`` with valid options (2 modes, the face x = 0 clamped, a soft
-    material) followed by ``options``: argparse keeps the last value of a repeated option."""
-    return ("preprocess", source, "--modes", "2", "--clamp", "x0", *MATERIAL, *options, "--out", OUT)
+    material, into the case's ``out/``) followed by ``options``: argparse keeps the last value
+    of a repeated option."""
+    return ("preprocess", source, "--modes", "2", "--clamp", "x0", *MATERIAL, "--out", OUT, *options)
 
 
 def _cube(*edits):
@@ -732,6 +733,11 @@ def all_cases() -> list[Case]:
     if duplicates:
         raise ValueError(f"duplicate case names: {duplicates}")
     return cases
+
+
+def all_cases_by_name() -> dict:
+    """{name: case} of :func:`all_cases`."""
+    return {c.name: c for c in all_cases()}
 
 
 def controls() -> list[Case]:
