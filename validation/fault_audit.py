@@ -2,7 +2,7 @@
 
 ``python3 -m validation.fault_audit --out DIR [--only KIND] [--jobs N] [--timeout S]``
 writes over a hundred bad inputs into ``DIR/cases/<case>/`` and runs each through
-``python3 -m ffrmbs.cli ...`` in its own process (``FFRMBS_PROGRESS=0``, a time limit and
+``python3 -m ffrmbs.cli ...`` in its own process group (``FFRMBS_PROGRESS=0``, a time limit and
 an address-space limit of :data:`MEMORY_LIMIT` bytes, so that a run that would eat the
 machine dies instead). Each case is classified (:func:`classify`) as
 
@@ -39,7 +39,6 @@ import argparse
 import json
 import os
 import pickle
-import resource
 import shutil
 import signal
 import subprocess
@@ -757,10 +756,10 @@ def controls() -> list[Case]:
 
 # --- running ---------------------------------------------------------------------------------
 
-def _limits():
-    """In the child: its own process group (killed as one on a timeout), bounded memory."""
-    os.setsid()
-    resource.setrlimit(resource.RLIMIT_AS, (MEMORY_LIMIT, MEMORY_LIMIT))
+LAUNCH = ("import resource, runpy; resource.setrlimit(resource.RLIMIT_AS, ({0}, {0})); "
+          "runpy.run_module('ffrmbs.cli', run_name='__main__', alter_sys=True)").format(MEMORY_LIMIT)
+"""``python3 -c LAUNCH ARGS`` is ``python3 -m ffrmbs.cli ARGS`` with the address space bounded
+(set in the child itself: ``preexec_fn`` is unsafe beside the runner's threads)."""
 
 
 def run_case(case: Case, root: Path, timeout=TIMEOUT) -> Outcome:
@@ -774,9 +773,8 @@ def run_case(case: Case, root: Path, timeout=TIMEOUT) -> Outcome:
     argv = [a.format(**where) for a in case.argv]
     env = dict(os.environ, FFRMBS_PROGRESS="0")
     t0 = time.perf_counter()
-    proc = subprocess.Popen([sys.executable, "-m", "ffrmbs.cli", *argv], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, stdin=subprocess.DEVNULL, env=env, preexec_fn=_limits,
-                            cwd=case_dir)
+    proc = subprocess.Popen([sys.executable, "-c", LAUNCH, *argv], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            stdin=subprocess.DEVNULL, env=env, start_new_session=True, cwd=case_dir)
     try:
         _, err = proc.communicate(timeout=timeout)
         timed_out = False
