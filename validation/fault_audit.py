@@ -39,6 +39,7 @@ import argparse
 import json
 import os
 import pickle
+import shlex
 import shutil
 import signal
 import subprocess
@@ -87,6 +88,7 @@ class Case:
     marker: str | None = None
 
     def paths(self, root: Path) -> dict:
+        """The directories ``{case}`` and ``{shared}`` stand for, under the audit's ``root``."""
         return {"case": str(root / "cases" / self.name), "shared": str(root / "shared")}
 
 
@@ -161,7 +163,10 @@ def copy(rel: str):
     """A copy of ``shared/rel`` (a file or a directory)."""
     def build(path, shared):
         src = shared / rel
-        shutil.copytree(src, path) if src.is_dir() else shutil.copyfile(src, path)
+        if src.is_dir():
+            shutil.copytree(src, path)
+        else:
+            shutil.copyfile(src, path)
     return build
 
 
@@ -192,7 +197,7 @@ class _Planted:
         self.marker = marker
 
     def __reduce__(self):
-        return os.system, (f"touch {self.marker}",)
+        return os.system, (f"touch {shlex.quote(str(self.marker))}",)
 
 
 def planted_pickle(header: bytes, marker: str):
