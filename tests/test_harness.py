@@ -201,3 +201,26 @@ def test_case_figures_are_written_and_shown(tmp_path):
     _, report = read_outputs(tmp_path)
     assert "![fig: boundaries](fig_boundaries.png)" in report
     assert not [p for p in tmp_path.iterdir() if p.name.startswith("tmp")]
+
+
+@pytest.mark.parametrize("name", ["wobble_complex", "wobble_case_study"])
+def test_a_case_without_its_peer_says_skipped_and_why(tmp_path, monkeypatch, name):
+    """The Akantu cases, Akantu absent: status "skipped (akantu not installed)" in report.md
+    and results.json, not "ok" with "No rows."."""
+    from validation.peers import akantu_dynamics
+
+    monkeypatch.setattr(akantu_dynamics, "available", lambda: False)
+    lines = []
+    run_validation(tmp_path, quick=True, only=name, progress=lines.append)
+    assert f"[1/1] {name}: skipped (akantu not installed)" in lines
+    doc, report = read_outputs(tmp_path)
+    assert doc["cases"][name]["status"] == "skipped (akantu not installed)"
+    assert f"| {name} | 0 | skipped (akantu not installed) |" in report
+    assert "Not run: skipped (akantu not installed)." in report and "No rows." not in report
+
+
+def test_a_case_with_rows_and_a_skipped_part_is_ok(tmp_path, demo):
+    run_validation(tmp_path, cases=[demo, fake_case("empty", no_rows_run)], progress=None)
+    doc, report = read_outputs(tmp_path)
+    assert doc["cases"]["demo"]["status"] == "ok" and doc["cases"]["empty"]["status"] == "ok"
+    assert "| demo | 4 | ok |" in report and "| empty | 0 | ok |" in report

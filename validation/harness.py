@@ -12,6 +12,10 @@ Each row of a result is a dict ``{case, code, config, cpu_s, error, error_kind, 
 swept parameters, ``cpu_s`` CPU seconds, ``error`` a float (relative unless ``error_kind``
 says otherwise; NaN when the row has no error), ``reference`` what the error is measured
 against. Extra keys are kept in results.json and shown as extra table columns.
+
+A case's status (report.md's summary table, results.json) is "ok", "failed", or
+"skipped (<reason>)" when it returns no rows and says why in its ``skipped`` lines
+(e.g. a peer code that is not installed).
 """
 
 from __future__ import annotations
@@ -360,6 +364,27 @@ def _cell(value):
     return text.replace("|", "\\|").replace("\n", " ")
 
 
+_SKIP_REASON = re.compile(r"skipped: (?P<reason>.*?)(?: \([^()]*\))?\s*$")
+
+
+def _status(outcome) -> str:
+    """A case's status: "failed", "ok", or "skipped (<reason>)" when it has no rows and
+    says why (its ``skipped`` lines, e.g. "akantu: skipped: akantu not installed (pip
+    install ...)" gives "skipped (akantu not installed)"; distinct reasons joined by "; ")."""
+    if outcome.failure is not None:
+        return "failed"
+    result = outcome.result
+    if result.rows or not result.skipped:
+        return "ok"
+    reasons = []
+    for line in result.skipped:
+        match = _SKIP_REASON.search(line)
+        reason = match["reason"] if match else line
+        if reason not in reasons:
+            reasons.append(reason)
+    return f"skipped ({'; '.join(reasons)})"
+
+
 def _case_report(outcome, png_name, figures=()):
     """Markdown lines of one case: heading, description, table, plots, notes, skipped."""
     lines = [f"## {outcome.name}", ""]
@@ -381,6 +406,8 @@ def _case_report(outcome, png_name, figures=()):
             cells += [_cell(row.get(k, "")) for k in extra]
             lines.append("| " + " | ".join(cells) + " |")
         lines.append("")
+    elif result.skipped:
+        lines += [f"Not run: {_status(outcome)}.", ""]
     else:
         lines += ["No rows.", ""]
     n_out = sum(not _plottable(row) for row in rows)
@@ -408,7 +435,7 @@ def _report(outcomes, pngs, figures, quick, machine, date):
              "- cpu [s]: CPU time of this process (all threads), time.process_time", "",
              "| case | rows | status |", "|---|---|---|"]
     for o in outcomes:
-        status = "FAILED" if o.failure is not None else "ok"
+        status = "FAILED" if o.failure is not None else _status(o)
         lines.append(f"| {o.name} | {len(o.result.rows) if o.result else 0} | {status} |")
     lines.append("")
     for o in outcomes:
@@ -439,7 +466,7 @@ def _results_json(outcomes, quick, machine, date):
     for o in outcomes:
         r = o.result
         cases[o.name] = {"description": o.description,
-                         "status": "failed" if o.failure is not None else "ok",
+                         "status": _status(o),
                          "failure": o.failure, "traceback": o.traceback, "cpu_s": o.cpu_s,
                          "skipped": list(r.skipped) if r else [], "notes": list(r.notes) if r else []}
     rows = [row for o in outcomes if o.result for row in o.result.rows]
@@ -477,6 +504,8 @@ def run_validation(out_dir, quick=False, only=None, cases=None, progress=print):
         outcome = _run_case(registry, name, quick)
         if outcome.failure is not None:
             say(f"[{i}/{len(names)}] {name}: FAILED: {outcome.failure}")
+        elif not outcome.result.rows and outcome.result.skipped:
+            say(f"[{i}/{len(names)}] {name}: {_status(outcome)}")
         else:
             say(f"[{i}/{len(names)}] {name}: {len(outcome.result.rows)} rows, "
                 f"{outcome.cpu_s:.3g} s CPU")
