@@ -26,11 +26,21 @@ import argparse
 import os
 import sys
 import time
+from pathlib import Path
 
 from ffrmbs import __version__
 from ffrmbs.errors import FfrmbsError, RunInterrupted
 
 DEFAULT_MODES = 10  # modes printed by the main job
+
+
+def output_dir(text):
+    """argparse type of an ``--out`` directory: refused at once when it names an existing
+    file (the command would fail after its work, or half-way through writing)."""
+    path = Path(text)
+    if path.exists() and not path.is_dir():
+        raise argparse.ArgumentTypeError(f"{text} exists and is not a directory")
+    return text
 
 
 def _say(msg):
@@ -177,7 +187,7 @@ def build_parser():
     pre.add_argument("--poisson", type=float, required=True)
     pre.add_argument("--order", type=int, choices=(1, 2), default=2, help="tet4 (1) or tet10 (2)")
     pre.add_argument("--mesh-size", type=float, help="maximum element size, input units")
-    pre.add_argument("--out", required=True, help="output directory")
+    pre.add_argument("--out", type=output_dir, required=True, help="output directory")
     pre.set_defaults(func=cmd_preprocess)
 
     info = sub.add_parser("info", help="summary of a body file or directory")
@@ -188,7 +198,7 @@ def build_parser():
     val = sub.add_parser("validate", help="run the validation cases")
     val.add_argument("--quick", action="store_true", help="coarse sweeps (minutes)")
     val.add_argument("--only", action="append", metavar="NAME", help="run only this case (repeatable)")
-    val.add_argument("--out", required=True, help="output directory")
+    val.add_argument("--out", type=output_dir, required=True, help="output directory")
     val.add_argument("--stability", action="store_true",
                      help="run the stability suite instead (stiff and extreme cases): stability.json, report.md")
     val.set_defaults(func=cmd_validate)
@@ -197,7 +207,7 @@ def build_parser():
                                      "thesis Sec. 5.2), a TOML scene file or a Python model script")
     run.add_argument("scene", nargs="?", help="scene file (.toml) or model script (.py defining scene()); "
                                               "default: the embedded point-mass-on-beam scene")
-    run.add_argument("--out", default="ffrmbs-run", help="output directory (default: ffrmbs-run)")
+    run.add_argument("--out", type=output_dir, default="ffrmbs-run", help="output directory (default: ffrmbs-run)")
     run.add_argument("--resume", action="store_true",
                      help="continue a killed or interrupted run from its checkpoint (OUT/<scene>.h5.ckpt)")
     run.add_argument("--checkpoint-every", type=float, default=60.0, metavar="SECONDS",
@@ -216,7 +226,7 @@ def build_parser():
     run.set_defaults(func=cmd_run)
 
     bench = sub.add_parser("bench", help="run the benchmarks: tables, target verdicts, JSON")
-    bench.add_argument("--out", default="out/bench", help="output directory (default: out/bench)")
+    bench.add_argument("--out", type=output_dir, default="out/bench", help="output directory (default: out/bench)")
     bench.add_argument("--quick", action="store_true", help="coarse settings of every benchmark")
     bench.add_argument("--only", action="append", metavar="NAME[,NAME]",
                        help="run only these benchmarks (comma-separated or repeated)")
@@ -231,7 +241,8 @@ def build_parser():
 
     export = sub.add_parser("export", help="export a result file to ParaView (.pvd + .vtu per sample)")
     export.add_argument("result", help="result file (.h5) of a run")
-    export.add_argument("--out", help="output directory (default: RESULT stem + '-paraview' beside it)")
+    export.add_argument("--out", type=output_dir,
+                        help="output directory (default: RESULT stem + '-paraview' beside it)")
     export.add_argument("--every", type=int, default=1, metavar="N", help="every N-th sample (default: 1)")
     export.add_argument("--body", action="append", metavar="NAME", help="only this body (repeatable)")
     export.add_argument("--compress", action="store_true", help="zlib-compress the .vtu files (smaller, slower)")

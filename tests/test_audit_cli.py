@@ -1,8 +1,11 @@
-"""Command-line behaviour a new user meets first (issue 18): a closed pipe."""
+"""Command-line behaviour a new user meets first (issue 18): a closed pipe, an output
+directory that is a file."""
 
 import os
 import subprocess
 import sys
+
+import pytest
 
 
 def test_info_into_a_closed_pipe_ends_quietly(tmp_path):
@@ -22,3 +25,25 @@ def test_info_into_a_closed_pipe_ends_quietly(tmp_path):
         os.close(write)
     assert "Traceback" not in res.stderr and "BrokenPipeError" not in res.stderr, res.stderr
     assert res.returncode == 141
+
+
+@pytest.mark.parametrize("argv", [
+    ["run", "--out", "{file}", "--t-end", "0.001", "--no-check", "--no-export"],
+    ["preprocess", "box:0.2,0.05,0.05", "--modes", "2", "--clamp", "x0", "--density", "7800",
+     "--young", "2e11", "--poisson", "0.3", "--order", "1", "--mesh-size", "0.05", "--out", "{file}"],
+    ["validate", "--quick", "--only", "cantilever", "--out", "{file}"],
+    ["bench", "--quick", "--out", "{file}"],
+])
+def test_an_output_directory_that_is_a_file_is_one_clear_line(tmp_path, capsys, argv):
+    """--out naming an existing regular file is refused before any work (it was a
+    FileExistsError traceback after the run or the meshing)."""
+    from ffrmbs.cli import main
+
+    blocker = tmp_path / "taken"
+    blocker.write_text("not a directory\n")
+    with pytest.raises(SystemExit) as stop:
+        main([a.replace("{file}", str(blocker)) for a in argv])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert stop.value.code == 2
+    assert err[-1].endswith(f"argument --out: {blocker} exists and is not a directory")
+    assert blocker.read_text() == "not a directory\n"
