@@ -13,7 +13,8 @@ tool's convention and catches corrupt connectivity.
 
 Readers (regular files only, :mod:`preprocess.inputfiles`):
 * ``.geo`` and ``.msh``: the gmsh Python API (``.geo`` is meshed, see
-  :func:`preprocess.geometry.mesh_current_model`); physical groups become node groups.
+  :func:`preprocess.geometry.mesh_geo_file`, after the checks of
+  :func:`preprocess.geometry.check_geo_file`); physical groups become node groups.
 * ``.inp`` and other formats meshio reads: node sets and element sets become node groups;
   surface and line elements are ignored, other volume elements refused. A fault meshio
   finds is one line naming the file (for ``.inp`` also the line and the fault,
