@@ -65,7 +65,7 @@ def _stage(label, fn, *args, **kwargs):
     return out
 
 
-def _preprocess(spec, modes, clamp, units, density, young, poisson, order, mesh_size, out):
+def _preprocess(spec, modes, clamp, units, density, young, poisson, order, mesh_size, out, check_limits=True):
     from preprocess.bodyfiles import write_body
     from preprocess.geometry import check_mesh_size
     from preprocess.pipeline import Material, build_body, check_n_modes, mesh_source, mesh_statistics
@@ -78,11 +78,11 @@ def _preprocess(spec, modes, clamp, units, density, young, poisson, order, mesh_
         check_mesh_size(mesh_size)
     with stage_bar(4 if out is not None else 3, "preprocess") as bar:
         bar.stage("meshing")
-        mesh = _stage(f"meshing {spec}", mesh_source, spec, order, mesh_size)
+        mesh = _stage(f"meshing {spec}", mesh_source, spec, order, mesh_size, check_limits)
         write(mesh_statistics(mesh), sys.stdout)
         params = dict(input=spec, mesh_size=mesh_size)
-        body = build_body(mesh, material, modes, clamp=clamp,
-                          units=units, params=params, log=_log, progress=bar.stage)
+        body = build_body(mesh, material, modes, clamp=clamp, units=units, params=params, log=_log,
+                          progress=bar.stage, check_limits=check_limits)
         if out is not None:
             bar.stage("writing body files")
             _stage(f"writing body files to {out}", write_body, out, body)
@@ -92,7 +92,7 @@ def _preprocess(spec, modes, clamp, units, density, young, poisson, order, mesh_
 
 def cmd_preprocess(args):
     _preprocess(args.input, args.modes, None if args.free else args.clamp, args.units,
-                args.density, args.young, args.poisson, args.order, args.mesh_size, args.out)
+                args.density, args.young, args.poisson, args.order, args.mesh_size, args.out, not args.no_limits)
 
 
 def cmd_info(args):
@@ -188,6 +188,9 @@ def build_parser():
     pre.add_argument("--order", type=int, choices=(1, 2), default=2, help="tet4 (1) or tet10 (2)")
     pre.add_argument("--mesh-size", type=float, help="maximum element size, input units")
     pre.add_argument("--out", type=output_dir, required=True, help="output directory")
+    pre.add_argument("--no-limits", action="store_true",
+                     help="mesh and solve even when the mesh is estimated over 5e6 nodes or half the physical "
+                          "memory (preprocess.limits)")
     pre.set_defaults(func=cmd_preprocess)
 
     info = sub.add_parser("info", help="summary of a body file or directory")

@@ -12,17 +12,26 @@ Every built-in body carries node groups for its six bounding faces, named
 ``body`` (all nodes), found on the mesh nodes with a tolerance relative to the
 body's own size (:func:`bounding_face_groups`), so at any scale. Meshing is
 single-threaded so that it is deterministic.
+
+Before gmsh meshes, the mesh is estimated from the model's volume and mesh size and
+refused over the limits of :mod:`preprocess.limits` (``check_limits=False`` lifts them).
+A ``.geo`` file is scanned first (:func:`check_geo_file`): every file it merges or
+includes must be a regular file (gmsh would block on a FIFO), and it must not mesh
+itself while gmsh reads it (before the estimate).
 """
 
 from __future__ import annotations
 
 import math
+import re
 from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
 
-from ffrmbs.errors import InputFileError, ModelError
+from ffrmbs.errors import InputFileError, ModelError, quote
+from preprocess import limits
+from preprocess.inputfiles import regular_file
 from preprocess.mesh import Mesh, canonical_mesh
 
 _GMSH_TET = {1: 4, 2: 11}  # gmsh element type numbers of tet4 and tet10
@@ -82,29 +91,105 @@ def check_mesh_size(mesh_size) -> float:
     return size
 
 
-def _generate(gmsh, order, mesh_size):
+def _generate(gmsh, order, mesh_size, source, check_limits=True, n_elements=None):
+    """Mesh the current (synchronized) model; a ModelError first if it is estimated over
+    the limits (from ``n_elements`` tetrahedra if known, else from the mesh size)."""
     if order not in (1, 2):
         raise ModelError(f"element order must be 1 or 2, not {order}")
     if mesh_size is not None:
         gmsh.option.setNumber("Mesh.MeshSizeMax", check_mesh_size(mesh_size))
+    if check_limits:
+        volume, box = model_volume(gmsh), np.array(gmsh.model.getBoundingBox(-1, -1))
+        extent = float((box[3:] - box[:3]).max())
+        if n_elements is None:
+            size = model_mesh_size(gmsh)
+            estimate = limits.from_mesh_size(volume, extent, size, order)
+            what = f"{source} meshed at element size {size:g} (volume {volume:g})"
+        else:
+            estimate, what = limits.from_elements(n_elements, order, volume, extent), str(source)
+        limits.check(estimate, what)
     gmsh.option.setNumber("Mesh.SecondOrderLinear", 1)  # straight mid-edge nodes
     gmsh.model.mesh.generate(3)
     if order == 2:
         gmsh.model.mesh.setOrder(2)
 
 
-def mesh_geo_file(path, order=2, mesh_size=None) -> Mesh:
-    """Mesh a gmsh ``.geo`` file with tetrahedra of ``order`` and maximum size ``mesh_size``."""
+def model_volume(gmsh) -> float:
+    """Volume of the current model: the sum of its OpenCASCADE volumes, or, for the
+    built-in kernel (which cannot tell without a mesh), its bounding box's volume."""
+    occ = gmsh.model.occ.getEntities(3)
+    if occ and len(occ) == len(gmsh.model.getEntities(3)):
+        return float(sum(gmsh.model.occ.getMass(dim, tag) for dim, tag in occ))
+    if not gmsh.model.getEntities(3):
+        return 0.0
+    box = np.array(gmsh.model.getBoundingBox(-1, -1))
+    return float(np.prod(box[3:] - box[:3]))
+
+
+def model_mesh_size(gmsh) -> float:
+    """The smallest element size gmsh will aim at in the current model: the smallest
+    size given at a point (when ``Mesh.MeshSizeFromPoints``) — else a tenth of the
+    model's diagonal, about gmsh's default — clipped to [``Mesh.MeshSizeMin``,
+    ``Mesh.MeshSizeMax``] and times ``Mesh.MeshSizeFactor``. Size fields and sizes from
+    curvature are not seen."""
+    option = gmsh.option.getNumber
+    points = gmsh.model.getEntities(0)
+    given = gmsh.model.mesh.getSizes(points) if points and option("Mesh.MeshSizeFromPoints") else []
+    given = [s for s in given if s > 0]
+    box = np.array(gmsh.model.getBoundingBox(-1, -1)) if points else np.zeros(6)
+    size = min(given) if given else 0.1 * float(np.linalg.norm(box[3:] - box[:3]))
+    size = min(max(size, option("Mesh.MeshSizeMin")), option("Mesh.MeshSizeMax"))
+    return size * option("Mesh.MeshSizeFactor")
+
+
+def mesh_geo_file(path, order=2, mesh_size=None, check_limits=True) -> Mesh:
+    """Mesh a gmsh ``.geo`` file with tetrahedra of ``order`` and maximum size ``mesh_size``.
+
+    ``check_limits``: refuse a ``Mesh`` command in the file and an estimated mesh over
+    the limits of :mod:`preprocess.limits` (ModelError) before meshing."""
     path = Path(path)
+    check_geo_file(path, check_limits)
     with gmsh_session() as gmsh:
         try:
             gmsh.open(str(path))
-            _generate(gmsh, order, mesh_size)
+            _generate(gmsh, order, mesh_size, path, check_limits)
         except ModelError:
             raise
         except Exception as exc:  # gmsh reports parse and meshing errors as Exception
             raise InputFileError(path, None, f"gmsh: {exc}") from None
         return mesh_from_gmsh_model(gmsh, path)
+
+
+_GEO_COMMENT = re.compile(r"//[^\n]*|/\*.*?\*/", re.DOTALL)
+_GEO_READS = re.compile(r'\b(?:Merge|Include|ShapeFromFile)\s*\(?\s*"([^"]*)"')
+_GEO_MESH = re.compile(r"^[ \t]*Mesh[ \t]+[123][ \t]*;", re.MULTILINE)
+
+
+def check_geo_file(path, check_limits=True) -> None:
+    """InputFileError if the ``.geo`` file ``path`` or a file it reads (``Merge "…"``,
+    ``Include "…"``, ``ShapeFromFile("…")``, relative to the reading file's folder,
+    ``.geo`` files followed at any depth) is not a regular file; with ``check_limits``
+    also if one holds a ``Mesh 1|2|3;`` command (it would mesh while gmsh reads the
+    file, before the mesh size is checked). File names built by expressions
+    (``StrCat``) are not seen."""
+    pending, seen = [Path(path)], set()
+    while pending:
+        current = regular_file(pending.pop())
+        if current.resolve() in seen:
+            continue
+        seen.add(current.resolve())
+        with open(current, encoding="utf-8", errors="replace") as f:
+            text = _GEO_COMMENT.sub(lambda m: "\n" * m[0].count("\n"), f.read())
+        command = _GEO_MESH.search(text)
+        if check_limits and command:
+            raise InputFileError(current, text.count("\n", 0, command.start()) + 1,
+                                 f"{quote(command[0].strip())} meshes while gmsh reads the file, before its size is "
+                                 f"checked; remove it (ffrmbs preprocess meshes the file) or {limits.LIFT}")
+        for name in _GEO_READS.findall(text):
+            read = current.parent / name
+            regular_file(read)
+            if read.suffix.lower() == ".geo":
+                pending.append(read)
 
 
 def bounding_face_groups(points) -> dict:
@@ -138,20 +223,22 @@ def _set_transfinite_box(gmsh, divisions):
         gmsh.model.mesh.setTransfiniteVolume(tag)
 
 
-def _mesh_occ(name, build, mesh_size, order, divisions=None) -> Mesh:
+def _mesh_occ(name, build, mesh_size, order, divisions=None, check_limits=True) -> Mesh:
+    source = f"<builtin {name}>"
     with gmsh_session() as gmsh:
         gmsh.model.add(name)
         build(gmsh.model.occ)
         gmsh.model.occ.synchronize()
         if divisions is not None:
             _set_transfinite_box(gmsh, divisions)
-        _generate(gmsh, order, mesh_size)
-        mesh = mesh_from_gmsh_model(gmsh, f"<builtin {name}>")
+        _generate(gmsh, order, mesh_size, source, check_limits,   # structured: 6 tetrahedra per cell
+                  None if divisions is None else 6 * math.prod(divisions))
+        mesh = mesh_from_gmsh_model(gmsh, source)
     mesh.node_groups.update(bounding_face_groups(mesh.points))
     return mesh
 
 
-def box(lx, ly, lz, mesh_size, order=2, divisions=None) -> Mesh:
+def box(lx, ly, lz, mesh_size, order=2, divisions=None, check_limits=True) -> Mesh:
     """Cuboid [0, lx] x [0, ly] x [0, lz] meshed with tetrahedra of maximum size ``mesh_size``.
 
     The report's beam is ``box(1, 1, 5, 0.5)`` (report Table 1: 579 nodes, 426 surface
@@ -164,12 +251,16 @@ def box(lx, ly, lz, mesh_size, order=2, divisions=None) -> Mesh:
     regular grid: (n_a + 1) x (n_b + 1) levels for order 1, (2 n_a + 1) x (2 n_b + 1)
     with the straight mid-edge nodes of order 2 — the node matrix O of thesis eq. 3.24
     (see :func:`contours.node_grid.node_matrix`).
+
+    ``check_limits``: a mesh estimated over the limits of :mod:`preprocess.limits` is a
+    ModelError before meshing.
     """
     if not all(math.isfinite(v) and v > 0 for v in (lx, ly, lz)):
         raise ModelError(f"box dimensions must be positive and finite, got {lx}, {ly}, {lz}")
     if divisions is not None:
         divisions = _check_divisions(divisions)
-    return _mesh_occ("box", lambda occ: occ.addBox(0, 0, 0, lx, ly, lz), mesh_size, order, divisions)
+    return _mesh_occ("box", lambda occ: occ.addBox(0, 0, 0, lx, ly, lz), mesh_size, order, divisions,
+                     check_limits)
 
 
 def _check_divisions(divisions):
@@ -185,7 +276,8 @@ def _check_divisions(divisions):
     return tuple(int(n) for n in items)
 
 
-def stepped_beam(mesh_size, order=2, l=95.0, h1=10.0, h2=34.2, w1=20.0, w2=9.74, base=10.0) -> Mesh:
+def stepped_beam(mesh_size, order=2, l=95.0, h1=10.0, h2=34.2, w1=20.0, w2=9.74, base=10.0,
+                 check_limits=True) -> Mesh:
     """Our reading of the thesis's complex beam (thesis Sec. 5.1, Fig. 5.1), in mm.
 
     The figure is not in the text. What the text fixes: the dimensions l, h1, h2,
@@ -201,6 +293,8 @@ def stepped_beam(mesh_size, order=2, l=95.0, h1=10.0, h2=34.2, w1=20.0, w2=9.74,
     block at the tip) match the thesis's ABAQUS frequencies no better; its ratio
     f2/f1 = 2.0 suggests a cross-section of about 20 x 9.74 mm that the text does
     not describe. Treat frequency differences to the thesis as geometry, not error.
+
+    ``check_limits`` as for :func:`box`.
     """
     zc = (w1 - w2) / 2.0
 
@@ -209,4 +303,4 @@ def stepped_beam(mesh_size, order=2, l=95.0, h1=10.0, h2=34.2, w1=20.0, w2=9.74,
         b = occ.addBox(base, 0, zc, l, h1, w2)
         occ.fuse([(3, a)], [(3, b)])
 
-    return _mesh_occ("stepped_beam", build, mesh_size, order)
+    return _mesh_occ("stepped_beam", build, mesh_size, order, check_limits=check_limits)

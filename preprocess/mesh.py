@@ -13,7 +13,8 @@ tool's convention and catches corrupt connectivity.
 
 Readers (regular files only, :mod:`preprocess.inputfiles`):
 * ``.geo`` and ``.msh``: the gmsh Python API (``.geo`` is meshed, see
-  :func:`preprocess.geometry.mesh_current_model`); physical groups become node groups.
+  :func:`preprocess.geometry.mesh_geo_file`, after the checks of
+  :func:`preprocess.geometry.check_geo_file`); physical groups become node groups.
 * ``.inp`` and other formats meshio reads: node sets and element sets become node groups;
   surface and line elements are ignored, other volume elements refused. A fault meshio
   finds is one line naming the file (for ``.inp`` also the line and the fault,
@@ -28,7 +29,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
-from ffrmbs.errors import InputFileError, quote
+from ffrmbs.errors import InputFileError, ModelError, quote
 from preprocess.inputfiles import regular_file
 
 #: mid-edge node k (local index 4 + k) sits on edge TET10_EDGES[k]
@@ -185,19 +186,23 @@ def _sort_mid_nodes(points, tets, source):
     return out
 
 
-def read_mesh(path, order=2, mesh_size=None) -> Mesh:
+def read_mesh(path, order=2, mesh_size=None, check_limits=True) -> Mesh:
     """Read a tetrahedral mesh from ``.msh`` (gmsh), ``.geo`` or ``.inp`` (Abaqus)
     and other meshio formats. Units are those of the file.
 
-    ``order`` (1 or 2) and ``mesh_size`` (maximum element size, file units) apply
-    to ``.geo`` files, which are meshed here; meshes read from files keep theirs.
+    ``order`` (1 or 2), ``mesh_size`` (maximum element size, file units) and
+    ``check_limits`` (the limits of :mod:`preprocess.limits`, checked before meshing)
+    apply to ``.geo`` files, which are meshed here; meshes read from files keep their
+    order, and a ``mesh_size`` for them is a ModelError.
     """
     path = regular_file(path)
     suffix = path.suffix.lower()
+    if suffix != ".geo" and mesh_size is not None:
+        raise ModelError(f"--mesh-size applies to built-in geometries and .geo files; {path} is already meshed")
     if suffix in (".geo", ".msh"):
         from preprocess.geometry import mesh_geo_file
 
-        return mesh_geo_file(path, order, mesh_size) if suffix == ".geo" else _read_gmsh_msh(path)
+        return mesh_geo_file(path, order, mesh_size, check_limits) if suffix == ".geo" else _read_gmsh_msh(path)
     return _read_meshio(path)
 
 

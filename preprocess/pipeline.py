@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from ffrmbs.errors import InputFileError, ModelError
-from preprocess import fe, geometry, modes, units as unitsys
+from preprocess import fe, geometry, limits, modes, units as unitsys
 from preprocess.body import BodyData
 from preprocess.mesh import Mesh, read_mesh
 
@@ -43,11 +43,13 @@ class Material:
         return Material(self.density * f.density, self.young * f.stress, self.poisson)
 
 
-def mesh_source(spec: str, order=2, mesh_size=None) -> Mesh:
+def mesh_source(spec: str, order=2, mesh_size=None, check_limits=True) -> Mesh:
     """The mesh named by ``spec``: a file path, ``box:LX,LY,LZ`` or ``stepped-beam``.
 
     Built-in sizes and ``mesh_size`` are in the units of the run (m for SI, mm for SI(mm));
-    ``mesh_size`` must be positive and finite (ModelError) or None (a default).
+    ``mesh_size`` must be positive and finite (ModelError) or None (a default), and None
+    for a mesh file. ``check_limits``: a mesh estimated over the limits of
+    :mod:`preprocess.limits` is a ModelError before meshing.
     """
     if mesh_size is not None:
         geometry.check_mesh_size(mesh_size)
@@ -56,24 +58,32 @@ def mesh_source(spec: str, order=2, mesh_size=None) -> Mesh:
             lx, ly, lz = (float(v) for v in spec[4:].split(","))
         except ValueError:
             raise ModelError(f"built-in box needs three lengths, e.g. box:1,1,5 — got {spec!r}") from None
-        return geometry.box(lx, ly, lz, min(lx, ly, lz) / 2 if mesh_size is None else mesh_size, order)
+        return geometry.box(lx, ly, lz, min(lx, ly, lz) / 2 if mesh_size is None else mesh_size, order,
+                            check_limits=check_limits)
     if spec == "stepped-beam":
-        return geometry.stepped_beam(5.0 if mesh_size is None else mesh_size, order)
-    return read_mesh(Path(spec), order, mesh_size)
+        return geometry.stepped_beam(5.0 if mesh_size is None else mesh_size, order, check_limits=check_limits)
+    return read_mesh(Path(spec), order, mesh_size, check_limits)
 
 
 def build_body(mesh: Mesh, material: Material, n_modes: int, clamp: str | None = None,
-               units: str = "si", params: dict | None = None, log=None, progress=None) -> BodyData:
+               units: str = "si", params: dict | None = None, log=None, progress=None,
+               check_limits: bool = True) -> BodyData:
     """Assemble K and the lumped masses, compute ``n_modes`` modes, return SI body data.
 
     ``clamp`` names a node group to clamp (thesis Sec. 2.4.4 (a)); None gives
     free-free modes with the rigid-body modes removed (b). ``log(msg)`` receives
     progress lines with timings; ``progress(label)`` is called as each long step begins
     ("assembling K", "computing modes"), e.g. a stage bar's ``stage`` (ffrmbs.progress).
+    ``check_limits``: a mesh whose assembly and modes are estimated over the limits of
+    :mod:`preprocess.limits` is a ModelError before assembly.
     """
     log = log or (lambda msg: None)
     progress = progress or (lambda label: None)
     check_n_modes(n_modes)
+    if check_limits:
+        limits.check(limits.from_mesh(mesh.n_nodes, mesh.n_elements, mesh.order,
+                                      float(mesh.element_volumes().sum()), float(np.ptp(mesh.points, axis=0).max())),
+                     mesh.source)
     f = unitsys.unit_system(units)
     mesh_si = mesh.scaled(f.length)
     mat = material.to_si(units)
