@@ -10,7 +10,12 @@ own ``<series>/<series>.pvd``.
 Series
 ------
 * a body with a ``surface`` group: its surface triangles at the deformed positions
-  (thesis eq. 2.24)
+  (thesis eq. 2.24) — linear triangles (VTK ``triangle``) for tet4 bodies, quadratic
+  triangles (VTK ``triangle6``: corners, then the mid-edge nodes of edges (c0,c1),
+  (c1,c2), (c2,c0), the order of :meth:`preprocess.mesh.Mesh.surface_triangles`) for
+  tet10 bodies. Quadratic cells rather than each split into four linear ones: every
+  surface node stays one point with its own data, the cells are the FE mesh's own
+  faces, and ParaView draws the curved faces of a bent body (nonlinear subdivision)
 
       x = R + A (ū0 + Φ q_f)      [m]
 
@@ -63,6 +68,7 @@ FORMAT = "ffrmbs-result"
 FORMAT_VERSION = 1
 MARKER = ".ffrmbs-export"
 POINT_BODY_VELOCITY = ("PointMass", "RigidBody")   # kinds whose u[:3] is Ṙ (world) [m/s]
+TRIANGLE_CELLS = {3: "triangle", 6: "triangle6"}  # VTK cell type of a surface triangle by its node count
 _CHUNK_VALUES = 3_000_000      # floats per block of samples held at once (~24 MB per array)
 
 
@@ -330,7 +336,9 @@ def _plan(f, path, bodies):
             _check_shape(u0, (None, 3), path)
             m = u0.shape[0]
             _check_shape(phi, (m, 3, None), path)
-            _check_shape(tri, (None, 3), path)
+            if tri.ndim != 2 or tri.shape[1] not in TRIANGLE_CELLS:
+                raise InputFileError(path, None, f"{tri.name} has shape {tri.shape}, expected (n, 3) for linear "
+                                                 "or (n, 6) for quadratic triangles")
             n_f = phi.shape[2]
             A = _dataset(g, "A", path)
             _check_shape(A, (None, 3, 3), path)
@@ -409,7 +417,7 @@ def _surface_samples(series, idx):
     g = series["group"]
     u0, phi, tri, nodes = series["u0"], series["phi"], series["triangles"], series["nodes"]
     n_f = phi.shape[2]
-    cells = [("triangle", tri.astype(np.int32) if len(u0) < 2**31 else tri)]
+    cells = [(TRIANGLE_CELLS[tri.shape[1]], tri.astype(np.int32) if len(u0) < 2**31 else tri)]
     for sl, block in _blocks(idx, 4 * 3 * len(u0)):
         R = np.asarray(g["R"][sl], dtype=float)                            # (s, 3)
         A = np.asarray(g["A"][sl], dtype=float)                            # (s, 3, 3)

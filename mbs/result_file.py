@@ -21,7 +21,9 @@ goes)::
             nodes (m,) int64              FE node numbers of the surface nodes
             u0 (m, 3) [m]                 their undeformed positions in the body frame
             phi (m, 3, n_f)               the body's mode shapes at them
-            triangles (k, 3) int64        rows into ``nodes``
+            triangles (k, 3) or (k, 6) int64   rows into ``nodes``: corners (tet4 bodies),
+                                          or corners then the mid-edge nodes of edges
+                                          (c0,c1), (c1,c2), (c2,c0) (tet10 bodies)
                                           → deformed surface x = R + A (u0 + phi · q_f)
     /energy/kinetic, /energy/potential      (n,) [J]          (when recorded)
     /outputs/<name>           (n, ...) the requested outputs (node positions [m], ...)
