@@ -34,6 +34,24 @@ class InputFileError(FfrmbsError):
         super().__init__(f"{where}: {fault}")
 
 
+class OutputFileError(FfrmbsError):
+    """A file ffrmbs writes (result file, checkpoint) that cannot be written: a full
+    disk, a missing directory, no permission.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file that could not be written.
+    fault : str
+        What failed and the system's reason (e.g. "No space left on device").
+    """
+
+    def __init__(self, path, fault):
+        self.path = str(path)
+        self.fault = fault
+        super().__init__(f"{self.path}: {fault}")
+
+
 class ModelError(FfrmbsError):
     """An inconsistent model: unknown node group, bad parameter, missing data."""
 

@@ -247,6 +247,7 @@ CONTOUR1_KINDS = ("point", "sphere")
 CONTOUR2_KINDS = ("2s", "1s", "band", "cylinder", "plane", "sphere")
 LAWS = ("impact", "coulomb", "penalty", "bilateral")
 QUANTITIES = ("position", "velocity", "displacement", "angular_velocity", "q_f")
+QUANTITY_UNITS = {"position": "m", "velocity": "m/s", "displacement": "m", "angular_velocity": "rad/s"}
 COMPONENTS = ("x", "y", "z")
 ORTHONORMAL_TOL = 1e-9      # max |AᵀA − 1| of an orientation matrix
 TOP_LEVEL = ("scene", "body", "spring", "joint", "load", "contact", "outputs")
@@ -605,6 +606,7 @@ class _SceneReader:
         self.bodies: dict[str, _Body] = {}
         self.steps: list = []               # (keypath, label, build(env)) after the bodies
         self.outputs: dict = {}             # name -> (keypath, label, make(env))
+        self.units: dict = {}               # name -> unit of the output's quantity
         self.inputs: dict = {"scene file": str(path)}
         self._sources: dict = {}            # resolved source -> BodyData (read once)
 
@@ -1266,6 +1268,8 @@ class _SceneReader:
                     t.fail("component", "quantity 'q_f' takes no 'component'")
                 component = COMPONENTS.index(t.choice("component", COMPONENTS))
             self.outputs[name] = (keypath, label, self._probe(frame, quantity, component))
+            if quantity in QUANTITY_UNITS:
+                self.units[name] = QUANTITY_UNITS[quantity]
 
     @staticmethod
     def _probe(ref: _FrameRef, quantity, component):
@@ -1301,7 +1305,7 @@ class _SceneReader:
         return self.r.run(("scene",), "[scene]", lambda: Scene(
             env.system, settings["t_end"], settings["dt"], settings["integrator"], settings["options"],
             settings["n_out"], outputs, settings["energies"], settings["plan"], settings["tolerance"],
-            settings["name"], dict(self.inputs), settings["description"]))
+            settings["name"], dict(self.inputs), settings["description"], units=dict(self.units)))
 
 
 # --- reading -------------------------------------------------------------------------------------------
