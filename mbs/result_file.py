@@ -279,14 +279,15 @@ class ResultRecorder:
         _create(f, "t", (), float, "s")
         for body in sys.bodies:
             g = f.create_group(f"bodies/{body.name}")
-            self._body_layout(g, body)
-            q_units, u_units = coordinate_units(body)
+            phi_units, q_f_units = modal_units(body)
+            self._body_layout(g, body, phi_units)
+            q_units, u_units = coordinate_units(body, q_f_units)
             _create(g, "q", (body.nq,), float, q_units)
             _create(g, "u", (body.nu,), float, u_units)
             _create(g, "R", (3,), float, "m")
             _create(g, "A", (3, 3), float, "1")
             if getattr(body, "n_modes", 0):
-                _create(g, "q_f", (body.n_modes,), float, modal_units(body)[1])
+                _create(g, "q_f", (body.n_modes,), float, q_f_units)
         if st.energies:
             for key in ("kinetic", "potential"):
                 _create(f, f"energy/{key}", (), float, "J")
@@ -299,7 +300,7 @@ class ResultRecorder:
         for key, rows in integ.trace().items():
             _create(f, f"trace/{key}", rows.shape[1:], rows.dtype, integ.trace_units.get(key, "SI"))
 
-    def _body_layout(self, g, body):
+    def _body_layout(self, g, body, phi_units):
         g.attrs.update(kind=type(body).__name__, q_start=body.q_slice.start, q_stop=body.q_slice.stop,
                        u_start=body.u_slice.start, u_stop=body.u_slice.stop, n_modes=getattr(body, "n_modes", 0))
         data = getattr(body, "data", None)
@@ -307,7 +308,7 @@ class ResultRecorder:
             nodes = data.surface_nodes
             s = g.create_group("surface")
             for key, values, unit in (("nodes", nodes, "1"), ("u0", data.u0[nodes], "m"),
-                                      ("phi", body.phi_nodes[nodes], modal_units(body)[0]),
+                                      ("phi", body.phi_nodes[nodes], phi_units),
                                       ("triangles", np.searchsorted(nodes, data.surface_triangles), "1")):
                 s[key] = values
                 s[key].attrs["units"] = unit
@@ -348,9 +349,10 @@ CONTACT_FIELDS = {"active": ((), np.int8, "1"), "gap": ((), float, "m"), "point"
                   "normal": ((3,), float, "1"), "force": ((3,), float, "N")}
 
 
-def coordinate_units(body) -> tuple[str, str]:
+def coordinate_units(body, q_f_units="SI") -> tuple[str, str]:
     """The units of a body's coordinates q and velocities u, by blocks, e.g.
-    "m (R, 3), 1 (quaternion, 4), kg^(1/2) m (q_f, 20)"."""
+    "m (R, 3), 1 (quaternion, 4), kg^(1/2) m (q_f, 20)" (``q_f_units``: those of its
+    modal coordinates, :func:`modal_units`)."""
     from .floating_frame import FloatingFrameBody
     from .rigid_body import PointMass
 
@@ -364,9 +366,8 @@ def coordinate_units(body) -> tuple[str, str]:
         q += ["m (R, 3)", f"{rotation} ({body.param.name}, {body.param.nq})"]
         u += ["m/s (v, 3)", "rad/s (angular velocity, 3)"]
     if body.n_modes:
-        q_f = modal_units(body)[1]
-        q.append(f"{q_f} (q_f, {body.n_modes})")
-        u.append(f"{q_f}/s (q_f rates, {body.n_modes})")
+        q.append(f"{q_f_units} (q_f, {body.n_modes})")
+        u.append(f"{q_f_units}/s (q_f rates, {body.n_modes})")
     return ", ".join(q) or "1", ", ".join(u) or "1"
 
 
