@@ -52,6 +52,12 @@ class OutputFileError(FfrmbsError):
         super().__init__(f"{self.path}: {fault}")
 
 
+def os_reason(exc: OSError) -> str:
+    """The system's reason of an OSError in a few words (e.g. "No space left on device"):
+    its strerror, else the first line of its message, at most 200 characters."""
+    return exc.strerror or (str(exc).splitlines() or [type(exc).__name__])[0][:200]
+
+
 class ModelError(FfrmbsError):
     """An inconsistent model: unknown node group, bad parameter, missing data."""
 

@@ -62,7 +62,7 @@ from xml.sax.saxutils import quoteattr
 import h5py
 import numpy as np
 
-from ffrmbs.errors import FfrmbsError, InputFileError
+from ffrmbs.errors import FfrmbsError, InputFileError, OutputFileError, os_reason
 
 FORMAT = "ffrmbs-result"
 FORMAT_VERSION = 1
@@ -233,6 +233,8 @@ def export_paraview(result_path, out_dir=None, every=1, bodies=None, compress=Fa
     FfrmbsError
         ``every`` is not a positive integer, or ``out_dir`` exists and is not an earlier
         export.
+    OutputFileError
+        The export cannot be written (a full disk, no permission); nothing is left behind.
     """
     from ffrmbs.progress import progress_bar
 
@@ -247,9 +249,10 @@ def export_paraview(result_path, out_dir=None, every=1, bodies=None, compress=Fa
 
     with open_result(result_path) as f:
         plan = _plan(f, result_path, bodies)
-        created = _make_parents(out_dir.parent)
-        tmp = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.tmp-", dir=out_dir.parent))
+        created, tmp = [], None
         try:
+            created = _make_parents(out_dir.parent)
+            tmp = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.tmp-", dir=out_dir.parent))
             idx = np.arange(0, plan["n"], every)
             n_files = len(idx) * len(plan["series"])
             width = max(6, len(str(plan["n"] - 1)))
@@ -273,13 +276,16 @@ def export_paraview(result_path, out_dir=None, every=1, bodies=None, compress=Fa
             (tmp / MARKER).write_text(json.dumps({"result": str(result_path.absolute()), "every": every,
                                                   "series": [s["name"] for s in plan["series"]]}) + "\n")
             _replace_dir(tmp, out_dir)
-        except BaseException:
-            shutil.rmtree(tmp, ignore_errors=True)
+        except BaseException as exc:
+            if tmp is not None:
+                shutil.rmtree(tmp, ignore_errors=True)
             for d in reversed(created):
                 try:
                     d.rmdir()
                 except OSError:
                     pass
+            if isinstance(exc, OSError):
+                raise OutputFileError(out_dir, f"cannot write the ParaView export: {os_reason(exc)}") from None
             raise
     return out_dir / main.name
 

@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ffrmbs.errors import FfrmbsError, InputFileError
+from ffrmbs.errors import FfrmbsError, InputFileError, OutputFileError, os_reason
 from ffrmbs.export import _attr, _check_shape, _dataset, _group, open_result
 
 COMPONENTS = ("x", "y", "z")
@@ -206,6 +206,8 @@ def plot_result(result_path, names=None, out=None, overwrite=False) -> Path:
     InputFileError
         Not an ffrmbs result file, a missing or malformed dataset, or an unknown name (the
         message lists the available ones). No PNG is written.
+    OutputFileError
+        The PNG cannot be written (a full disk, no permission); no partial file is left.
     """
     result_path = Path(result_path)
     out = Path(out) if out is not None else new_plot_path(result_path, overwrite)
@@ -216,6 +218,8 @@ def plot_result(result_path, names=None, out=None, overwrite=False) -> Path:
             raise FfrmbsError(f"cannot write {out}: no directory {out.parent}")
         fig.savefig(tmp, format="png")
         os.replace(tmp, out)
+    except OSError as exc:
+        raise OutputFileError(out, f"cannot write the plot: {os_reason(exc)}") from None
     finally:
         if tmp.exists():
             tmp.unlink()

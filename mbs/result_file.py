@@ -76,7 +76,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from ffrmbs.errors import InputFileError, OutputFileError
+from ffrmbs.errors import InputFileError, OutputFileError, os_reason
 
 from .body import Frame
 from .checkpoint import read_checkpoint, write_checkpoint
@@ -253,8 +253,7 @@ class ResultRecorder:
         try:
             yield
         except OSError as exc:
-            reason = exc.strerror or str(exc).split("\n")[0][:200]
-            fault = f"cannot write the {what}: {reason}"
+            fault = f"cannot write the {what}: {os_reason(exc)}"
             self._close_failed(f"failed: {fault}")
             raise OutputFileError(path, fault) from None
 

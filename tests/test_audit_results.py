@@ -235,6 +235,21 @@ def test_a_full_disk_at_a_flush_is_one_clear_line_and_status_failed(tmp_path, mo
     assert attrs["status"] == f"failed: cannot write the result file: {os.strerror(errno.ENOSPC)}"
 
 
+def test_a_full_disk_while_plotting_or_exporting_is_one_clear_line(default_run, tmp_path, monkeypatch):
+    from matplotlib.figure import Figure
+
+    result, png, pv = default_run[0] / "point_mass_beam.h5", tmp_path / "p.png", tmp_path / "pv"
+    monkeypatch.setattr(Figure, "savefig", enospc)
+    code, _, stderr = run_cli("plot", str(result), "y", "--out", str(png))
+    assert code == 2
+    assert stderr.strip() == f"ffrmbs: error: {png}: cannot write the plot: {os.strerror(errno.ENOSPC)}"
+    monkeypatch.setattr(meshio, "write", enospc)
+    code, _, stderr = run_cli("export", str(result), "--out", str(pv), "--every", "100")
+    assert code == 2
+    assert stderr.strip() == f"ffrmbs: error: {pv}: cannot write the ParaView export: {os.strerror(errno.ENOSPC)}"
+    assert list(tmp_path.iterdir()) == []                                 # nothing half-written
+
+
 # --- finding 14: kill -9 at any moment leaves a readable file ------------------------------------
 
 KILL_T_END, KILL_N_OUT = 0.05, 4001      # the example scene shortened, with dense samples: many flushes
