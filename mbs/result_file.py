@@ -66,10 +66,12 @@ attributes.
 from __future__ import annotations
 
 import contextlib
+import errno
 import hashlib
 import json
 import os
 import platform
+import re
 import time
 from pathlib import Path
 
@@ -85,6 +87,8 @@ from .result import Result
 FORMAT, FORMAT_VERSION = "ffrmbs-result", 1
 CHUNK_ROWS = 256
 FLUSH_SAMPLES = CHUNK_ROWS      # buffered samples that force a flush: each flush completes a chunk
+HDF5_WRITE_FAILED = re.compile(r"file write failed.*?error message = '([^']*)'", re.S)
+SPACE_RESERVE = 1 << 20         # [bytes] kept free on the disk for closing the file cleanly
 
 
 def versions() -> dict:
@@ -154,9 +158,10 @@ class ResultRecorder:
         file is readable (an older file of the same name is replaced)."""
         part = self.path.with_name(self.path.name + ".part")
         try:
-            with self._writing(part, "result file"):
+            with self._writing(self.path, "result file"):
                 self.path.parent.mkdir(parents=True, exist_ok=True)
                 self.checkpoint_path.unlink(missing_ok=True)
+                ensure_space(self.path.parent, sum(getattr(b, "phi", np.zeros(0)).nbytes for b in integ.system.bodies))
                 self.file = f = h5py.File(part, "w")
                 st = integ.state
                 f.attrs.update(format=FORMAT, format_version=FORMAT_VERSION, status="running",
@@ -248,12 +253,15 @@ class ResultRecorder:
 
     @contextlib.contextmanager
     def _writing(self, path, what):
-        """Turn an OSError while writing ``path`` into OutputFileError, after marking the
-        result file failed and closing it."""
+        """Turn an OSError (or HDF5's "file write failed") while writing ``path`` into
+        OutputFileError, after marking the result file failed and closing it."""
         try:
             yield
-        except OSError as exc:
-            fault = f"cannot write the {what}: {os_reason(exc)}"
+        except (OSError, RuntimeError) as exc:
+            hdf5 = HDF5_WRITE_FAILED.search(str(exc))      # HDF5 reports some failed writes as RuntimeError
+            if isinstance(exc, RuntimeError) and hdf5 is None:
+                raise
+            fault = f"cannot write the {what}: {hdf5[1] if hdf5 else os_reason(exc)}"
             self._close_failed(f"failed: {fault}")
             raise OutputFileError(path, fault) from None
 
@@ -264,11 +272,8 @@ class ResultRecorder:
             return
         try:
             f.attrs["status"] = status
-        except OSError:
-            pass
-        try:
             f.close()
-        except OSError:
+        except (OSError, RuntimeError):
             pass
 
     def _layout(self, f, integ):
@@ -313,35 +318,51 @@ class ResultRecorder:
                 s[key].attrs["units"] = unit
 
     def _flush(self, integ):
+        """Append the samples and trace rows not yet in the file, then flush it."""
         st, f = integ.state, self.file
         a, b = self.written, st.recorded
+        blocks = []                                  # (dataset name, rows to append)
         if b > a:
             res = st.result
-            _append(f, "t", res.t[a:b])
+            blocks.append(("t", res.t[a:b]))
             for body in integ.system.bodies:
                 g = f"bodies/{body.name}"
                 q, u = res.q[a:b, body.q_slice], res.u[a:b, body.u_slice]
-                _append(f, f"{g}/q", q)
-                _append(f, f"{g}/u", u)
                 R, A = _frame_rows(body, q, res.t[a:b])
-                _append(f, f"{g}/R", R)
-                _append(f, f"{g}/A", A)
+                blocks += [(f"{g}/q", q), (f"{g}/u", u), (f"{g}/R", R), (f"{g}/A", A)]
                 if getattr(body, "n_modes", 0):
-                    _append(f, f"{g}/q_f", body.modal_coordinates(q))
-            for key, values in res.energy.items():
-                _append(f, f"energy/{key}", values[a:b])
-            for name, values in res.outputs.items():
-                _append(f, f"outputs/{name}", values[a:b])
-            for name, rec in res.contacts.items():
-                for key, values in rec.items():
-                    _append(f, f"contacts/{name}/{key}", values[a:b])
+                    blocks.append((f"{g}/q_f", body.modal_coordinates(q)))
+            blocks += [(f"energy/{key}", values[a:b]) for key, values in res.energy.items()]
+            blocks += [(f"outputs/{name}", values[a:b]) for name, values in res.outputs.items()]
+            blocks += [(f"contacts/{name}/{key}", values[a:b])
+                       for name, rec in res.contacts.items() for key, values in rec.items()]
         rows = integ.trace(self.traced)
-        for key, values in rows.items():
-            _append(f, f"trace/{key}", values)
+        blocks += [(f"trace/{key}", values) for key, values in rows.items()]
+        if blocks:              # whole chunks may be allocated: room for one more chunk per dataset
+            ensure_space(self.path.parent, sum((len(v) + CHUNK_ROWS) * np.asarray(v)[:1].nbytes for _, v in blocks))
+        for name, values in blocks:
+            _append(f, name, values)
         f.flush()
         self.written = b
         self.traced += min((len(v) for v in rows.values()), default=0)
         self._last_flush = time.perf_counter()
+
+
+def free_bytes(directory) -> int:
+    """Bytes available to this user on the file system of ``directory``."""
+    st = os.statvfs(directory)
+    return st.f_bavail * st.f_frsize
+
+
+def ensure_space(directory, nbytes):
+    """Raise OSError(ENOSPC) unless ``nbytes`` plus SPACE_RESERVE fit on the file system
+    of ``directory``. HDF5 cannot close a file after a failed write (and its library then
+    crashes the process as it exits), so a full disk is caught before HDF5 writes; the
+    reserve leaves room for the status attribute and the close."""
+    free = free_bytes(directory)
+    if free < nbytes + SPACE_RESERVE:
+        raise OSError(errno.ENOSPC, f"{os.strerror(errno.ENOSPC)} ({free / 1e6:.2f} MB free, "
+                                    f"{(nbytes + SPACE_RESERVE) / 1e6:.2f} MB needed with the reserve)")
 
 
 CONTACT_FIELDS = {"active": ((), np.int8, "1"), "gap": ((), float, "m"), "point": ((3,), float, "m"),

@@ -216,13 +216,20 @@ def test_a_full_disk_at_a_checkpoint_is_one_clear_line_and_status_failed(tmp_pat
     assert not ckpt.exists()
 
 
-def test_a_full_disk_at_a_flush_is_one_clear_line_and_status_failed(tmp_path, monkeypatch):
+HDF5_ENOSPC = RuntimeError("Unable to synchronously flush file (file write failed: time = Wed Nov 25 12:08:13 2026\n, "
+                           "filename = 'x.h5', file descriptor = 3, errno = 28, error message = 'No space left on "
+                           "device', buf = 0x1, total write size = 96, bytes this sub-write = 96, offset = 1757976)")
+
+
+@pytest.mark.parametrize("error", [OSError(errno.ENOSPC, os.strerror(errno.ENOSPC)), HDF5_ENOSPC],
+                         ids=["OSError", "HDF5 RuntimeError"])
+def test_a_full_disk_at_a_flush_is_one_clear_line_and_status_failed(tmp_path, monkeypatch, error):
     real, calls = h5py.File.flush, []
 
     def flush(self):                     # the layout's flush goes through, the next one finds the disk full
         calls.append(1)
         if len(calls) > 1:
-            enospc()
+            raise error
         real(self)
 
     monkeypatch.setattr(h5py.File, "flush", flush)
@@ -233,6 +240,24 @@ def test_a_full_disk_at_a_flush_is_one_clear_line_and_status_failed(tmp_path, mo
     monkeypatch.undo()
     res, attrs = load_result(path)
     assert attrs["status"] == f"failed: cannot write the result file: {os.strerror(errno.ENOSPC)}"
+
+
+def test_a_disk_about_to_fill_stops_before_hdf5_writes(tmp_path, monkeypatch):
+    """HDF5 cannot close a file after a failed write (the process then crashes as it
+    exits, seen on a full 1 MB tmpfs), so the recorder checks the free space before each
+    flush and stops with room left to close the file."""
+    import mbs.result_file
+
+    free = iter([50e6] + [1.2e6] * 100)                     # [bytes]: room for the layout, not for 256 samples
+    monkeypatch.setattr(mbs.result_file, "free_bytes", lambda directory: int(next(free)))
+    code, _, stderr = run_cli("run", "--no-check", "--no-export", "--t-end", "0.015", "--out", str(tmp_path))
+    path = tmp_path / "point_mass_beam.h5"
+    assert code == 2
+    assert stderr.startswith(f"ffrmbs: error: {path}: cannot write the result file: {os.strerror(errno.ENOSPC)} "
+                             "(1.20 MB free, ") and stderr.count("\n") == 1
+    res, attrs = load_result(path)
+    assert attrs["status"].startswith(f"failed: cannot write the result file: {os.strerror(errno.ENOSPC)}")
+    assert len(res.t) == 0 and len(res.trace["t"]) == 0
 
 
 def test_a_full_disk_while_plotting_or_exporting_is_one_clear_line(default_run, tmp_path, monkeypatch):
