@@ -471,30 +471,39 @@ def load_result(path) -> tuple[Result, dict]:
     except OSError as exc:
         raise InputFileError(path, None, f"not a readable HDF5 file ({exc})") from None
     with f:
-        if f.attrs.get("format") != FORMAT:
-            raise InputFileError(path, None, "not an ffrmbs result file (attribute format missing)")
-        attrs = {k: (json.loads(v) if k in ("options", "versions", "inputs", "summary", "stats") else v)
-                 for k, v in f.attrs.items()}
-        per_sample = [obj for name, obj in _datasets(f)
-                      if not name.startswith("trace/") and "/surface/" not in name]
-        n = min((d.shape[0] for d in per_sample), default=0)
-        t = f["t"][:n] if "t" in f else np.zeros(0)
-        bodies = f.get("bodies", {})
-        nq = max((g.attrs["q_stop"] for g in bodies.values()), default=0)
-        nu = max((g.attrs["u_stop"] for g in bodies.values()), default=0)
-        q, u = np.full((n, nq), np.nan), np.full((n, nu), np.nan)
-        for g in bodies.values():
-            if "q" in g:
-                q[:, g.attrs["q_start"]:g.attrs["q_stop"]] = g["q"][:n]
-                u[:, g.attrs["u_start"]:g.attrs["u_stop"]] = g["u"][:n]
-        res = Result(t, q, u, plan=str(attrs.get("plan", "")))
-        res.outputs = {k: v[:n] for k, v in _group(f, "outputs").items()}
-        res.energy = {k: v[:n] for k, v in _group(f, "energy").items()}
-        trace = _group(f, "trace")
-        steps = min((len(v) for v in trace.values()), default=0)
-        res.trace = {k: v[:steps] for k, v in trace.items()}
-        res.contacts = {name: {k: v[:n] for k, v in g.items()} for name, g in f.get("contacts", {}).items()}
-        res.stats = attrs.get("stats", {}) or {}
+        try:
+            return _read(f, path)
+        except (OSError, RuntimeError, KeyError, ValueError) as exc:   # h5py on damaged metadata; bad JSON
+            reason = (str(exc).splitlines() or [type(exc).__name__])[0][:120]
+            raise InputFileError(path, None, f"damaged result file ({reason})") from None
+
+
+def _read(f, path) -> tuple[Result, dict]:
+    """The body of :func:`load_result` on the open file ``f``."""
+    if f.attrs.get("format") != FORMAT:
+        raise InputFileError(path, None, "not an ffrmbs result file (attribute format missing)")
+    attrs = {k: (json.loads(v) if k in ("options", "versions", "inputs", "summary", "stats") else v)
+             for k, v in f.attrs.items()}
+    per_sample = [obj for name, obj in _datasets(f)
+                  if not name.startswith("trace/") and "/surface/" not in name]
+    n = min((d.shape[0] for d in per_sample), default=0)
+    t = f["t"][:n] if "t" in f else np.zeros(0)
+    bodies = f.get("bodies", {})
+    nq = max((g.attrs["q_stop"] for g in bodies.values()), default=0)
+    nu = max((g.attrs["u_stop"] for g in bodies.values()), default=0)
+    q, u = np.full((n, nq), np.nan), np.full((n, nu), np.nan)
+    for g in bodies.values():
+        if "q" in g:
+            q[:, g.attrs["q_start"]:g.attrs["q_stop"]] = g["q"][:n]
+            u[:, g.attrs["u_start"]:g.attrs["u_stop"]] = g["u"][:n]
+    res = Result(t, q, u, plan=str(attrs.get("plan", "")))
+    res.outputs = {k: v[:n] for k, v in _group(f, "outputs").items()}
+    res.energy = {k: v[:n] for k, v in _group(f, "energy").items()}
+    trace = _group(f, "trace")
+    steps = min((len(v) for v in trace.values()), default=0)
+    res.trace = {k: v[:steps] for k, v in trace.items()}
+    res.contacts = {name: {k: v[:n] for k, v in g.items()} for name, g in f.get("contacts", {}).items()}
+    res.stats = attrs.get("stats", {}) or {}
     return res, attrs
 
 

@@ -347,3 +347,22 @@ def test_kill_9_at_random_moments_leaves_a_readable_file(tmp_path):
         seen.append(check_killed_file(path, KILL_T_END, KILL_N_OUT))
     print("samples in the killed files:", seen)
     assert seen[0] == 0 and max(seen) > 0           # killed before any sample was flushed, and after some
+
+
+def test_a_damaged_result_file_is_a_clear_error(default_run, tmp_path):
+    """64 bytes of 0xff every 4 KiB of a result file, one place at a time (damaged HDF5
+    metadata made h5py raise RuntimeError, OSError or KeyError, and bad JSON a
+    JSONDecodeError): load_result reads the file or raises InputFileError, nothing else."""
+    from ffrmbs.errors import InputFileError
+
+    data = (default_run[0] / "point_mass_beam.h5").read_bytes()
+    damaged, faults = tmp_path / "damaged.h5", 0
+    for offset in range(0, len(data), 4096):
+        damaged.write_bytes(data[:offset] + b"\xff" * 64 + data[offset + 64:])
+        try:
+            load_result(damaged)
+        except InputFileError as exc:
+            faults += 1
+            assert str(exc).startswith(f"{damaged}: ") and "\n" not in str(exc) and len(str(exc)) < 300
+    assert faults >= 3
+
