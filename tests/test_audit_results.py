@@ -132,6 +132,16 @@ def test_the_readme_plot_command_works_and_keeps_the_runs_png(request, which):
     assert (own.read_bytes(), own.stat().st_mtime_ns) == before
 
 
+def test_the_readme_export_command_works_on_the_default_scene(default_run):
+    out = default_run[0]
+    code, stdout, stderr = run_cli("export", str(out / "point_mass_beam.h5"), "--every", "10")
+    assert code == 0, stderr
+    pvd = out / "point_mass_beam-paraview" / "point_mass_beam.pvd"
+    assert f"wrote {pvd}" in stdout
+    n = len(load_result(out / "point_mass_beam.h5")[0].t)
+    assert len(list((pvd.parent / "beam").glob("beam_*.vtu"))) == len(range(0, n, 10))
+
+
 def test_default_and_example_scene_name_and_mean_their_outputs_alike(default_run, example_run):
     """The same names in both files, and node19 the same quantity in both: node 19's
     displacement Φ_19 q_f, from the beam's body data and the file's modal coordinates (its
