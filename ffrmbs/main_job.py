@@ -6,10 +6,11 @@ Moreau time-stepping (θ = 0.5: no numerical damping of the elastic forces), 100
 output samples of the point mass's y position ``y`` [m] and velocity ``vy`` [m/s], node
 19's displacement ``node19`` [m], the kinetic and potential energy and the contact
 ``impact`` — the names of ``examples/scenes/point_mass_beam.toml``; a warm-up run of
-12.5 ms at Δt = 1e-4 s (past the first contact) compiles the numba kernels first. Written to ``out``: ``point_mass_beam.h5`` (the result file,
-:mod:`mbs.result_file`), ``point_mass_beam.png`` and ``point_mass_beam-paraview/``. The
-mode-truncation error is not part of the job's error estimate: the validation case
-``contact_point_mass_beam`` sweeps the modes against all 750.
+12.5 ms at Δt = 1e-4 s (past the first contact) compiles the numba kernels first.
+Written to ``out``: ``point_mass_beam.h5`` (the result file, :mod:`mbs.result_file`),
+``point_mass_beam.png`` and ``point_mass_beam-paraview/``. The mode-truncation error is
+not part of the job's error estimate: the validation case ``contact_point_mass_beam``
+sweeps the modes against all 750.
 """
 
 from __future__ import annotations

@@ -53,14 +53,16 @@ a run killed at any moment — finds every sample up to the last flush. Every
 goes to the checkpoint ``<name>.h5.ckpt`` beside the file (:mod:`mbs.checkpoint`, written
 atomically); after the samples up to it are in the file. A write that fails (full disk)
 stops the run with :class:`~ffrmbs.errors.OutputFileError`, the file's status set to
-"failed: …" where the disk still allows. :func:`resume_recording` continues a killed run from its
-checkpoint: the file is cut back to the checkpoint's samples and trace rows and the run goes on; the
-result equals the uninterrupted run's bit for bit (the state is restored exactly, the
-computation is deterministic). The checkpoint is removed when the run completes and kept
-when it is interrupted or fails.
+"failed: …" where the disk still allows; the free space is checked before each flush, as
+HDF5 cannot close a file after a failed write (:func:`ensure_space`).
+:func:`resume_recording` continues a killed run from its checkpoint: the file is cut back
+to the checkpoint's samples and trace rows and the run goes on; the result equals the
+uninterrupted run's bit for bit (the state is restored exactly, the computation is
+deterministic). The checkpoint is removed when the run completes and kept when it is
+interrupted or fails.
 
 Reading: :func:`load_result` gives a :class:`~mbs.result.Result` and the file's
-attributes.
+attributes; a damaged file is an InputFileError.
 """
 
 from __future__ import annotations
@@ -337,7 +339,7 @@ class ResultRecorder:
             blocks += [(f"contacts/{name}/{key}", values[a:b])
                        for name, rec in res.contacts.items() for key, values in rec.items()]
         rows = integ.trace(self.traced)
-        blocks += [(f"trace/{key}", values) for key, values in rows.items()]
+        blocks += [(f"trace/{key}", values) for key, values in rows.items() if len(values)]
         if blocks:              # whole chunks may be allocated: room for one more chunk per dataset
             ensure_space(self.path.parent, sum((len(v) + CHUNK_ROWS) * np.asarray(v)[:1].nbytes for _, v in blocks))
         for name, values in blocks:
