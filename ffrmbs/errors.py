@@ -35,8 +35,8 @@ class InputFileError(FfrmbsError):
 
 
 class OutputFileError(FfrmbsError):
-    """A file ffrmbs writes (result file, checkpoint) that cannot be written: a full
-    disk, a missing directory, no permission.
+    """A file ffrmbs writes (result file, checkpoint, plot, ParaView export) that cannot
+    be written: a full disk, a missing directory, no permission.
 
     Parameters
     ----------

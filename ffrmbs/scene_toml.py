@@ -194,8 +194,10 @@ output. The quantities are:
 - "angular_velocity" [rad/s]: of the body.
 - "q_f" [-]: the body's modal coordinates.
 
-``component`` ("x", "y" or "z") picks one component of a 3-vector. Contacts are
-recorded by the result file itself.
+``component`` ("x", "y" or "z") picks one component of a 3-vector. The unit of the
+quantity (q_f: "SI", its unit depends on the modes' normalization) is written with the
+output into the result file and onto plot axes. Contacts are recorded by the result file
+itself.
 
 Errors
 ======
