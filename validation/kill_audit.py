@@ -7,8 +7,10 @@ First one uninterrupted run of the default scene (``ffrmbs run --no-check --no-e
 --checkpoint-every 0.5 --t-end T`` in ``DIR/reference``) gives the oracle and the
 timeline: when its result file appeared and when it ended (wall seconds from the
 start of the process). Then, per kill, the same command in ``DIR/kill<k>`` is sent
-SIGKILL at a random moment (``--seed``): uniform between one second before the file
-appeared and the end of the run, the first kill at the very moment the file appears.
+SIGKILL at a random moment (``--seed``) counted from the moment its own result file
+appears (start-up times vary most under load): uniform from one second before it to 0.9
+of the reference's time from the file to the end, the first kill at the very moment the
+file appears.
 After each kill: is the file readable (:func:`mbs.result_file.load_result`) and
 consistent (every per-sample dataset of one length), how many samples it holds, is
 there a checkpoint; if there is, ``--resume`` finishes the run and its datasets are
@@ -101,18 +103,20 @@ def reference_run(out: Path, t_end: float) -> dict:
     return {"path": out / NAME, "appeared_s": appeared, "ended_s": ended}
 
 
-def kill_once(out: Path, t_end: float, moment, reference: Path) -> dict:
-    """Start the run, SIGKILL it at ``moment`` [s] after its start ("file": when its
-    result file appears), inspect the file, resume from a checkpoint and compare."""
+def kill_once(out: Path, t_end: float, moment: float, appeared: float, reference: Path) -> dict:
+    """Start the run, SIGKILL it ``moment`` [s] after its result file appears (a negative
+    moment: that long before the reference's file appeared, ``appeared`` [s] after the
+    start), inspect the file, resume from a checkpoint and compare."""
     shutil.rmtree(out, ignore_errors=True)
     path, ckpt = out / NAME, out / (NAME + ".ckpt")
     t0 = time.monotonic()
     proc = subprocess.Popen(command(out, t_end), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=ENV)
-    if moment == "file":
+    if moment < 0:
+        time.sleep(max(0.0, appeared + moment))
+    else:
         while not path.exists() and proc.poll() is None:
             time.sleep(0.0005)
-    else:
-        time.sleep(max(0.0, moment - (time.monotonic() - t0)))
+        time.sleep(moment)
     finished = proc.poll() is not None
     if not finished:
         os.kill(proc.pid, signal.SIGKILL)
@@ -130,7 +134,7 @@ def kill_once(out: Path, t_end: float, moment, reference: Path) -> dict:
 
 
 def table(rows) -> str:
-    lines = ["| kill | moment [s] | phase | readable | samples | checkpoint | resumed bit-identical |",
+    lines = ["| kill | moment [s from start] | phase | readable | samples | checkpoint | resumed bit-identical |",
              "|---|---|---|---|---|---|---|"]
     for k, r in enumerate(rows):
         lines.append(f"| {k} | {r['moment_s']:.3f} | {r['phase']} | {r['readable']} | {r['samples']} | "
@@ -150,11 +154,11 @@ def main(argv=None) -> int:
     ref = reference_run(out / "reference", args.t_end)
     print(f"reference: file appeared at {ref['appeared_s']:.2f} s, run ended at {ref['ended_s']:.2f} s", flush=True)
     rng = random.Random(args.seed)
-    low = max(0.0, ref["appeared_s"] - 1.0)
-    moments = ["file"] + [rng.uniform(low, ref["ended_s"]) for _ in range(args.kills - 1)]
+    running = ref["ended_s"] - ref["appeared_s"]
+    moments = [0.0] + [rng.uniform(-1.0, 0.9 * running) for _ in range(args.kills - 1)]
     rows = []
     for k, moment in enumerate(moments[:args.kills]):
-        rows.append(kill_once(out / f"kill{k}", args.t_end, moment, ref["path"]))
+        rows.append(kill_once(out / f"kill{k}", args.t_end, moment, ref["appeared_s"], ref["path"]))
         print(f"kill {k}: {rows[-1]}", flush=True)
     text = table(rows)
     print(text)
