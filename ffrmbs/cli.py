@@ -157,7 +157,7 @@ def cmd_plot(args):
     """Plot a result file's outputs, energy and contacts against time (:mod:`ffrmbs.plot`)."""
     from ffrmbs.plot import plot_result
 
-    print(f"wrote {plot_result(args.result, args.names or None, args.out)}")
+    print(f"wrote {plot_result(args.result, args.names or None, args.out, overwrite=args.overwrite)}")
 
 
 def cmd_export(args):
@@ -239,7 +239,9 @@ def build_parser():
     plot.add_argument("result", help="result file (.h5) of a run")
     plot.add_argument("names", nargs="*", metavar="NAME",
                       help="output names, 'energy' or 'contact:NAME' (default: all outputs and energy)")
-    plot.add_argument("--out", help="PNG to write (default: RESULT with .png)")
+    plot.add_argument("--out", help="PNG to write, replaced if it exists (default: a new RESULT-stem-plot.png, "
+                                    "-plot-2.png, ... beside RESULT)")
+    plot.add_argument("--overwrite", action="store_true", help="without --out: replace RESULT-stem-plot.png")
     plot.set_defaults(func=cmd_plot)
 
     export = sub.add_parser("export", help="export a result file to ParaView (.pvd + .vtu per sample)")

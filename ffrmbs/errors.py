@@ -34,6 +34,30 @@ class InputFileError(FfrmbsError):
         super().__init__(f"{where}: {fault}")
 
 
+class OutputFileError(FfrmbsError):
+    """A file ffrmbs writes (result file, checkpoint, plot, ParaView export) that cannot
+    be written: a full disk, a missing directory, no permission.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file that could not be written.
+    fault : str
+        What failed and the system's reason (e.g. "No space left on device").
+    """
+
+    def __init__(self, path, fault):
+        self.path = str(path)
+        self.fault = fault
+        super().__init__(f"{self.path}: {fault}")
+
+
+def os_reason(exc: OSError) -> str:
+    """The system's reason of an OSError in a few words (e.g. "No space left on device"):
+    its strerror, else the first line of its message, at most 200 characters."""
+    return exc.strerror or (str(exc).splitlines() or [type(exc).__name__])[0][:200]
+
+
 class ModelError(FfrmbsError):
     """An inconsistent model: unknown node group, bad parameter, missing data."""
 

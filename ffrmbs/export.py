@@ -10,7 +10,12 @@ own ``<series>/<series>.pvd``.
 Series
 ------
 * a body with a ``surface`` group: its surface triangles at the deformed positions
-  (thesis eq. 2.24)
+  (thesis eq. 2.24) — linear triangles (VTK ``triangle``) for tet4 bodies, quadratic
+  triangles (VTK ``triangle6``: corners, then the mid-edge nodes of edges (c0,c1),
+  (c1,c2), (c2,c0), the order of :meth:`preprocess.mesh.Mesh.surface_triangles`) for
+  tet10 bodies. Quadratic cells rather than each split into four linear ones: every
+  surface node stays one point with its own data, the cells are the FE mesh's own
+  faces, and ParaView draws the curved faces of a bent body (nonlinear subdivision)
 
       x = R + A (ū0 + Φ q_f)      [m]
 
@@ -57,12 +62,13 @@ from xml.sax.saxutils import quoteattr
 import h5py
 import numpy as np
 
-from ffrmbs.errors import FfrmbsError, InputFileError
+from ffrmbs.errors import FfrmbsError, InputFileError, OutputFileError, os_reason
 
 FORMAT = "ffrmbs-result"
 FORMAT_VERSION = 1
 MARKER = ".ffrmbs-export"
 POINT_BODY_VELOCITY = ("PointMass", "RigidBody")   # kinds whose u[:3] is Ṙ (world) [m/s]
+TRIANGLE_CELLS = {3: "triangle", 6: "triangle6"}  # VTK cell type of a surface triangle by its node count
 _CHUNK_VALUES = 3_000_000      # floats per block of samples held at once (~24 MB per array)
 
 
@@ -227,6 +233,8 @@ def export_paraview(result_path, out_dir=None, every=1, bodies=None, compress=Fa
     FfrmbsError
         ``every`` is not a positive integer, or ``out_dir`` exists and is not an earlier
         export.
+    OutputFileError
+        The export cannot be written (a full disk, no permission); nothing is left behind.
     """
     from ffrmbs.progress import progress_bar
 
@@ -241,9 +249,10 @@ def export_paraview(result_path, out_dir=None, every=1, bodies=None, compress=Fa
 
     with open_result(result_path) as f:
         plan = _plan(f, result_path, bodies)
-        created = _make_parents(out_dir.parent)
-        tmp = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.tmp-", dir=out_dir.parent))
+        created, tmp = [], None
         try:
+            created = _make_parents(out_dir.parent)
+            tmp = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.tmp-", dir=out_dir.parent))
             idx = np.arange(0, plan["n"], every)
             n_files = len(idx) * len(plan["series"])
             width = max(6, len(str(plan["n"] - 1)))
@@ -267,13 +276,16 @@ def export_paraview(result_path, out_dir=None, every=1, bodies=None, compress=Fa
             (tmp / MARKER).write_text(json.dumps({"result": str(result_path.absolute()), "every": every,
                                                   "series": [s["name"] for s in plan["series"]]}) + "\n")
             _replace_dir(tmp, out_dir)
-        except BaseException:
-            shutil.rmtree(tmp, ignore_errors=True)
+        except BaseException as exc:
+            if tmp is not None:
+                shutil.rmtree(tmp, ignore_errors=True)
             for d in reversed(created):
                 try:
                     d.rmdir()
                 except OSError:
                     pass
+            if isinstance(exc, OSError):
+                raise OutputFileError(out_dir, f"cannot write the ParaView export: {os_reason(exc)}") from None
             raise
     return out_dir / main.name
 
@@ -330,7 +342,9 @@ def _plan(f, path, bodies):
             _check_shape(u0, (None, 3), path)
             m = u0.shape[0]
             _check_shape(phi, (m, 3, None), path)
-            _check_shape(tri, (None, 3), path)
+            if tri.ndim != 2 or tri.shape[1] not in TRIANGLE_CELLS:
+                raise InputFileError(path, None, f"{tri.name} has shape {tri.shape}, expected (n, 3) for linear "
+                                                 "or (n, 6) for quadratic triangles")
             n_f = phi.shape[2]
             A = _dataset(g, "A", path)
             _check_shape(A, (None, 3, 3), path)
@@ -409,7 +423,7 @@ def _surface_samples(series, idx):
     g = series["group"]
     u0, phi, tri, nodes = series["u0"], series["phi"], series["triangles"], series["nodes"]
     n_f = phi.shape[2]
-    cells = [("triangle", tri.astype(np.int32) if len(u0) < 2**31 else tri)]
+    cells = [(TRIANGLE_CELLS[tri.shape[1]], tri.astype(np.int32) if len(u0) < 2**31 else tri)]
     for sl, block in _blocks(idx, 4 * 3 * len(u0)):
         R = np.asarray(g["R"][sl], dtype=float)                            # (s, 3)
         A = np.asarray(g["A"][sl], dtype=float)                            # (s, 3, 3)

@@ -3,12 +3,14 @@ flexible beam (thesis Sec. 5.2, setup A; :mod:`validation.scenes.point_mass_beam
 run by ``ffrmbs run`` with no scene file, as a job of :mod:`ffrmbs.job`.
 
 Moreau time-stepping (θ = 0.5: no numerical damping of the elastic forces), 1001
-output samples of the point mass's y position [m] and velocity [m/s] and node 19's
-position [m]; a warm-up run of 12.5 ms at Δt = 1e-4 s (past the first contact) compiles
-the numba kernels first. Written to ``out``: ``point_mass_beam.h5`` (the result file,
-:mod:`mbs.result_file`), ``point_mass_beam.png`` and ``point_mass_beam-paraview/``. The
-mode-truncation error is not part of the job's error estimate: the validation case
-``contact_point_mass_beam`` sweeps the modes against all 750.
+output samples of the point mass's y position ``y`` [m] and velocity ``vy`` [m/s], node
+19's displacement ``node19`` [m], the kinetic and potential energy and the contact
+``impact`` — the names of ``examples/scenes/point_mass_beam.toml``; a warm-up run of
+12.5 ms at Δt = 1e-4 s (past the first contact) compiles the numba kernels first.
+Written to ``out``: ``point_mass_beam.h5`` (the result file, :mod:`mbs.result_file`),
+``point_mass_beam.png`` and ``point_mass_beam-paraview/``. The mode-truncation error is
+not part of the job's error estimate: the validation case ``contact_point_mass_beam``
+sweeps the modes against all 750.
 """
 
 from __future__ import annotations
@@ -51,8 +53,8 @@ def default_scene(settings: JobSettings, data=None):
         + (f" (e = {settings.e})" if settings.law == "impact" else f" (k = {pmb.PENALTY_K:g} N/m)")
         + f"; Moreau, dt = {settings.dt:g} s, θ = {settings.theta}, {settings.t_end:g} s")
     return Scene(built.system, settings.t_end, settings.dt, "moreau", {"theta": settings.theta},
-                 n_out=settings.n_out, outputs=built.outputs(), energies=False, name="point_mass_beam",
-                 description=description, warmup=(0.0125, 1e-4))
+                 n_out=settings.n_out, outputs=built.outputs(), energies=True, name="point_mass_beam",
+                 description=description, warmup=(0.0125, 1e-4), units=dict(pmb.OUTPUT_UNITS))
 
 
 def run_job(settings: JobSettings, out, log=print, resume=False, checkpoint_every=60.0, export=True) -> dict:

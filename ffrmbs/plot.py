@@ -4,7 +4,8 @@
 
 * an output name (``/outputs/<name>``): a scalar output is one line; a vector output
   (n, 3) one line per component, labelled x, y, z; other shapes one line per component,
-  labelled by index. The y label carries the dataset's ``unit`` attribute when it has one;
+  labelled by index. The y label carries the dataset's ``units`` attribute when it has
+  one (:mod:`mbs.result_file` writes one on every dataset);
 * ``energy``: kinetic, potential and their sum, total [J] (``/energy``);
 * ``contact:<name>``: the normal gap g_N [m] on the left axis and the normal force
   magnitude |f · n| [N] on a twin right axis (``/contacts/<name>``); the gap is NaN, so
@@ -21,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ffrmbs.errors import FfrmbsError, InputFileError
+from ffrmbs.errors import FfrmbsError, InputFileError, OutputFileError, os_reason
 from ffrmbs.export import _attr, _check_shape, _dataset, _group, open_result
 
 COMPONENTS = ("x", "y", "z")
@@ -68,8 +69,9 @@ def _title(f, path, n) -> str:
     return title
 
 
-def _unit(ds) -> str:
-    unit = _attr(ds, "unit") or _attr(ds, "units")
+def _unit(ds, default="") -> str:
+    """" [<unit>]" from the dataset's ``units`` (or ``unit``) attribute, else ``default``."""
+    unit = _attr(ds, "units") or _attr(ds, "unit") or default
     return f" [{unit}]" if unit else ""
 
 
@@ -99,16 +101,16 @@ def _plot_output(ax, f, name, t, n):
 
 def _plot_energy(ax, f, t, n):
     e = f["energy"]
-    total = np.zeros(n)
+    total, unit = np.zeros(n), " [J]"
     for key in ("kinetic", "potential"):
         if key in e:
             ds = _dataset(e, key, f.filename)
             _check_shape(ds, (None,), f.filename)
             y = np.asarray(ds[:n], dtype=float)
             ax.plot(t, y, label=key)
-            total = total + y
+            total, unit = total + y, _unit(ds, "J")
     ax.plot(t, total, "k--", label="total")
-    ax.set_ylabel("energy [J]")
+    ax.set_ylabel(f"energy{unit}")
     ax.legend(loc="best", fontsize="small")
 
 
@@ -124,13 +126,13 @@ def _plot_contact(ax, f, name, t, n):
         nv = np.asarray(c["normal"][:n], dtype=float)
         fn = np.abs(np.einsum("ij,ij->i", fv, nv))
         fn[np.linalg.norm(fv, axis=1) == 0] = 0.0           # open contact: no force, normal may be NaN
-        force_label = "normal force |f·n| [N]"
+        force_label = f"normal force |f·n|{_unit(force, 'N')}"
     else:
         fn = np.linalg.norm(fv, axis=1)
-        force_label = "contact force |f| [N]"
+        force_label = f"contact force |f|{_unit(force, 'N')}"
     ax.plot(t, g, color="C0", label="gap")
     ax.axhline(0.0, color="0.6", lw=0.8)
-    ax.set_ylabel(f"{name}: gap g_N [m]", color="C0")
+    ax.set_ylabel(f"{name}: gap g_N{_unit(gap, 'm')}", color="C0")
     twin = ax.twinx()
     twin.plot(t, fn, color="C3", label="normal force")
     twin.set_ylabel(force_label, color="C3")
@@ -170,13 +172,13 @@ def result_figure(result_path, names=None):
             else:
                 _plot_output(ax, f, name, t, n)
             ax.grid(True, alpha=0.3)
-        axes[-1].set_xlabel("t [s]")
+        axes[-1].set_xlabel(f"t{_unit(f['t'], 's')}")
         fig.suptitle(_title(f, path, n))
     fig.tight_layout()
     return fig
 
 
-def plot_result(result_path, names=None, out=None) -> Path:
+def plot_result(result_path, names=None, out=None, overwrite=False) -> Path:
     """Plot outputs, energy and contacts of a result file against time; write a PNG.
 
     Parameters
@@ -188,7 +190,11 @@ def plot_result(result_path, names=None, out=None) -> Path:
         each, in this order. Default: every output plus ``energy`` when recorded (the
         contacts when the file has neither).
     out : str or os.PathLike, optional
-        The PNG to write; default ``<result stem>.png`` beside the result file.
+        The PNG to write (replaced if it exists). Default: a new file beside the result
+        file, ``<stem>-plot.png``, else ``<stem>-plot-2.png``, ``-3``, ... (the run's own
+        ``<stem>.png`` is never touched).
+    overwrite : bool
+        Without ``out``: write ``<stem>-plot.png`` even if it exists.
 
     Returns
     -------
@@ -200,9 +206,11 @@ def plot_result(result_path, names=None, out=None) -> Path:
     InputFileError
         Not an ffrmbs result file, a missing or malformed dataset, or an unknown name (the
         message lists the available ones). No PNG is written.
+    OutputFileError
+        The PNG cannot be written (a full disk, no permission); no partial file is left.
     """
     result_path = Path(result_path)
-    out = Path(out) if out is not None else result_path.with_suffix(".png")
+    out = Path(out) if out is not None else new_plot_path(result_path, overwrite)
     fig = result_figure(result_path, names)
     tmp = out.with_name(f".{out.name}.tmp-{os.getpid()}")
     try:
@@ -210,8 +218,22 @@ def plot_result(result_path, names=None, out=None) -> Path:
             raise FfrmbsError(f"cannot write {out}: no directory {out.parent}")
         fig.savefig(tmp, format="png")
         os.replace(tmp, out)
+    except OSError as exc:
+        raise OutputFileError(out, f"cannot write the plot: {os_reason(exc)}") from None
     finally:
         if tmp.exists():
             tmp.unlink()
     return out
 
+
+def new_plot_path(result_path, overwrite=False) -> Path:
+    """``<stem>-plot.png`` beside the result file; unless ``overwrite``, the first of
+    ``<stem>-plot-2.png``, ``-3``, ... that does not exist when it does."""
+    result_path = Path(result_path)
+    first = result_path.with_name(f"{result_path.stem}-plot.png")
+    if overwrite or not first.exists():
+        return first
+    k = 2
+    while (candidate := result_path.with_name(f"{result_path.stem}-plot-{k}.png")).exists():
+        k += 1
+    return candidate

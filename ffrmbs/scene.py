@@ -31,7 +31,8 @@ class Scene:
     identifier, used for the result file's name; inputs: {label: path} of the files the
     scene was built from (the result file records their SHA-256); description: one line
     for logs; warmup: (t_end, dt) [s] of a short run made first so that the numba kernels
-    are compiled (or loaded from numba's cache) outside the timed run, or None.
+    are compiled (or loaded from numba's cache) outside the timed run, or None; units:
+    {output name: unit} written with the outputs and on plot axes (:meth:`output_units`).
     """
 
     system: object
@@ -48,6 +49,7 @@ class Scene:
     inputs: dict = field(default_factory=dict)
     description: str = ""
     warmup: tuple | None = None
+    units: dict = field(default_factory=dict)
 
     def __post_init__(self):
         if not (self.t_end > 0 and self.dt > 0):
@@ -55,6 +57,14 @@ class Scene:
         if int(self.n_out) < 2:
             raise ModelError(f"scene {self.name!r}: need at least 2 output samples, got {self.n_out}")
         self.n_out = int(self.n_out)
+
+    def output_units(self) -> dict:
+        """{output name: unit}: the unit given in ``units``, else "m" for a Frame output
+        (its position), else "SI"."""
+        from mbs import Frame
+
+        return {name: self.units.get(name) or ("m" if isinstance(spec, Frame) else "SI")
+                for name, spec in self.outputs.items()}
 
     def t_out(self) -> np.ndarray:
         """The output times [s], (n_out,)."""

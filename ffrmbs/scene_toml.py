@@ -194,8 +194,10 @@ output. The quantities are:
 - "angular_velocity" [rad/s]: of the body.
 - "q_f" [-]: the body's modal coordinates.
 
-``component`` ("x", "y" or "z") picks one component of a 3-vector. Contacts are
-recorded by the result file itself.
+``component`` ("x", "y" or "z") picks one component of a 3-vector. The unit of the
+quantity (q_f: "SI", its unit depends on the modes' normalization) is written with the
+output into the result file and onto plot axes. Contacts are recorded by the result file
+itself.
 
 Errors
 ======
@@ -247,6 +249,7 @@ CONTOUR1_KINDS = ("point", "sphere")
 CONTOUR2_KINDS = ("2s", "1s", "band", "cylinder", "plane", "sphere")
 LAWS = ("impact", "coulomb", "penalty", "bilateral")
 QUANTITIES = ("position", "velocity", "displacement", "angular_velocity", "q_f")
+QUANTITY_UNITS = {"position": "m", "velocity": "m/s", "displacement": "m", "angular_velocity": "rad/s"}
 COMPONENTS = ("x", "y", "z")
 ORTHONORMAL_TOL = 1e-9      # max |AᵀA − 1| of an orientation matrix
 TOP_LEVEL = ("scene", "body", "spring", "joint", "load", "contact", "outputs")
@@ -605,6 +608,7 @@ class _SceneReader:
         self.bodies: dict[str, _Body] = {}
         self.steps: list = []               # (keypath, label, build(env)) after the bodies
         self.outputs: dict = {}             # name -> (keypath, label, make(env))
+        self.units: dict = {}               # name -> unit of the output's quantity
         self.inputs: dict = {"scene file": str(path)}
         self._sources: dict = {}            # resolved source -> BodyData (read once)
 
@@ -1262,6 +1266,8 @@ class _SceneReader:
                     t.fail("component", "quantity 'q_f' takes no 'component'")
                 component = COMPONENTS.index(t.choice("component", COMPONENTS))
             self.outputs[name] = (keypath, label, self._probe(frame, quantity, component))
+            if quantity in QUANTITY_UNITS:
+                self.units[name] = QUANTITY_UNITS[quantity]
 
     @staticmethod
     def _probe(ref: _FrameRef, quantity, component):
@@ -1297,7 +1303,7 @@ class _SceneReader:
         return self.r.run(("scene",), "[scene]", lambda: Scene(
             env.system, settings["t_end"], settings["dt"], settings["integrator"], settings["options"],
             settings["n_out"], outputs, settings["energies"], settings["plan"], settings["tolerance"],
-            settings["name"], dict(self.inputs), settings["description"]))
+            settings["name"], dict(self.inputs), settings["description"], units=dict(self.units)))
 
 
 # --- reading -------------------------------------------------------------------------------------------

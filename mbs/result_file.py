@@ -16,12 +16,14 @@ goes)::
                                      (the body's slices of the system's q and u), n_modes
         q (n, nq_b), u (n, nu_b)          the body's coordinates and velocities
         R (n, 3) [m], A (n, 3, 3)         its frame's position and orientation (world)
-        q_f (n, n_f) [-]                  modal coordinates (flexible bodies)
+        q_f (n, n_f)                      modal coordinates (flexible bodies)
         surface/                          flexible bodies with surface triangles:
             nodes (m,) int64              FE node numbers of the surface nodes
             u0 (m, 3) [m]                 their undeformed positions in the body frame
             phi (m, 3, n_f)               the body's mode shapes at them
-            triangles (k, 3) int64        rows into ``nodes``
+            triangles (k, 3) or (k, 6) int64   rows into ``nodes``: corners (tet4 bodies),
+                                          or corners then the mid-edge nodes of edges
+                                          (c0,c1), (c1,c2), (c2,c0) (tet10 bodies)
                                           → deformed surface x = R + A (u0 + phi · q_f)
     /energy/kinetic, /energy/potential      (n,) [J]          (when recorded)
     /outputs/<name>           (n, ...) the requested outputs (node positions [m], ...)
@@ -33,36 +35,52 @@ goes)::
         force (n, 3) [N]      contact force on the first contour's body (world): the
                               impulse of the last step / Δt for set-valued laws
     /trace/<key>              (steps,) per-step records of integrators that keep them
-                              (written when the run ends)
+                              (Moreau's ``trace=True``), streamed with the samples
+
+Every dataset has a ``units`` attribute: "s", "m", "m/s", "J", "N", "1" (dimensionless:
+orientation matrices, normals, flags, counts, node numbers), for q and u the units of
+their blocks (e.g. "m (R, 3), 1 (quaternion, 4), kg^(1/2) m (q_f, 20)"), for the mode
+shapes and modal coordinates those of their normalization (:func:`modal_units`), for an
+output the unit its scene gives it, else "SI".
 
 Writing: :class:`ResultRecorder` is the driver's recorder (``System.simulate(recorder=)``).
-Samples are buffered and appended every ``flush_every`` seconds of wall time (and at
-every checkpoint and at the end), then the file is flushed, so a reader — or a killed
-run — finds every sample up to the last flush. Every ``checkpoint_every`` seconds of wall
-time, at the next output sample, the whole run state goes to the checkpoint
-``<name>.h5.ckpt`` beside the file (:mod:`mbs.checkpoint`, written atomically); after the
-samples up to it are in the file. :func:`resume_recording` continues a killed run from its
-checkpoint: the file is cut back to the checkpoint's samples and the run goes on; the
-result equals the uninterrupted run's bit for bit (the state is restored exactly, the
-computation is deterministic). The checkpoint is removed when the run completes and kept
-when it is interrupted or fails.
+The file is created with every dataset (zero rows) and flushed under a temporary name,
+then renamed into place, so it is readable from its first moment. Samples and trace rows
+are buffered and appended every ``flush_every`` seconds of wall time, every FLUSH_SAMPLES
+samples, at every checkpoint and at the end, then the file is flushed, so a reader — or
+a run killed at any moment — finds every sample up to the last flush. Every
+``checkpoint_every`` seconds of wall time, at the next output sample, the whole run state
+goes to the checkpoint ``<name>.h5.ckpt`` beside the file (:mod:`mbs.checkpoint`, written
+atomically); after the samples up to it are in the file. A write that fails (full disk)
+stops the run with :class:`~ffrmbs.errors.OutputFileError`, the file's status set to
+"failed: …" where the disk still allows; the free space is checked before each flush, as
+HDF5 cannot close a file after a failed write (:func:`ensure_space`).
+:func:`resume_recording` continues a killed run from its checkpoint: the file is cut back
+to the checkpoint's samples and trace rows and the run goes on; the result equals the
+uninterrupted run's bit for bit (the state is restored exactly, the computation is
+deterministic). The checkpoint is removed when the run completes and kept when it is
+interrupted or fails.
 
 Reading: :func:`load_result` gives a :class:`~mbs.result.Result` and the file's
-attributes.
+attributes; a damaged file is an InputFileError.
 """
 
 from __future__ import annotations
 
+import contextlib
+import errno
 import hashlib
 import json
+import os
 import platform
+import re
 import time
 from pathlib import Path
 
 import h5py
 import numpy as np
 
-from ffrmbs.errors import InputFileError
+from ffrmbs.errors import InputFileError, OutputFileError, os_reason
 
 from .body import Frame
 from .checkpoint import read_checkpoint, write_checkpoint
@@ -70,6 +88,9 @@ from .result import Result
 
 FORMAT, FORMAT_VERSION = "ffrmbs-result", 1
 CHUNK_ROWS = 256
+FLUSH_SAMPLES = CHUNK_ROWS      # buffered samples that force a flush: each flush completes a chunk
+HDF5_WRITE_FAILED = re.compile(r"file write failed.*?error message = '([^']*)'", re.S)
+SPACE_RESERVE = 1 << 20         # [bytes] kept free on the disk for closing the file cleanly
 
 
 def versions() -> dict:
@@ -110,9 +131,15 @@ class ResultRecorder:
     """Streams a run's samples to the HDF5 result file ``path`` (layout above) and takes
     checkpoints.
 
-    meta: {"scene", "description", "inputs": {label: path}} written as attributes;
-    flush_every [s]: wall time between appends of the buffered samples; checkpoint_every
-    [s] or None: wall time between checkpoints (taken at output samples).
+    meta: {"scene", "description", "inputs": {label: path}, "units": {output name: unit}}
+    (attributes; an output without a unit is "SI"); flush_every [s]: wall time between
+    appends of the buffered samples; checkpoint_every [s] or None: wall time between
+    checkpoints (taken at output samples).
+
+    A failed write (a full disk, a vanished directory: an ``OSError``) stops the run with
+    :class:`~ffrmbs.errors.OutputFileError` naming the file and the system's reason, after
+    the file's status is set to "failed: …" and the file is closed (as far as the disk
+    still allows).
     """
 
     def __init__(self, path, meta=None, flush_every=2.0, checkpoint_every=60.0):
@@ -123,29 +150,43 @@ class ResultRecorder:
         self.checkpoint_every = None if checkpoint_every is None else float(checkpoint_every)
         self.file = None
         self.written = 0            # samples in the file
+        self.traced = 0             # trace rows (steps) in the file
         self.checkpoints = 0
 
     # --- the driver's hooks -----------------------------------------------------------------
     def begin(self, integ):
-        """Create the file and its layout (replacing an older file of the same name)."""
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        self.checkpoint_path.unlink(missing_ok=True)
-        self.file = f = h5py.File(self.path, "w")
-        st, sys = integ.state, integ.system
-        f.attrs.update(format=FORMAT, format_version=FORMAT_VERSION, status="running",
-                       scene=self.meta.get("scene", ""), description=self.meta.get("description", ""),
-                       integrator=integ.name, options=json.dumps(integ.options(), default=str), dt=integ.dt,
-                       t_end=float(st.times[-1]), n_out=len(st.times), plan=st.result.plan,
-                       versions=json.dumps(versions()),
-                       inputs=json.dumps(input_hashes(self.meta.get("inputs", {}))), units="SI")
-        for body in sys.bodies:
-            self._body_layout(f.create_group(f"bodies/{body.name}"), body)
-        self.written = 0
+        """Create the file with its whole layout (every dataset, zero rows), flushed, under
+        a temporary name renamed into place: from its first moment under ``path`` the
+        file is readable (an older file of the same name is replaced)."""
+        part = self.path.with_name(self.path.name + ".part")
+        try:
+            with self._writing(self.path, "result file"):
+                self.path.parent.mkdir(parents=True, exist_ok=True)
+                self.checkpoint_path.unlink(missing_ok=True)
+                ensure_space(self.path.parent, sum(getattr(b, "phi", np.zeros(0)).nbytes for b in integ.system.bodies))
+                self.file = f = h5py.File(part, "w")
+                st = integ.state
+                f.attrs.update(format=FORMAT, format_version=FORMAT_VERSION, status="running",
+                               scene=self.meta.get("scene", ""), description=self.meta.get("description", ""),
+                               integrator=integ.name, options=json.dumps(integ.options(), default=str),
+                               dt=integ.dt, t_end=float(st.times[-1]), n_out=len(st.times), plan=st.result.plan,
+                               versions=json.dumps(versions()),
+                               inputs=json.dumps(input_hashes(self.meta.get("inputs", {}))), units="SI")
+                self._layout(f, integ)
+                f.flush()
+                os.replace(part, self.path)
+        except BaseException:
+            if self.file is not None:
+                self.file.close()
+                self.file = None
+            part.unlink(missing_ok=True)
+            raise
+        self.written = self.traced = 0
         self._clocks()
 
     def resume(self, integ):
         """Reopen the file of a run restored from its checkpoint and cut it back to the
-        checkpoint's samples."""
+        checkpoint's samples and trace rows."""
         if not self.path.is_file():
             raise InputFileError(self.path, None, "the result file of the run to resume is missing")
         try:
@@ -154,98 +195,216 @@ class ResultRecorder:
             raise InputFileError(self.path, None, f"cannot reopen the result file to resume ({exc})") from None
         if f.attrs.get("format") != FORMAT:
             raise InputFileError(self.path, None, "not an ffrmbs result file")
-        self.written = n = integ.state.recorded
-        for name, obj in _datasets(f):
-            if obj.maxshape[0] is None and obj.shape[0] > n:
-                obj.resize(n, axis=0)
-        f.attrs["status"] = "running"
-        f.attrs["resumed_at"] = np.asarray(integ.state.resumed_at, dtype=float)
+        with self._writing(self.path, "result file"):
+            self.written = n = integ.state.recorded
+            traced = {key: len(rows) for key, rows in integ.trace().items()}
+            self.traced = min(traced.values(), default=0)
+            for name, obj in _datasets(f):
+                keep = traced.get(name[len("trace/"):], 0) if name.startswith("trace/") else n
+                if obj.maxshape[0] is None and obj.shape[0] > keep:
+                    obj.resize(keep, axis=0)
+            f.attrs["status"] = "running"
+            f.attrs["resumed_at"] = np.asarray(integ.state.resumed_at, dtype=float)
+            f.flush()
         self._clocks()
 
     def landed(self, integ):
         now = time.perf_counter()
         if self.checkpoint_every is not None and now - self._last_checkpoint >= self.checkpoint_every:
             self.checkpoint(integ)
-        elif now - self._last_flush >= self.flush_every:
-            self._flush(integ)
+        elif now - self._last_flush >= self.flush_every or integ.state.recorded - self.written >= FLUSH_SAMPLES:
+            with self._writing(self.path, "result file"):
+                self._flush(integ)
 
     def checkpoint(self, integ):
         """Append the samples so far, then save the run state (the checkpoint refers to
         them by count)."""
-        self._flush(integ)
-        write_checkpoint(self.checkpoint_path, {"integrator": integ, "samples": self.written,
-                                                "result_file": str(self.path)})
+        with self._writing(self.path, "result file"):
+            self._flush(integ)
+        with self._writing(self.checkpoint_path, "checkpoint"):
+            write_checkpoint(self.checkpoint_path, {"integrator": integ, "samples": self.written,
+                                                    "result_file": str(self.path)})
         self.checkpoints += 1
         self._last_checkpoint = time.perf_counter()
 
     def end(self, integ, status):
-        """Append the rest, write the trace, statistics and status, close the file."""
+        """Append the rest of the samples and trace, write the statistics and status,
+        close the file."""
         if self.file is None:
             return
-        try:
+        with self._writing(self.path, "result file"):
             self._flush(integ)
             f = self.file
-            for key, values in integ.trace().items():
-                if f"trace/{key}" in f:
-                    del f[f"trace/{key}"]
-                f[f"trace/{key}"] = values
             f.attrs["status"] = status
             f.attrs["stats"] = json.dumps(integ.diagnostics() | {"steps": integ.steps,
                                                                  "checkpoints": self.checkpoints}, default=float)
-        finally:
-            self.file.close()
-            self.file = None
+            f.close()
+        self.file = None
         if status == "complete":
             self.checkpoint_path.unlink(missing_ok=True)
 
     def write_summary(self, summary: dict):
         """Add the job's summary (JSON) to the closed file."""
-        with h5py.File(self.path, "r+") as f:
-            f.attrs["summary"] = json.dumps(summary, default=float)
+        with self._writing(self.path, "result file"):
+            with h5py.File(self.path, "r+") as f:
+                f.attrs["summary"] = json.dumps(summary, default=float)
 
     # --- internals ----------------------------------------------------------------------------
     def _clocks(self):
         self._last_flush = self._last_checkpoint = time.perf_counter()
 
-    def _body_layout(self, g, body):
+    @contextlib.contextmanager
+    def _writing(self, path, what):
+        """Turn an OSError (or HDF5's "file write failed") while writing ``path`` into
+        OutputFileError, after marking the result file failed and closing it."""
+        try:
+            yield
+        except (OSError, RuntimeError) as exc:
+            hdf5 = HDF5_WRITE_FAILED.search(str(exc))      # HDF5 reports some failed writes as RuntimeError
+            if isinstance(exc, RuntimeError) and hdf5 is None:
+                raise
+            fault = f"cannot write the {what}: {hdf5[1] if hdf5 else os_reason(exc)}"
+            self._close_failed(f"failed: {fault}")
+            raise OutputFileError(path, fault) from None
+
+    def _close_failed(self, status):
+        """Best effort on a failing disk: set ``status`` and close the open file."""
+        f, self.file = self.file, None
+        if f is None:
+            return
+        try:
+            f.attrs["status"] = status
+            f.close()
+        except (OSError, RuntimeError):
+            pass
+
+    def _layout(self, f, integ):
+        """Every dataset of the file (layout above) with zero rows and its units."""
+        st, sys = integ.state, integ.system
+        units = self.meta.get("units", {})
+        _create(f, "t", (), float, "s")
+        for body in sys.bodies:
+            g = f.create_group(f"bodies/{body.name}")
+            phi_units, q_f_units = modal_units(body)
+            self._body_layout(g, body, phi_units)
+            q_units, u_units = coordinate_units(body, q_f_units)
+            _create(g, "q", (body.nq,), float, q_units)
+            _create(g, "u", (body.nu,), float, u_units)
+            _create(g, "R", (3,), float, "m")
+            _create(g, "A", (3, 3), float, "1")
+            if getattr(body, "n_modes", 0):
+                _create(g, "q_f", (body.n_modes,), float, q_f_units)
+        if st.energies:
+            for key in ("kinetic", "potential"):
+                _create(f, f"energy/{key}", (), float, "J")
+        for name, probe in st.probes.items():
+            shape = np.shape(np.asarray(probe(integ.t, integ.q, integ.u), dtype=float))
+            _create(f, f"outputs/{name}", shape, float, units.get(name) or "SI")
+        for name in st.result.contacts:
+            for key, (shape, dtype, unit) in CONTACT_FIELDS.items():
+                _create(f, f"contacts/{name}/{key}", shape, dtype, unit)
+        for key, rows in integ.trace().items():
+            _create(f, f"trace/{key}", rows.shape[1:], rows.dtype, integ.trace_units.get(key, "SI"))
+
+    def _body_layout(self, g, body, phi_units):
         g.attrs.update(kind=type(body).__name__, q_start=body.q_slice.start, q_stop=body.q_slice.stop,
                        u_start=body.u_slice.start, u_stop=body.u_slice.stop, n_modes=getattr(body, "n_modes", 0))
         data = getattr(body, "data", None)
         if data is not None and getattr(data, "surface_triangles", None) is not None:
             nodes = data.surface_nodes
             s = g.create_group("surface")
-            s["nodes"] = nodes
-            s["u0"] = data.u0[nodes]
-            s["phi"] = body.phi_nodes[nodes]
-            s["triangles"] = np.searchsorted(nodes, data.surface_triangles)
+            for key, values, unit in (("nodes", nodes, "1"), ("u0", data.u0[nodes], "m"),
+                                      ("phi", body.phi_nodes[nodes], phi_units),
+                                      ("triangles", np.searchsorted(nodes, data.surface_triangles), "1")):
+                s[key] = values
+                s[key].attrs["units"] = unit
 
     def _flush(self, integ):
+        """Append the samples and trace rows not yet in the file, then flush it."""
         st, f = integ.state, self.file
         a, b = self.written, st.recorded
-        if b <= a:
-            return
-        res = st.result
-        _append(f, "t", res.t[a:b])
-        for body in integ.system.bodies:
-            g = f"bodies/{body.name}"
-            q, u = res.q[a:b, body.q_slice], res.u[a:b, body.u_slice]
-            _append(f, f"{g}/q", q)
-            _append(f, f"{g}/u", u)
-            R, A = _frame_rows(body, q, res.t[a:b])
-            _append(f, f"{g}/R", R)
-            _append(f, f"{g}/A", A)
-            if getattr(body, "n_modes", 0):
-                _append(f, f"{g}/q_f", body.modal_coordinates(q))
-        for key, values in res.energy.items():
-            _append(f, f"energy/{key}", values[a:b])
-        for name, values in res.outputs.items():
-            _append(f, f"outputs/{name}", values[a:b])
-        for name, rec in res.contacts.items():
-            for key, values in rec.items():
-                _append(f, f"contacts/{name}/{key}", values[a:b])
+        blocks = []                                  # (dataset name, rows to append)
+        if b > a:
+            res = st.result
+            blocks.append(("t", res.t[a:b]))
+            for body in integ.system.bodies:
+                g = f"bodies/{body.name}"
+                q, u = res.q[a:b, body.q_slice], res.u[a:b, body.u_slice]
+                R, A = _frame_rows(body, q, res.t[a:b])
+                blocks += [(f"{g}/q", q), (f"{g}/u", u), (f"{g}/R", R), (f"{g}/A", A)]
+                if getattr(body, "n_modes", 0):
+                    blocks.append((f"{g}/q_f", body.modal_coordinates(q)))
+            blocks += [(f"energy/{key}", values[a:b]) for key, values in res.energy.items()]
+            blocks += [(f"outputs/{name}", values[a:b]) for name, values in res.outputs.items()]
+            blocks += [(f"contacts/{name}/{key}", values[a:b])
+                       for name, rec in res.contacts.items() for key, values in rec.items()]
+        rows = integ.trace(self.traced)
+        blocks += [(f"trace/{key}", values) for key, values in rows.items() if len(values)]
+        if blocks:              # whole chunks may be allocated: room for one more chunk per dataset
+            ensure_space(self.path.parent, sum((len(v) + CHUNK_ROWS) * np.asarray(v)[:1].nbytes for _, v in blocks))
+        for name, values in blocks:
+            _append(f, name, values)
         f.flush()
         self.written = b
+        self.traced += min((len(v) for v in rows.values()), default=0)
         self._last_flush = time.perf_counter()
+
+
+def free_bytes(directory) -> int:
+    """Bytes available to this user on the file system of ``directory``."""
+    st = os.statvfs(directory)
+    return st.f_bavail * st.f_frsize
+
+
+def ensure_space(directory, nbytes):
+    """Raise OSError(ENOSPC) unless ``nbytes`` plus SPACE_RESERVE fit on the file system
+    of ``directory``. HDF5 cannot close a file after a failed write (and its library then
+    crashes the process as it exits), so a full disk is caught before HDF5 writes; the
+    reserve leaves room for the status attribute and the close."""
+    free = free_bytes(directory)
+    if free < nbytes + SPACE_RESERVE:
+        raise OSError(errno.ENOSPC, f"{os.strerror(errno.ENOSPC)} ({free / 1e6:.2f} MB free, "
+                                    f"{(nbytes + SPACE_RESERVE) / 1e6:.2f} MB needed with the reserve)")
+
+
+CONTACT_FIELDS = {"active": ((), np.int8, "1"), "gap": ((), float, "m"), "point": ((3,), float, "m"),
+                  "normal": ((3,), float, "1"), "force": ((3,), float, "N")}
+
+
+def coordinate_units(body, q_f_units="SI") -> tuple[str, str]:
+    """The units of a body's coordinates q and velocities u, by blocks, e.g.
+    "m (R, 3), 1 (quaternion, 4), kg^(1/2) m (q_f, 20)" (``q_f_units``: those of its
+    modal coordinates, :func:`modal_units`)."""
+    from .floating_frame import FloatingFrameBody
+    from .rigid_body import PointMass
+
+    if isinstance(body, PointMass):
+        return "m", "m/s"
+    if not isinstance(body, FloatingFrameBody):
+        return "SI", "SI"
+    q, u = [], []
+    if body.param is not None:
+        rotation = "rad" if body.param.name == "cardan" else "1"
+        q += ["m (R, 3)", f"{rotation} ({body.param.name}, {body.param.nq})"]
+        u += ["m/s (v, 3)", "rad/s (angular velocity, 3)"]
+    if body.n_modes:
+        q.append(f"{q_f_units} (q_f, {body.n_modes})")
+        u.append(f"{q_f_units}/s (q_f rates, {body.n_modes})")
+    return ", ".join(q) or "1", ", ".join(u) or "1"
+
+
+def modal_units(body) -> tuple[str, str]:
+    """(units of the mode shapes Φ, of the modal coordinates q_f): Φ q_f is in m. Modes
+    normalized to the lumped mass (Φᵀ M Φ = I, as :mod:`preprocess.modes` writes them)
+    give Φ [kg^(-1/2)] and q_f [kg^(1/2) m]; other normalizations are "SI"."""
+    masses = getattr(getattr(body, "data", None), "masses", None)
+    if masses is None:
+        return "SI", "SI"
+    phi = body.phi
+    gram = phi.T @ (np.repeat(masses, 3)[:, None] * phi)
+    if np.allclose(gram, np.eye(len(gram)), rtol=0, atol=1e-6):
+        return "kg^(-1/2)", "kg^(1/2) m"
+    return "SI", "SI"
 
 
 def resume_recording(recorder, progress=None, inputs=None):
@@ -269,12 +428,16 @@ def resume_recording(recorder, progress=None, inputs=None):
     return resume(read_checkpoint(ckpt)["integrator"], recorder, progress)
 
 
+def _create(f, name, row_shape, dtype, units):
+    """An empty per-sample dataset (0, *row_shape), resizable along its first axis,
+    chunked by CHUNK_ROWS rows, with its ``units`` attribute."""
+    d = f.create_dataset(name, shape=(0,) + tuple(row_shape), dtype=dtype, maxshape=(None,) + tuple(row_shape),
+                         chunks=(CHUNK_ROWS,) + tuple(row_shape))
+    d.attrs["units"] = units
+
+
 def _append(f, name, rows):
     rows = np.asarray(rows)
-    if name not in f:
-        f.create_dataset(name, data=rows, maxshape=(None,) + rows.shape[1:],
-                         chunks=(CHUNK_ROWS,) + rows.shape[1:] if rows.ndim else True)
-        return
     d = f[name]
     n = d.shape[0]
     d.resize(n + rows.shape[0], axis=0)
@@ -299,33 +462,50 @@ def _datasets(f):
 
 def load_result(path) -> tuple[Result, dict]:
     """The samples of a result file as a :class:`~mbs.result.Result` (q, u assembled from
-    the bodies' datasets) and the file's attributes (JSON ones decoded)."""
+    the bodies' datasets) and the file's attributes (JSON ones decoded).
+
+    A file cut short (a killed run) may hold more rows in some per-sample datasets than
+    in others; every one is read up to the shortest, and the trace up to its shortest key.
+    """
     path = Path(path)
     try:
         f = h5py.File(path, "r")
     except OSError as exc:
         raise InputFileError(path, None, f"not a readable HDF5 file ({exc})") from None
     with f:
-        if f.attrs.get("format") != FORMAT:
-            raise InputFileError(path, None, "not an ffrmbs result file (attribute format missing)")
-        attrs = {k: (json.loads(v) if k in ("options", "versions", "inputs", "summary", "stats") else v)
-                 for k, v in f.attrs.items()}
-        t = f["t"][()] if "t" in f else np.zeros(0)
-        n = len(t)
-        bodies = f.get("bodies", {})
-        nq = max((g.attrs["q_stop"] for g in bodies.values()), default=0)
-        nu = max((g.attrs["u_stop"] for g in bodies.values()), default=0)
-        q, u = np.full((n, nq), np.nan), np.full((n, nu), np.nan)
-        for g in bodies.values():
-            if "q" in g:
-                q[:, g.attrs["q_start"]:g.attrs["q_stop"]] = g["q"][:n]
-                u[:, g.attrs["u_start"]:g.attrs["u_stop"]] = g["u"][:n]
-        res = Result(t, q, u, plan=str(attrs.get("plan", "")))
-        res.outputs = {k: v[:n] for k, v in _group(f, "outputs").items()}
-        res.energy = {k: v[:n] for k, v in _group(f, "energy").items()}
-        res.trace = _group(f, "trace")
-        res.contacts = {name: {k: v[()][:n] for k, v in g.items()} for name, g in f.get("contacts", {}).items()}
-        res.stats = attrs.get("stats", {}) or {}
+        try:
+            return _read(f, path)
+        except (OSError, RuntimeError, KeyError, ValueError) as exc:   # h5py on damaged metadata; bad JSON
+            reason = (str(exc).splitlines() or [type(exc).__name__])[0][:120]
+            raise InputFileError(path, None, f"damaged result file ({reason})") from None
+
+
+def _read(f, path) -> tuple[Result, dict]:
+    """The body of :func:`load_result` on the open file ``f``."""
+    if f.attrs.get("format") != FORMAT:
+        raise InputFileError(path, None, "not an ffrmbs result file (attribute format missing)")
+    attrs = {k: (json.loads(v) if k in ("options", "versions", "inputs", "summary", "stats") else v)
+             for k, v in f.attrs.items()}
+    per_sample = [obj for name, obj in _datasets(f)
+                  if not name.startswith("trace/") and "/surface/" not in name]
+    n = min((d.shape[0] for d in per_sample), default=0)
+    t = f["t"][:n] if "t" in f else np.zeros(0)
+    bodies = f.get("bodies", {})
+    nq = max((g.attrs["q_stop"] for g in bodies.values()), default=0)
+    nu = max((g.attrs["u_stop"] for g in bodies.values()), default=0)
+    q, u = np.full((n, nq), np.nan), np.full((n, nu), np.nan)
+    for g in bodies.values():
+        if "q" in g:
+            q[:, g.attrs["q_start"]:g.attrs["q_stop"]] = g["q"][:n]
+            u[:, g.attrs["u_start"]:g.attrs["u_stop"]] = g["u"][:n]
+    res = Result(t, q, u, plan=str(attrs.get("plan", "")))
+    res.outputs = {k: v[:n] for k, v in _group(f, "outputs").items()}
+    res.energy = {k: v[:n] for k, v in _group(f, "energy").items()}
+    trace = _group(f, "trace")
+    steps = min((len(v) for v in trace.values()), default=0)
+    res.trace = {k: v[:steps] for k, v in trace.items()}
+    res.contacts = {name: {k: v[:n] for k, v in g.items()} for name, g in f.get("contacts", {}).items()}
+    res.stats = attrs.get("stats", {}) or {}
     return res, attrs
 
 

@@ -16,7 +16,7 @@ import pytest
 
 import ffrmbs.export as export_mod
 from ffrmbs import cli
-from ffrmbs.errors import FfrmbsError, InputFileError
+from ffrmbs.errors import FfrmbsError, InputFileError, OutputFileError
 from ffrmbs.export import export_paraview
 
 N = 5                                        # samples
@@ -259,7 +259,7 @@ def test_a_failure_while_writing_leaves_nothing(result, monkeypatch):
         real(path, *args)
 
     monkeypatch.setattr(export_mod, "_write_vtu", failing)
-    with pytest.raises(OSError, match="disk full"):
+    with pytest.raises(OutputFileError, match="cannot write the ParaView export: disk full"):
         export_paraview(result)
     assert len(calls) == 4
     assert sorted(p.name for p in result.parent.iterdir()) == ["square.h5"]

@@ -55,13 +55,13 @@ def png_size(path):
 
 def test_default_plot_is_a_png_of_outputs_and_energy(result):
     out = plot_result(result)
-    assert out == result.with_suffix(".png")
+    assert out == result.with_name("drop-plot.png")
     width, height = png_size(out)
     assert width == 900 and 800 <= height <= 900              # 9 in x (1.2 + 3 x 2.4) in at 100 dpi
     image = imread(out)
     assert image.shape[:2] == (height, width)
     assert len(np.unique(image.reshape(-1, image.shape[2]), axis=0)) > 50   # lines and text, not blank
-    assert sorted(p.name for p in result.parent.iterdir()) == ["drop.h5", "drop.png"]
+    assert sorted(p.name for p in result.parent.iterdir()) == ["drop-plot.png", "drop.h5"]
 
 
 def test_drawn_lines_are_the_file_data(result):

@@ -23,11 +23,12 @@ def scene() -> Scene:
                                 name="point mass"))
     kinematics = ContactKinematicsPointContour2s(PointContour(mass.point), Contour2sNeutralFFR(beam, "y1"))
     system.add(Contact(kinematics, UnilateralNewtonImpact(e=0.0), name="impact"))
+    node19 = beam.node(beam.data.node_at((0.25, 0.05, 0.025)))
     outputs = {
         "y": lambda t, q, u: q[mass.q_slice][1],                 # [m]
         "vy": lambda t, q, u: u[mass.u_slice][1],                # [m/s]
-        "node19": beam.node(beam.data.node_at((0.25, 0.05, 0.025))),   # position [m]
+        "node19": lambda t, q, u: node19.elastic_displacement(q[beam.q_slice]),   # displacement [m]
     }
     return Scene(system, t_end=0.1, dt=1e-5, integrator="moreau", options={"theta": 0.5, "trace": True},
-                 n_out=1001, outputs=outputs, name="point_mass_beam",
+                 n_out=1001, outputs=outputs, name="point_mass_beam", units={"y": "m", "vy": "m/s", "node19": "m"},
                  description="thesis Sec. 5.2 setup A, written as a Python model script")

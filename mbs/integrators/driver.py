@@ -128,8 +128,11 @@ class Integrator:
         if _stop[1] > 1:
             raise RunInterrupted(self.t, self.steps, _stop[0])
 
-    def trace(self) -> dict:
-        """Per-step records {name: (steps,) array} when the integrator keeps them, else {}."""
+    trace_units: dict = {}      # {trace key: unit} of the integrator's per-step records
+
+    def trace(self, start=0) -> dict:
+        """Per-step records {name: (steps − start,) array} from step ``start`` on when the
+        integrator keeps them, else {}."""
         return {}
 
     def options(self) -> dict:

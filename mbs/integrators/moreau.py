@@ -89,6 +89,9 @@ from .driver import Integrator, StepFailure
 
 NEUTRAL_FFR = (Contour1sNeutralFFR, Contour2sNeutralFFR)
 TRACE_KEYS = ("t", "dt", "closed", "penetration", "iterations", "residual", "impulse_work", "energy")
+TRACE_UNITS = {"t": "s", "dt": "s", "closed": "1", "penetration": "m", "iterations": "1", "residual": "m/s",
+               "impulse_work": "J", "energy": "J"}
+TRACE_DTYPES = {"closed": np.int64, "iterations": np.int64}     # the others float64
 
 
 class MoreauTimeStepping(Integrator):
@@ -152,10 +155,13 @@ class MoreauTimeStepping(Integrator):
                 self._trace[key].append(value)
         self._last[:] = 0, 0.0, 0, 0.0, 0.0
 
-    def trace(self):
+    trace_units = TRACE_UNITS
+
+    def trace(self, start=0):
         if self._trace is None:
             return {}
-        return {key: np.array(values) for key, values in self._trace.items()}
+        return {key: np.array(values[start:], dtype=TRACE_DTYPES.get(key, np.float64))
+                for key, values in self._trace.items()}
 
     def _check_penalty(self, factor, dt):
         """Stop when a closed single-valued contact is too stiff for its explicit force:

@@ -15,7 +15,11 @@
   (``contour="2s"``, the thesis's Contour2sNeutralLinearExternalFFR) or a
   ``FlexibleBand`` 50 mm wide on the top face's centre line (``contour="band"``, thesis
   Table 5.3), with a set-valued Newton impact law (``law="impact"``, e) or a linear
-  penalty law (``law="penalty"``, k [N/m], d [N s/m]).
+  penalty law (``law="penalty"``, k [N/m], d [N s/m]); the contact is named "impact"
+  whatever its law.
+- Outputs (:meth:`Scene.outputs`): ``y`` [m] and ``vy`` [m/s] of the point mass, and
+  ``node19``, the **displacement** Φ q_f [m] of node 19 (not its position): the same
+  names and meanings as ``examples/scenes/point_mass_beam.toml``.
 
 The body data are preprocessed on first use and cached (:func:`default_beam_data`,
 :mod:`validation.scenes.cache`).
@@ -40,6 +44,8 @@ MASS, VELOCITY = 0.5, (0.0, -0.2, 0.0)            # [kg], [m/s]
 SETUPS = {"A": (0.235, 0.052, 0.025), "B": (0.235, 0.052, 0.040)}   # initial positions [m]
 NODE_19 = (0.25, 0.05, 0.025)                     # the thesis's output node [m]
 PENALTY_K = 1e7                                   # [N/m], the thesis's soft contact
+OUTPUT_UNITS = {"y": "m", "vy": "m/s", "node19": "m"}
+CONTACT = "impact"                                # the contact's name, whatever its law
 
 
 def recipe(divisions=DIVISIONS, modes="all") -> dict:
@@ -88,7 +94,9 @@ class Scene:
     node: int                     # index of node 19
 
     def outputs(self):
-        """Point-mass y position [m] and velocity [m/s], node 19's displacement [m]."""
+        """Point-mass y position [m] and velocity [m/s], node 19's displacement Φ q_f [m]
+        (body-frame components; the frame is fixed, so also world components). Their units:
+        :data:`OUTPUT_UNITS`."""
         mass, beam, j = self.mass, self.beam, self.node
         return {"y": lambda t, q, u: q[mass.q_slice][1],
                 "vy": lambda t, q, u: u[mass.u_slice][1],
@@ -119,5 +127,6 @@ def build(setup="A", modes=20, law="impact", e=0.0, k=PENALTY_K, d=0.0, contour=
         force_law = LinearRegularizedUnilateralConstraint(k, d)
     else:
         raise ModelError(f"law must be 'impact' or 'penalty', not {law!r}")
-    contact = system.add(Contact(ContactKinematicsPointContour2s(PointContour(mass.point), surface), force_law))
+    contact = system.add(Contact(ContactKinematicsPointContour2s(PointContour(mass.point), surface), force_law,
+                                 name=CONTACT))
     return Scene(system, beam, mass, contact, data.node_at(NODE_19))
