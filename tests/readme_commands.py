@@ -37,6 +37,7 @@ _ENV_WORD = re.compile(r"[A-Za-z_][A-Za-z0-9_]*=")
 _PLACEHOLDER = re.compile(r"\b[A-Z][A-Z0-9_]*[A-Z]\b")
 _FENCE = re.compile(r"^(\s*)```(\S*)\s*$")
 _INLINE = re.compile(r"`([^`\n]+)`")
+_SHELL_OPERATORS = {"|", "||", "&", ">", ">>", "<", "2>", "2>&1"}
 _PIP_TARGET = re.compile(r"\.(?:\[([A-Za-z0-9_,-]+)\])?")
 
 
@@ -214,6 +215,8 @@ def parse_problem(words: list[str], repo: Path) -> str | None:
     when it is the CLI's), ``python3 FILE`` by the file's existence, ``pip install`` by
     the extras named in setup.cfg."""
     prog, args = words[0], words[1:]
+    if set(words) & _SHELL_OPERATORS:
+        return "a pipe or redirection, which tests/readme_commands.py does not read"
     if prog == "ffrmbs":
         return _ffrmbs_problem(args)
     if prog in ("python3", "python") and args[:1] == ["-m"] and len(args) > 1:

@@ -12,6 +12,7 @@ there too; the others must compile and their imports must exist.
 import os
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -48,6 +49,51 @@ def _not_run_reason(command):
 def _where(item):
     shown = item.text if isinstance(item, rc.Command) else item.source.splitlines()[0] + " ..."
     return f"README.md, line {item.line}: `{shown}`"
+
+
+SAMPLE = """Try `ffrmbs run --help` or `OPENBLAS_NUM_THREADS=1 ffrmbs run SCENE.toml`; `ffrmbs plot` plots.
+
+```sh
+# a comment line
+A=1 ffrmbs run --out o \\
+    --dt 1e-4   # a trailing comment
+pip install '.[test]' && ffrmbs info b#c; ffrmbs info c
+ffrmbs validate --out o [--quick] [--only NAME[,NAME]]
+```
+
+```python
+from x import y
+print(y, [data for _ in range(2)], lambda t: t)
+```
+
+```
+output, not read
+```
+"""
+
+
+def test_reader_rules_on_a_sample():
+    """The rules of tests/readme_commands.py on a README whose reading is known."""
+    items = rc.items(SAMPLE)
+    commands = [(c.line, c.text, c.synopsis) for c in items if isinstance(c, rc.Command)]
+    assert commands == [(5, "A=1 ffrmbs run --out o --dt 1e-4", False),
+                        (7, "pip install '.[test]'", False), (7, "ffrmbs info b#c", False), (7, "ffrmbs info c", False),
+                        (8, "ffrmbs validate --out o [--quick] [--only NAME[,NAME]]", True)]
+    assert items[0].forms() == [({"A": "1"}, ["ffrmbs", "run", "--out", "o", "--dt", "1e-4"])]
+    assert items[1].forms() == [({}, ["pip", "install", ".[test]"])]
+    assert items[4].forms() == [({}, ["ffrmbs", "validate", "--out", "o"]),
+                                ({}, ["ffrmbs", "validate", "--out", "o", "--quick", "--only", "NAME,NAME"])]
+    (snippet,) = [s for s in items if isinstance(s, rc.Snippet)]
+    assert (snippet.line, snippet.imports(), snippet.free_names()) == (12, [("x", "y")], {"data"})
+    inline = [(c.line, c.text, c.synopsis) for c in rc.inline_commands(SAMPLE)]
+    assert inline == [(1, "ffrmbs run --help", False), (1, "OPENBLAS_NUM_THREADS=1 ffrmbs run SCENE.toml", True),
+                      (1, "ffrmbs plot", False)]
+    assert rc.parse_problem(["ffrmbs", "plot"], REPO) is None                      # names the subcommand
+    assert "required: --out" in rc.parse_problem(["ffrmbs", "validate", "--quick"], REPO)
+    assert "no extra nope" in rc.parse_problem(["pip", "install", ".[test,nope]"], REPO)
+    assert "no file" in rc.parse_problem(["python3", "examples/none.py"], REPO)
+    assert "no module" in rc.parse_problem(["python3", "-m", "validation.none"], REPO)
+    assert "pipe" in rc.parse_problem(["python3", "examples/modal_impact.py", "|", "head"], REPO)
 
 
 def test_readme_has_commands_and_snippets():
@@ -93,7 +139,8 @@ def test_readme_python_snippets_compile_and_import():
             continue
         problems += [f"{_where(snippet)}: {p}" for p in
                      filter(None, (rc.import_problem(m, n) for m, n in snippet.imports()))]
-    assert not problems, "\n".join(problems)
+    if problems:
+        pytest.fail("\n".join(problems), pytrace=False)
 
 
 def _argv(words):
@@ -136,6 +183,7 @@ def test_readme_commands_run_as_written(tmp_path):
         else:
             extra, words = item.forms()[0]
             argv = _argv(words)
+        start = time.perf_counter()
         try:
             done = subprocess.run(argv, cwd=work, env={**env, **extra}, capture_output=True, text=True,
                                   timeout=TIMEOUT_S)
@@ -145,5 +193,7 @@ def test_readme_commands_run_as_written(tmp_path):
         ran += 1
         if done.returncode != 0:
             failures.append(f"{_where(item)}: exit {done.returncode}\n{done.stderr.strip()[-2000:]}")
+        print(f"{done.returncode}  {time.perf_counter() - start:6.1f} s  {_where(item)}")
     assert ran, "no README command ran"
-    assert not failures, "\n\n".join(failures)
+    if failures:
+        pytest.fail("\n\n".join(failures), pytrace=False)
