@@ -47,7 +47,6 @@ class Command:
 
     line: int                  # README line (1-based) where it starts
     raw: str                   # its text, comments removed
-    fenced: bool               # from a shell block (runnable) or an inline span (shown only)
 
     @property
     def text(self) -> str:
@@ -124,6 +123,7 @@ def _chars(text):
 
 
 def _split_env(words):
+    """({VAR: value} of the leading VAR=value words, the words after them)."""
     env = {}
     while words and _ENV_WORD.match(words[0]):
         name, value = words[0].split("=", 1)
@@ -132,30 +132,18 @@ def _split_env(words):
     return env, words
 
 
-def _shell_commands(text, line, fenced):
+def _shell_commands(text, line):
     """The commands of one logical shell line: comment dropped, split at && and ;."""
-    commands, current, previous = [], [], " "
+    kept, previous = [], (" ", True)
     for c, quoted in _chars(text):
-        if not quoted and c == "#" and previous.isspace():
+        if not quoted and c == "#" and previous[0].isspace():
             break
-        current.append(c)
-        previous = c
-    text = "".join(current)
-    pieces, start, chars = [], 0, list(_chars(text))
-    i = 0
-    while i < len(chars):
-        c, quoted = chars[i]
-        if not quoted and (text.startswith("&&", i) or c == ";"):
-            pieces.append(text[start:i])
-            i += 2 if c == "&" else 1
-            start = i
-            continue
-        i += 1
-    pieces.append(text[start:])
-    for piece in pieces:
-        if piece.strip():
-            commands.append(Command(line, piece.strip(), fenced))
-    return commands
+        if not quoted and c == "&" and previous == ("&", False):
+            kept[-1], c = "\0", ""                         # && ends a command
+        kept.append("\0" if not quoted and c == ";" else c)
+        previous = (c, quoted)
+    pieces = "".join(kept).split("\0")
+    return [Command(line, piece.strip()) for piece in pieces if piece.strip()]
 
 
 def fenced_blocks(readme: str) -> list[tuple[str, int, str]]:
@@ -186,7 +174,7 @@ def items(readme: str) -> list:
                 if text.endswith("\\"):
                     logical += text[:-1] + " "
                     continue
-                found += _shell_commands(logical + text, first, fenced=True)
+                found += _shell_commands(logical + text, first)
                 logical, first = "", None
     return found
 
@@ -205,7 +193,7 @@ def inline_commands(readme: str) -> list[Command]:
             while words and _ENV_WORD.match(words[0]):
                 words = words[1:]
             if words and words[0] in COMMAND_WORDS and len(words) > 1:
-                found += _shell_commands(span, number, fenced=False)
+                found += _shell_commands(span, number)
     return found
 
 

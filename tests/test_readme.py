@@ -57,7 +57,7 @@ SAMPLE = """Try `ffrmbs run --help` or `OPENBLAS_NUM_THREADS=1 ffrmbs run SCENE.
 # a comment line
 A=1 ffrmbs run --out o \\
     --dt 1e-4   # a trailing comment
-pip install '.[test]' && ffrmbs info b#c; ffrmbs info c
+pip install '.[test]' && ffrmbs info b#c; ffrmbs info 'c&&d;e' 
 ffrmbs validate --out o [--quick] [--only NAME[,NAME]]
 ```
 
@@ -77,7 +77,7 @@ def test_reader_rules_on_a_sample():
     items = rc.items(SAMPLE)
     commands = [(c.line, c.text, c.synopsis) for c in items if isinstance(c, rc.Command)]
     assert commands == [(5, "A=1 ffrmbs run --out o --dt 1e-4", False),
-                        (7, "pip install '.[test]'", False), (7, "ffrmbs info b#c", False), (7, "ffrmbs info c", False),
+                        (7, "pip install '.[test]'", False), (7, "ffrmbs info b#c", False), (7, "ffrmbs info 'c&&d;e'", False),
                         (8, "ffrmbs validate --out o [--quick] [--only NAME[,NAME]]", True)]
     assert items[0].forms() == [({"A": "1"}, ["ffrmbs", "run", "--out", "o", "--dt", "1e-4"])]
     assert items[1].forms() == [({}, ["pip", "install", ".[test]"])]
