@@ -126,8 +126,10 @@ def test_every_readme_command_is_run_or_says_why_not():
     unknown = [_where(c) for c in commands
                if not c.synopsis and not _not_run_reason(c) and _argv(c.forms()[0][1]) is None]
     stale = [prefix for prefix in NOT_RUN if not any(c.text.startswith(prefix) for c in commands)]
-    assert not unknown, "commands this test cannot run; run them or list them in NOT_RUN:\n" + "\n".join(unknown)
-    assert not stale, f"NOT_RUN entries matching no README command: {stale}"
+    problems = [f"{where}: this test cannot run it; teach _argv to, or list it in NOT_RUN" for where in unknown]
+    problems += [f"NOT_RUN entry {prefix!r} matches no README command" for prefix in stale]
+    if problems:
+        pytest.fail("\n".join(problems), pytrace=False)
 
 
 def test_readme_python_snippets_compile_and_import():
