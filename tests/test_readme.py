@@ -1,0 +1,202 @@
+"""The README's commands and snippets work as written (the rules of reading them are in
+tests/readme_commands.py).
+
+Every shell command the README shows must parse: ffrmbs arguments by the CLI's own
+parser, modules and example scripts must exist, pip extras must be in setup.cfg. The
+fenced commands are then run as written, in README order, in a temporary directory laid
+out like a fresh clone (so that a plot finds the run before it), except usage synopses
+and the commands listed in NOT_RUN with the reason. Self-contained Python snippets run
+there too; the others must compile and their imports must exist.
+"""
+
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+import readme_commands as rc
+
+REPO = Path(__file__).resolve().parents[1]
+README = REPO / "README.md"
+TIMEOUT_S = 300          # per command or snippet; a README command slower than this belongs in NOT_RUN
+
+# command prefix -> why the test does not run it (it is still parsed)
+NOT_RUN = {
+    "python3 -m pip install": "installs into the environment; the extras it names are checked against setup.cfg",
+    "python3 -m pytest": "the whole test suite, which holds this test",
+    "ffrmbs preprocess part.inp": "reads the user's own Abaqus mesh; the repository has none",
+    "ffrmbs run --out out/run --resume": "continues a killed run: needs a kill after the first checkpoint "
+                                         "(30 s of wall time); kill -9 and resume are tested in tests/test_resume.py",
+    "ffrmbs validate": "minutes of validation cases, each with its own tests",
+}
+
+
+def _readme():
+    return README.read_text(encoding="utf-8")
+
+
+def _all_commands():
+    return [item for item in rc.items(_readme()) if isinstance(item, rc.Command)] + rc.inline_commands(_readme())
+
+
+def _not_run_reason(command):
+    return next((why for prefix, why in NOT_RUN.items() if command.text.startswith(prefix)), None)
+
+
+def _where(item):
+    shown = item.text if isinstance(item, rc.Command) else item.source.splitlines()[0] + " ..."
+    return f"README.md, line {item.line}: `{shown}`"
+
+
+SAMPLE = """Try `ffrmbs run --help` or `OPENBLAS_NUM_THREADS=1 ffrmbs run SCENE.toml`; `ffrmbs plot` plots.
+
+```sh
+# a comment line
+A=1 ffrmbs run --out o \\
+    --dt 1e-4   # a trailing comment
+pip install '.[test]' && ffrmbs info b#c; ffrmbs info 'c&&d;e' 
+ffrmbs validate --out o [--quick] [--only NAME[,NAME]]
+```
+
+```python
+from x import y
+print(y, [data for _ in range(2)], lambda t: t)
+```
+
+```
+output, not read
+```
+"""
+
+
+def test_reader_rules_on_a_sample():
+    """The rules of tests/readme_commands.py on a README whose reading is known."""
+    items = rc.items(SAMPLE)
+    commands = [(c.line, c.text, c.synopsis) for c in items if isinstance(c, rc.Command)]
+    assert commands == [(5, "A=1 ffrmbs run --out o --dt 1e-4", False),
+                        (7, "pip install '.[test]'", False), (7, "ffrmbs info b#c", False), (7, "ffrmbs info 'c&&d;e'", False),
+                        (8, "ffrmbs validate --out o [--quick] [--only NAME[,NAME]]", True)]
+    assert items[0].forms() == [({"A": "1"}, ["ffrmbs", "run", "--out", "o", "--dt", "1e-4"])]
+    assert items[1].forms() == [({}, ["pip", "install", ".[test]"])]
+    assert items[4].forms() == [({}, ["ffrmbs", "validate", "--out", "o"]),
+                                ({}, ["ffrmbs", "validate", "--out", "o", "--quick", "--only", "NAME,NAME"])]
+    (snippet,) = [s for s in items if isinstance(s, rc.Snippet)]
+    assert (snippet.line, snippet.imports(), snippet.free_names()) == (12, [("x", "y")], {"data"})
+    inline = [(c.line, c.text, c.synopsis) for c in rc.inline_commands(SAMPLE)]
+    assert inline == [(1, "ffrmbs run --help", False), (1, "OPENBLAS_NUM_THREADS=1 ffrmbs run SCENE.toml", True),
+                      (1, "ffrmbs plot", False)]
+    assert rc.parse_problem(["ffrmbs", "plot"], REPO) is None                      # names the subcommand
+    assert "required: --out" in rc.parse_problem(["ffrmbs", "validate", "--quick"], REPO)
+    assert "no extra nope" in rc.parse_problem(["pip", "install", ".[test,nope]"], REPO)
+    assert "no file" in rc.parse_problem(["python3", "examples/none.py"], REPO)
+    assert "no module" in rc.parse_problem(["python3", "-m", "validation.none"], REPO)
+    assert "pipe" in rc.parse_problem(["python3", "examples/modal_impact.py", "|", "head"], REPO)
+
+
+def test_readme_has_commands_and_snippets():
+    """The reader finds what is there (a broken fence would make every other test vacuous)."""
+    readme = _readme()
+    fences = sum(1 for line in readme.splitlines() if line.strip().startswith("```"))
+    blocks = rc.fenced_blocks(readme)
+    assert 2 * len(blocks) == fences
+    shell = [b for b in blocks if b[0] in rc.SHELL_FENCES]
+    commands = [item for item in rc.items(readme) if isinstance(item, rc.Command)]
+    assert shell and len(commands) >= len(shell)
+    assert any(isinstance(item, rc.Snippet) for item in rc.items(readme))
+
+
+def test_every_readme_command_parses():
+    problems = []
+    for command in _all_commands():
+        for _, words in command.forms():
+            problem = rc.parse_problem(words, REPO)
+            if problem:
+                problems.append(f"{_where(command)}: {problem}")
+    if problems:
+        pytest.fail("\n".join(problems), pytrace=False)
+
+
+def test_every_readme_command_is_run_or_says_why_not():
+    """A fenced command is run unless it is a synopsis or NOT_RUN says why not; an entry
+    of NOT_RUN that no longer matches a README command is stale."""
+    commands = [item for item in rc.items(_readme()) if isinstance(item, rc.Command)]
+    unknown = [_where(c) for c in commands
+               if not c.synopsis and not _not_run_reason(c) and _argv(c.forms()[0][1]) is None]
+    stale = [prefix for prefix in NOT_RUN if not any(c.text.startswith(prefix) for c in commands)]
+    problems = [f"{where}: this test cannot run it; teach _argv to, or list it in NOT_RUN" for where in unknown]
+    problems += [f"NOT_RUN entry {prefix!r} matches no README command" for prefix in stale]
+    if problems:
+        pytest.fail("\n".join(problems), pytrace=False)
+
+
+def test_readme_python_snippets_compile_and_import():
+    problems = []
+    for snippet in (item for item in rc.items(_readme()) if isinstance(item, rc.Snippet)):
+        try:
+            snippet.code()
+        except SyntaxError as exc:
+            problems.append(f"{_where(snippet)}: {exc}")
+            continue
+        problems += [f"{_where(snippet)}: {p}" for p in
+                     filter(None, (rc.import_problem(m, n) for m, n in snippet.imports()))]
+    if problems:
+        pytest.fail("\n".join(problems), pytrace=False)
+
+
+def _argv(words):
+    """The process to start for a command's words, with this checkout's code, or None."""
+    if words[0] == "ffrmbs":
+        return [sys.executable, "-m", "ffrmbs.cli", *words[1:]]
+    if words[0] in ("python3", "python"):
+        return [sys.executable, *words[1:]]
+    return None
+
+
+def _fresh_clone(tmp):
+    """A directory laid out like a fresh clone: the repository's tracked top-level entries
+    (all non-hidden ones without git) as symlinks, so outputs land in tmp."""
+    try:
+        tracked = subprocess.run(["git", "ls-files"], cwd=REPO, capture_output=True, text=True, check=True).stdout
+        names = {path.split("/")[0] for path in tracked.splitlines()}
+    except (OSError, subprocess.CalledProcessError):
+        names = {p.name for p in REPO.iterdir()}
+    tmp.mkdir()
+    for name in sorted(n for n in names if not n.startswith(".")):
+        (tmp / name).symlink_to(REPO / name)
+    return tmp
+
+
+@pytest.mark.slow
+def test_readme_commands_run_as_written(tmp_path):
+    """The fenced commands and self-contained snippets, in README order, each exits 0."""
+    work = _fresh_clone(tmp_path / "clone")
+    env = {**os.environ, "FFRMBS_PROGRESS": "0", "FFRMBS_CACHE": str(tmp_path / "cache"),
+           "PYTHONPATH": os.pathsep.join(filter(None, [str(REPO), os.environ.get("PYTHONPATH")]))}
+    failures, ran = [], 0
+    for item in rc.items(_readme()):
+        if isinstance(item, rc.Snippet):
+            if item.free_names():
+                continue                          # a fragment: compiled and import-checked above
+            argv, extra = [sys.executable, "-c", item.source], {}
+        elif item.synopsis or _not_run_reason(item):
+            continue
+        else:
+            extra, words = item.forms()[0]
+            argv = _argv(words)
+        start = time.perf_counter()
+        try:
+            done = subprocess.run(argv, cwd=work, env={**env, **extra}, capture_output=True, text=True,
+                                  timeout=TIMEOUT_S)
+        except subprocess.TimeoutExpired:
+            failures.append(f"{_where(item)}: still running after {TIMEOUT_S} s (make it cheaper or list it in NOT_RUN)")
+            continue
+        ran += 1
+        if done.returncode != 0:
+            failures.append(f"{_where(item)}: exit {done.returncode}\n{done.stderr.strip()[-2000:]}")
+        print(f"{done.returncode}  {time.perf_counter() - start:6.1f} s  {_where(item)}")
+    assert ran, "no README command ran"
+    if failures:
+        pytest.fail("\n\n".join(failures), pytrace=False)
