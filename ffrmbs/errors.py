@@ -64,3 +64,10 @@ class RunInterrupted(FfrmbsError):
         self.reason = reason
         self.result = None
         super().__init__(f"run interrupted at t = {t:.6g} s (step {step}): {reason}")
+
+
+def quote(text, limit: int = 20) -> str:
+    """``text`` as a short, printable quotation for an error message: at most ``limit``
+    characters of it, non-printable ones as '?', cut ones marked by '…'."""
+    s = "".join(c if c.isprintable() else "?" for c in str(text)[:limit])
+    return f"'{s}…'" if len(str(text)) > limit else f"'{s}'"
