@@ -35,7 +35,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ffrmbs.errors import InputFileError, ModelError
+from ffrmbs.errors import InputFileError, ModelError, quote
 from preprocess.textfiles import read_text
 
 from .body import Frame
@@ -320,10 +320,10 @@ def _parse_row(path, lineno, tokens) -> np.ndarray:
         try:
             row[col] = float(token)
         except ValueError:
-            raise InputFileError(path, lineno, f"entry {col + 1} ({token!r}) is not a number") from None
+            raise InputFileError(path, lineno, f"entry {col + 1} ({quote(token)}) is not a number") from None
     bad = np.flatnonzero(~np.isfinite(row))
     if bad.size:
-        raise InputFileError(path, lineno, f"entry {bad[0] + 1} ({tokens[bad[0]]!r}) is not finite")
+        raise InputFileError(path, lineno, f"entry {bad[0] + 1} ({quote(tokens[bad[0]])}) is not finite")
     return row
 
 
