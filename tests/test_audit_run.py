@@ -234,10 +234,11 @@ def test_a_second_run_into_the_same_output_is_refused_with_the_pid(tmp_path):
     assert sorted(p.name for p in out.iterdir()) == ["fall.h5", "fall.png"]   # the lock file is gone
 
 
-def test_a_result_file_open_in_another_process_is_a_clear_error(tmp_path):
+def test_a_result_file_open_in_another_process_is_a_clear_error(tmp_path, monkeypatch):
     """HDF5's own file lock (a reader holds the file open): the run says so, no traceback."""
     scene, out = scene_file(tmp_path), tmp_path / "out"
     assert ffrmbs("run", scene, "--out", out, "--no-check", "--no-export").returncode == 0
+    monkeypatch.setitem(ENV, "HDF5_USE_FILE_LOCKING", "TRUE")        # HDF5's default, whatever the caller set
     reader = subprocess.Popen([sys.executable, "-c", "import h5py, sys; f = h5py.File(sys.argv[1], 'r'); "
                                "print('open', flush=True); sys.stdin.read()", str(out / "fall.h5")],
                               stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, env=ENV)
