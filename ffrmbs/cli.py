@@ -122,7 +122,8 @@ def cmd_run(args):
     from ffrmbs.main_job import JobSettings, run_job
 
     given = {k: getattr(args, k) for k in DEFAULT_SCENE_OPTIONS if getattr(args, k) is not None}
-    common = dict(resume=args.resume, checkpoint_every=args.checkpoint_every, export=not args.no_export)
+    common = dict(resume=args.resume, checkpoint_every=args.checkpoint_every, export=not args.no_export,
+                  no_limits=args.no_limits)
     if args.scene is None:
         settings = JobSettings(**given, check=not args.no_check)
         summary = run_job(settings, args.out, log=_say, **common)
@@ -217,6 +218,8 @@ def build_parser():
                      help="wall seconds between checkpoints (default 60)")
     run.add_argument("--no-check", action="store_true", help="skip the second run at dt/2 (error estimate)")
     run.add_argument("--no-export", action="store_true", help="skip the ParaView export")
+    run.add_argument("--no-limits", action="store_true",
+                     help="run even beyond 1e8 time steps or 25%% of the physical memory (ffrmbs.limits)")
     default = run.add_argument_group("default scene")
     default.add_argument("--setup", choices=("A", "B"), help="initial position of the point mass (default A)")
     default.add_argument("--modes", type=int, help="elastic modes of the beam (1..750, default 20)")

@@ -4,6 +4,9 @@ ParaView export.
 
 The job, for a scene (:class:`ffrmbs.scene.Scene`) built fresh by ``make_scene()``:
 
+0. the checks, before anything is written: the options, the step count and memory
+   (:mod:`ffrmbs.limits`), and the lock ``OUT/<scene>.lock`` held for the job
+   (:mod:`ffrmbs.output_lock`: one job per result file);
 1. warm-up (the scene's ``warmup`` run, if any): a short run that compiles the numba
    kernels (or loads them from numba's disk cache) before the timed run. Compilation
    anywhere in the job is announced on its own line and measured apart
@@ -30,6 +33,7 @@ The job, for a scene (:class:`ffrmbs.scene.Scene`) built fresh by ``make_scene()
 from __future__ import annotations
 
 import contextlib
+import math
 import signal
 import time
 from pathlib import Path
@@ -37,6 +41,9 @@ from pathlib import Path
 import numpy as np
 
 from ffrmbs.compile_clock import CompileClock
+from ffrmbs.errors import ModelError
+from ffrmbs.limits import check_resources
+from ffrmbs.output_lock import in_use, output_lock
 from mbs.integrators import driver
 from mbs.result_file import ResultRecorder, resume_recording
 
@@ -97,12 +104,31 @@ def result_path(scene, out) -> Path:
 
 
 def run_scene(make_scene, out, check=True, resume=False, checkpoint_every=60.0, flush_every=2.0,
-              export=True, plot=True, log=print) -> dict:
+              export=True, plot=True, log=print, no_limits=False) -> dict:
     """Run the job (module docstring) on ``make_scene()`` (a fresh Scene per call);
     returns the summary. A diverging run raises SimulationError after closing the file
-    with its samples so far (status "failed: …"); an interrupted one RunInterrupted."""
+    with its samples so far (status "failed: …"); an interrupted one RunInterrupted.
+
+    Refused before anything is written (ModelError): ``checkpoint_every`` [s] not a
+    finite number > 0 (None: no checkpoints), or a scene over the step or memory limits
+    of :mod:`ffrmbs.limits` unless ``no_limits``. One job at a time writes a result file
+    (:mod:`ffrmbs.output_lock`); another is refused, as is a result file another process
+    holds open."""
     scene = make_scene()                      # a bad scene stops here, before anything is written
+    if checkpoint_every is not None and not (isinstance(checkpoint_every, (int, float))
+                                             and math.isfinite(checkpoint_every) and checkpoint_every > 0):
+        raise ModelError(f"checkpoint_every (--checkpoint-every) must be a finite number of seconds > 0, "
+                         f"got {checkpoint_every!r}")
+    check_resources(scene, check, no_limits)
     path = result_path(scene, out)
+    with output_lock(path):
+        try:
+            return _run(make_scene, scene, path, check, resume, checkpoint_every, flush_every, export, plot, log)
+        except BlockingIOError:               # HDF5's own lock: the file is open in another process
+            raise in_use(path, "another process (HDF5 file lock)") from None
+
+
+def _run(make_scene, scene, path, check, resume, checkpoint_every, flush_every, export, plot, log) -> dict:
     log(f"scene {scene.name}: {scene.description}" if scene.description else f"scene {scene.name}")
     units = scene.output_units()
     recorder = ResultRecorder(path, {"scene": scene.name, "description": scene.description, "inputs": scene.inputs,

@@ -15,9 +15,12 @@ sweeps the modes against all 750.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from ffrmbs.errors import ModelError
+
+LAWS, CONTOURS = ("impact", "penalty"), ("2s", "band")
 
 
 @dataclass
@@ -33,6 +36,32 @@ class JobSettings:
     check: bool = True            # a second run at dt/2 for the error estimate
     n_out: int = 1001             # output samples
 
+    def validate(self) -> None:
+        """ModelError, one line naming every setting out of range: setup "A" or "B", modes
+        >= 1 (at most the beam's modes, checked once it is built), law, contour, 0 <= e <=
+        1, t_end [s] and dt [s] finite and > 0, dt < t_end, n_out >= 2."""
+        from validation.scenes.point_mass_beam import SETUPS
+
+        def count(n, low):
+            return isinstance(n, int) and not isinstance(n, bool) and n >= low
+
+        faults = [f"{key} must be one of {', '.join(map(repr, options))}, got {getattr(self, key)!r}"
+                  for key, options in (("setup", tuple(SETUPS)), ("law", LAWS), ("contour", CONTOURS))
+                  if getattr(self, key) not in options]
+        if not count(self.modes, 1):
+            faults.append(f"modes (elastic modes of the beam) must be an integer >= 1, got {self.modes!r}")
+        if not 0.0 <= self.e <= 1.0:
+            faults.append(f"e (coefficient of restitution) must be in [0, 1], got {self.e!r}")
+        for key in ("t_end", "dt"):
+            if not (math.isfinite(getattr(self, key)) and getattr(self, key) > 0):
+                faults.append(f"{key} must be a finite time > 0 [s], got {getattr(self, key)!r}")
+        if not faults and not self.dt < self.t_end:
+            faults.append(f"dt must be smaller than t_end, got dt = {self.dt!r} s, t_end = {self.t_end!r} s")
+        if not count(self.n_out, 2):
+            faults.append(f"n_out (output samples) must be an integer >= 2, got {self.n_out!r}")
+        if faults:
+            raise ModelError("default scene: " + "; ".join(faults))
+
 
 def default_scene(settings: JobSettings, data=None):
     """The default scene as a :class:`~ffrmbs.scene.Scene` (``data``: the beam's body data,
@@ -42,7 +71,8 @@ def default_scene(settings: JobSettings, data=None):
 
     data = pmb.default_beam_data() if data is None else data
     if settings.modes > data.n_modes:
-        raise ModelError(f"the beam has {data.n_modes} modes; asked for {settings.modes}")
+        raise ModelError(f"default scene: modes must be in 1..{data.n_modes} (the beam's modes), "
+                         f"got {settings.modes}")
     built = pmb.build(settings.setup, settings.modes, settings.law, settings.e, contour=settings.contour, data=data)
     description = (
         f"thesis Sec. 5.2 setup {settings.setup}: point mass {pmb.MASS} kg at "
@@ -57,13 +87,14 @@ def default_scene(settings: JobSettings, data=None):
                  description=description, warmup=(0.0125, 1e-4), units=dict(pmb.OUTPUT_UNITS))
 
 
-def run_job(settings: JobSettings, out, log=print, resume=False, checkpoint_every=60.0, export=True) -> dict:
-    """Run the default scene as a job (:func:`ffrmbs.job.run_scene`); return the summary."""
+def run_job(settings: JobSettings, out, log=print, resume=False, checkpoint_every=60.0, export=True,
+            no_limits=False) -> dict:
+    """Run the default scene as a job (:func:`ffrmbs.job.run_scene`); return the summary.
+    The settings are checked first (:meth:`JobSettings.validate`)."""
     from ffrmbs.job import run_scene
     from validation.scenes import point_mass_beam as pmb
 
-    if not (settings.t_end > 0 and settings.dt > 0 and settings.n_out >= 2):
-        raise ModelError("need t_end > 0, dt > 0 and at least 2 output samples")
+    settings.validate()
     data = pmb.default_beam_data(log=log)
     return run_scene(lambda: default_scene(settings, data), out, check=settings.check, resume=resume,
-                     checkpoint_every=checkpoint_every, export=export, log=log)
+                     checkpoint_every=checkpoint_every, export=export, log=log, no_limits=no_limits)

@@ -8,13 +8,27 @@ calls it. :func:`load_scene` dispatches on the file's suffix.
 
 from __future__ import annotations
 
+import re
 import runpy
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from ffrmbs.errors import InputFileError, ModelError
+from ffrmbs.errors import InputFileError, ModelError, quote
+
+NAME_CHARS, NAME_MAX = "A-Za-z0-9._-", 100
+_NAME = re.compile(rf"[{NAME_CHARS}]{{1,{NAME_MAX}}}")
+
+
+def name_fault(name) -> str | None:
+    """Why ``name`` is not a scene name, or None. A scene name is a plain file stem (the
+    result file, plot, ParaView directory and checkpoint are named after it inside the
+    output directory): 1 to NAME_MAX characters of [A-Za-z0-9._-], not starting with '.'."""
+    if not isinstance(name, str) or not _NAME.fullmatch(name) or name.startswith("."):
+        return (f"the scene name {quote(name, 40)} is not a plain file stem: use 1 to {NAME_MAX} of the "
+                f"characters {NAME_CHARS}, not starting with '.'")
+    return None
 
 
 @dataclass
@@ -27,8 +41,8 @@ class Scene:
     options (e.g. theta, tol, penetration_bound [m]); n_out: output samples, equally
     spaced over [0, t_end]; outputs: {name: Frame or callable (t, q, u) -> array}, the
     quantities recorded at each sample; energies: record kinetic and potential energy
-    [J]; plan, tolerance [m]: the scene planner (:mod:`mbs.plan`); name: a short
-    identifier, used for the result file's name; inputs: {label: path} of the files the
+    [J]; plan, tolerance [m]: the scene planner (:mod:`mbs.plan`); name: a plain file
+    stem (:func:`name_fault`) naming the result file and its companions; inputs: {label: path} of the files the
     scene was built from (the result file records their SHA-256); description: one line
     for logs; warmup: (t_end, dt) [s] of a short run made first so that the numba kernels
     are compiled (or loaded from numba's cache) outside the timed run, or None; units:
@@ -52,8 +66,11 @@ class Scene:
     units: dict = field(default_factory=dict)
 
     def __post_init__(self):
-        if not (self.t_end > 0 and self.dt > 0):
-            raise ModelError(f"scene {self.name!r}: need t_end > 0 and dt > 0, got {self.t_end}, {self.dt}")
+        fault = name_fault(self.name)
+        if fault:
+            raise ModelError(fault)
+        if not (0 < self.t_end < np.inf and 0 < self.dt < np.inf):
+            raise ModelError(f"scene {self.name!r}: need finite t_end > 0 and dt > 0, got {self.t_end}, {self.dt}")
         if int(self.n_out) < 2:
             raise ModelError(f"scene {self.name!r}: need at least 2 output samples, got {self.n_out}")
         self.n_out = int(self.n_out)

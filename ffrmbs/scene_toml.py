@@ -56,7 +56,9 @@ loads and contacts. Any other key is an error. Keys marked *req.* are required. 
 other keys take the default shown.
 
 ``[scene]``
-    ``name`` (file stem): names the result file. ``description`` (""): one line.
+    ``name`` (the file's stem): names the result file and its companions in the output
+    directory, so it is a plain file stem: 1 to 100 of the characters A-Z a-z 0-9 . _ -,
+    not starting with ".". ``description`` (""): one line.
     ``t_end`` *req.* [s] > 0. ``dt`` *req.* [s] > 0: the step, or the largest step
     for "moreau-adaptive". ``integrator`` ("moreau"): one of "moreau",
     "moreau-adaptive", "generalized-alpha", "rk4". ``n_out`` (101) >= 2: output
@@ -208,7 +210,7 @@ line when it can be found, the entry, and the key. Faults include:
 - an unknown key (the allowed ones are listed);
 - a missing key;
 - a wrong type;
-- a value out of range;
+- a value out of range (and any number beyond |x| <= 1e12, SI units);
 - an unknown enum value (the allowed values are listed);
 - an unknown body;
 - a node, group or mode the body does not have;
@@ -236,8 +238,8 @@ if sys.version_info >= (3, 11):
 else:   # pragma: no cover - Python 3.10
     import tomli as tomllib
 
-from ffrmbs.errors import FfrmbsError, InputFileError, ModelError
-from ffrmbs.scene import Scene
+from ffrmbs.errors import FfrmbsError, InputFileError, ModelError, quote
+from ffrmbs.scene import Scene, name_fault
 
 GROUND = "ground"
 BUILTIN = "builtin:"
@@ -252,6 +254,7 @@ QUANTITIES = ("position", "velocity", "displacement", "angular_velocity", "q_f")
 QUANTITY_UNITS = {"position": "m", "velocity": "m/s", "displacement": "m", "angular_velocity": "rad/s"}
 COMPONENTS = ("x", "y", "z")
 ORTHONORMAL_TOL = 1e-9      # max |AᵀA − 1| of an orientation matrix
+MAX_MAGNITUDE = 1e12        # |x| of any number of a scene [SI units]: larger ones are no physical input
 TOP_LEVEL = ("scene", "body", "spring", "joint", "load", "contact", "outputs")
 FRAME_KEYS = ("body", "node", "at", "point")
 
@@ -348,8 +351,7 @@ def _describe(value) -> str:
     if isinstance(value, float):
         return f"a float ({value!r})"
     if isinstance(value, str):
-        shown = value if len(value) <= 40 else value[:37] + "..."
-        return f"a string ({shown!r})"
+        return f"a string ({quote(value, 40)})"
     if isinstance(value, list):
         return f"an array of {len(value)}"
     if isinstance(value, dict):
@@ -368,6 +370,11 @@ def _is_int(value) -> bool:
 
 def _unit(unit: str) -> str:
     return f" [{unit}]" if unit else ""
+
+
+def _too_large(key, unit, value) -> str:
+    return (f"{key!r}: {float(value)!r}{_unit(unit)} is beyond the bound |x| <= {MAX_MAGNITUDE:g} "
+            "(SI units) of any number of a scene")
 
 
 class _Reader:
@@ -428,6 +435,8 @@ class _Table:
         value = float(value)
         if not math.isfinite(value):
             self.fail(key, f"{key!r} must be finite, got {value!r}")
+        if abs(value) > MAX_MAGNITUDE:
+            self.fail(key, _too_large(key, unit, value))
         if low is not None and (value <= low if strict else value < low):
             self.fail(key, f"{key!r} must be {'>' if strict else '>='} {low:g}{_unit(unit)}, got {value!r}")
         if high is not None and value > high:
@@ -479,9 +488,11 @@ class _Table:
                            f"{_describe(value[bad[0]])}")
         array = np.array(value, dtype=float)
         if not np.isfinite(array).all():
-            self.fail(key, f"{key!r} must hold finite numbers, got {value!r}")
+            self.fail(key, f"{key!r} must hold finite numbers, got {quote(value, 60)}")
+        if (np.abs(array) > MAX_MAGNITUDE).any():
+            self.fail(key, _too_large(key, unit, array[np.abs(array) > MAX_MAGNITUDE][0]))
         if low is not None and (array < low).any():
-            self.fail(key, f"{key!r} must hold numbers >= {low:g}{_unit(unit)}, got {value!r}")
+            self.fail(key, f"{key!r} must hold numbers >= {low:g}{_unit(unit)}, got {quote(value, 60)}")
         return array
 
     def rows(self, key, n_rows, what, default=_REQUIRED) -> np.ndarray | None:
@@ -496,6 +507,8 @@ class _Table:
         array = np.array(value, dtype=float)
         if not np.isfinite(array).all():
             self.fail(key, f"{key!r} must hold finite numbers")
+        if (np.abs(array) > MAX_MAGNITUDE).any():
+            self.fail(key, _too_large(key, "", array[np.abs(array) > MAX_MAGNITUDE][0]))
         return array
 
     def matrix3(self, key, default=_REQUIRED, unit="") -> np.ndarray | None:
@@ -630,7 +643,12 @@ class _SceneReader:
         s = _Table(self.r, self.doc["scene"], ("scene",), "[scene]",
                    ("name", "description", "t_end", "dt", "integrator", "n_out", "energies", "plan",
                     "tolerance", "gravity", "options"))
-        out = {"name": s.string("name", self.path.stem), "description": s.string("description", ""),
+        name = s.string("name", self.path.stem)
+        fault = name_fault(name)
+        if fault:
+            s.fail("name" if s.has("name") else None,
+                   fault + ("" if s.has("name") else " (taken from the file name; set 'name')"))
+        out = {"name": name, "description": s.string("description", ""),
                "t_end": s.number("t_end", unit="s", low=0.0, strict=True),
                "dt": s.number("dt", unit="s", low=0.0, strict=True),
                "integrator": s.choice("integrator", INTEGRATORS, "moreau"),

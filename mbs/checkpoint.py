@@ -14,10 +14,19 @@ Pickling an object graph exactly needs two things plain pickle does not give:
 
 Files are written atomically (temporary file, fsync, rename): a kill at any moment
 leaves either the previous checkpoint or the new one, never a torn file.
+
+Unpickling runs code, so a checkpoint is signed: the file is ``MAGIC``, the hex
+HMAC-SHA256 of the pickle under a per-user secret key and a newline, then the pickle.
+:func:`read_checkpoint` checks the signature before anything is unpickled and refuses
+any checkpoint this installation did not write. The key (32 random bytes) is
+``checkpoint.key`` in ``$FFRMBS_CONFIG`` (default ``~/.config/ffrmbs``), outside every
+output directory; it is created on first use with mode 0600 in a directory of mode 0700.
 """
 
 from __future__ import annotations
 
+import hashlib
+import hmac
 import io
 import os
 from pathlib import Path
@@ -27,7 +36,49 @@ import numpy as np
 
 from ffrmbs.errors import InputFileError
 
-MAGIC = b"ffrmbs-checkpoint-1\n"
+MAGIC = b"ffrmbs-checkpoint-2\n"
+KEY_FILE, KEY_BYTES = "checkpoint.key", 32
+_SIGNATURE_CHARS = 2 * hashlib.sha256().digest_size        # hex HMAC-SHA256
+
+
+def key_path() -> Path:
+    """The per-user checkpoint key: ``$FFRMBS_CONFIG/checkpoint.key``, by default in
+    ``~/.config/ffrmbs``."""
+    config = os.environ.get("FFRMBS_CONFIG") or Path.home() / ".config" / "ffrmbs"
+    return Path(config) / KEY_FILE
+
+
+def _key() -> bytes:
+    """The checkpoint key, created (os.urandom, mode 0600, directory 0700) on first use;
+    a new key is linked into place whole, so concurrent first runs agree on one."""
+    path = key_path()
+    if not path.exists():
+        path.parent.mkdir(mode=0o700, parents=True, exist_ok=True)
+        tmp = path.with_name(f"{KEY_FILE}.{os.getpid()}.tmp")
+        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+        try:
+            os.write(fd, os.urandom(KEY_BYTES))
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+        try:
+            os.link(tmp, path)
+        except FileExistsError:
+            pass                       # another process made it first: use theirs
+        finally:
+            tmp.unlink()
+    try:
+        key = path.read_bytes() if path.is_file() else b""
+    except OSError as exc:
+        raise InputFileError(path, None, f"cannot read the checkpoint key ({exc.strerror})") from None
+    if len(key) != KEY_BYTES:
+        raise InputFileError(path, None, f"the checkpoint key must be a file of {KEY_BYTES} bytes; remove it "
+                                         "and a new one is made (older checkpoints are then refused)")
+    return key
+
+
+def _signature(payload: bytes) -> bytes:
+    return hmac.new(_key(), payload, hashlib.sha256).hexdigest().encode()
 
 
 def _view(base, offset, shape, strides, dtype, writeable):
@@ -65,13 +116,15 @@ def loads(data: bytes):
 
 
 def write_checkpoint(path, state) -> None:
-    """Write ``state`` (any picklable object graph) to ``path`` atomically."""
+    """Write ``state`` (any picklable object graph) to ``path`` atomically, signed."""
     path = Path(path)
+    payload = dumps(state)
+    signature = _signature(payload)
     tmp = path.with_name(path.name + ".tmp")
     try:
         with open(tmp, "wb") as f:
-            f.write(MAGIC)
-            f.write(dumps(state))
+            f.write(MAGIC + signature + b"\n")
+            f.write(payload)
             f.flush()
             os.fsync(f.fileno())
         os.replace(tmp, path)
@@ -81,16 +134,21 @@ def write_checkpoint(path, state) -> None:
 
 
 def read_checkpoint(path):
-    """The state saved by :func:`write_checkpoint`; InputFileError if ``path`` is not one."""
+    """The state saved by :func:`write_checkpoint`; InputFileError if ``path`` is not one
+    or was not signed with this installation's key (checked before unpickling)."""
     path = Path(path)
     try:
         data = path.read_bytes()
     except OSError as exc:
         raise InputFileError(path, None, f"cannot read the checkpoint ({exc.strerror})") from None
-    if not data.startswith(MAGIC):
-        raise InputFileError(path, None, "not an ffrmbs checkpoint")
+    head = len(MAGIC) + _SIGNATURE_CHARS + 1
+    signature, payload = data[len(MAGIC):head - 1], data[head:]
+    if not (data.startswith(MAGIC) and data[head - 1:head] == b"\n"
+            and hmac.compare_digest(signature, _signature(payload))):
+        raise InputFileError(path, None, "not written by this installation: signature does not match; "
+                                         "a checkpoint is refused rather than run")
     try:
-        return loads(data[len(MAGIC):])
+        return loads(payload)
     except Exception as exc:          # a checkpoint of another ffrmbs version, or damaged
         raise InputFileError(path, None, f"the checkpoint cannot be restored ({type(exc).__name__}: {exc}); "
                                          "was it written by another ffrmbs version?") from None

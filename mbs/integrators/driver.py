@@ -283,13 +283,18 @@ class Integrator:
         return res
 
     def _record(self, i):
-        """Sample row ``i`` of the result at the current state."""
+        """Sample row ``i`` of the result at the current state; SimulationError if q, u or
+        the energy there is NaN or infinite (the steps check only the integrated
+        coordinates, and a finite state can have an infinite energy)."""
         st, sys = self.state, self.system
         res, n = st.result, len(st.times)
         res.t[i], res.q[i], res.u[i] = self.t, self.q, self.u
         q, u = res.q[i], res.u[i]
         for b, (qb, ub) in st.modal.items():
             q[b.q_slice], u[b.u_slice] = qb[i], ub[i]
+        bad = [name for name, values in (("q", q), ("u", u)) if not np.isfinite(values).all()]
+        if bad:
+            self._non_finite("/".join(bad))
         self.monitor.check(self.t, q, u)
         for name, probe in st.probes.items():
             value = np.asarray(probe(self.t, q, u), dtype=float)
@@ -301,6 +306,8 @@ class Integrator:
                 res.energy.setdefault(key, np.full(n, np.nan))
             res.energy["kinetic"][i] = sys.kinetic_energy(self.t, q, u)
             res.energy["potential"][i] = sys.potential_energy(self.t, q)
+        if st.energies and not math.isfinite(res.energy["kinetic"][i] + res.energy["potential"][i]):
+            self._non_finite("energy")
         if st.contacts:
             for c in sys.contacts:
                 rec, k = res.contacts[c.name], c.kinematics
@@ -310,6 +317,11 @@ class Integrator:
                     rec["point"][i] = k.point2.r
                     rec["normal"][i] = k.n
                 self.contact_force(c, rec["force"][i])
+
+    def _non_finite(self, where):
+        """Stop at a sample whose ``where`` is NaN or infinite; the sample is not counted, so
+        the result keeps the finite ones before it."""
+        raise SimulationError(self.t, self.steps, f"state became non-finite (NaN/inf) in {where}")
 
 
 def resume(integrator, recorder=None, progress=None):

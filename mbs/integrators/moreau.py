@@ -77,13 +77,15 @@ fifth of its size; at dt_min the run stops with the cause.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from scipy.linalg.lapack import dpotrf, dpotrs
 
 from contact.laws import Bilateral
 from contact.solver import ContactSet, ProxSolver
 from contours import Contour1sNeutralFFR, Contour2sNeutralFFR, PointContour, SphereContour
-from ffrmbs.errors import ModelError
+from ffrmbs.errors import ModelError, SimulationError
 
 from .driver import Integrator, StepFailure
 
@@ -151,6 +153,8 @@ class MoreauTimeStepping(Integrator):
         if self._trace is not None:
             sys = self.system
             energy = sys.kinetic_energy(self.t, self.q, self.u) + sys.potential_energy(self.t, self.q)
+            if not math.isfinite(energy):
+                raise SimulationError(self.t, self.steps, "state became non-finite (NaN/inf) in energy")
             for key, value in zip(TRACE_KEYS, (self.t, h, *self._last, energy)):
                 self._trace[key].append(value)
         self._last[:] = 0, 0.0, 0, 0.0, 0.0
