@@ -323,6 +323,7 @@ def wait_for(condition, proc, timeout=120.0):
         time.sleep(0.001)
 
 
+@pytest.mark.slow
 def test_kill_9_at_random_moments_leaves_a_readable_file(tmp_path):
     """SIGKILL a run of the example scene at random moments (seed fixed): before the file
     exists, the moment it appears, while the kernels compile (before any sample is

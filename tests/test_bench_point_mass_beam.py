@@ -2,9 +2,12 @@
 
 import json
 
+import pytest
+
 from validation.bench import point_mass_beam as bench
 
 
+@pytest.mark.slow
 def test_short_run_writes_every_row(tmp_path, capsys, monkeypatch):
     monkeypatch.setenv("FFRMBS_CACHE", str(tmp_path / "cache"))       # the meshes are preprocessed here
     doc = bench.main(["--repeats", "1", "--t-end", "0.012", "--node-t-end", "0.011",

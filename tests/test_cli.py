@@ -76,6 +76,7 @@ def test_preprocess_missing_mesh_file(tmp_path):
     assert res.returncode == 2 and "none.msh" in res.stderr and "not found" in res.stderr
 
 
+@pytest.mark.slow
 def test_main_job_runs_the_point_mass_on_the_beam(tmp_path):
     """``ffrmbs run`` with no scene argument: setup A of thesis Sec. 5.2. Independent
     checks: the point mass falls 2 mm at 0.2 m/s, so the contact closes at 10 ms; before

@@ -11,6 +11,8 @@ from validation.cases import contact_bounce, contact_friction
 
 from case_rows import quick_rows_by_case, select
 
+pytestmark = pytest.mark.slow   # seconds each: left out of the fast subset (-m "not slow")
+
 CASES = (contact_bounce, contact_friction)
 G = 9.81
 V1 = math.sqrt(2.0 * G * contact_bounce.H)      # impact speed of the first impact [m/s]

@@ -10,6 +10,8 @@ from validation.cases import contact_point_mass_beam as case
 from validation.harness import run_validation
 from validation.scenes import point_mass_beam as pmb
 
+pytestmark = pytest.mark.slow   # seconds each: left out of the fast subset (-m "not slow")
+
 
 @pytest.fixture(scope="module")
 def rows(tmp_path_factory):

@@ -11,6 +11,8 @@ import os
 import subprocess
 import sys
 
+import pytest
+
 SCRIPT = r'''
 import hashlib, json
 import numpy as np
@@ -50,6 +52,7 @@ def run(seed):
     return json.loads(res.stdout.strip().splitlines()[-1])
 
 
+@pytest.mark.slow
 def test_results_are_bitwise_identical_across_processes():
     first, second = run(1), run(2)
     assert sorted(first) == sorted(second) and len(first) == 4

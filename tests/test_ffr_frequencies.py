@@ -12,6 +12,8 @@ import pytest
 
 from validation.cases import ffr_frequencies as case
 
+pytestmark = pytest.mark.slow   # seconds each: left out of the fast subset (-m "not slow")
+
 
 @pytest.mark.parametrize("theta, sigma_dt, phase", [(0.01, 0.0, 0.3), (0.4, 0.0, 1.0),
                                                     (0.02, 1e-4, -0.7), (2.0, 3e-3, 2.0)])

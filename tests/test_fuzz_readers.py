@@ -146,6 +146,7 @@ def mutate_text(text: str, op, argument, draw_index):
     return "\n".join(lines), (i + 1 if pinned else None), following
 
 
+@pytest.mark.slow
 @fuzz(600)
 @given(mutation=text_mutations(), data=st.data())
 def test_text_body_files_read_or_fail_with_file_and_line(originals, mutation, data):
@@ -443,6 +444,7 @@ def test_the_fuzzing_base_scene_is_valid(scene_dir):
         ["spin", "tip", "y"]
 
 
+@pytest.mark.slow
 @fuzz(400)
 @given(data=st.data())
 def test_scene_files_read_or_fail_naming_file_line_and_key(scene_dir, data):

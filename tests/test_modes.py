@@ -21,6 +21,7 @@ def dense_eigenvalues(K, m):
     return la.eigh(K, np.diag(m), eigvals_only=True)
 
 
+@pytest.mark.slow
 def test_clamped_modes_normalized_and_zero_at_clamp(beam):
     mesh, K, m = beam
     clamp = mesh.group("z0")
@@ -35,6 +36,7 @@ def test_clamped_modes_normalized_and_zero_at_clamp(beam):
     np.testing.assert_allclose(w2, ref, rtol=1e-9)
 
 
+@pytest.mark.slow
 def test_free_modes_carry_no_rigid_motion(beam):
     mesh, K, m = beam
     w2, phi = free_modes(K, m, mesh.points, 10)

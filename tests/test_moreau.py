@@ -116,6 +116,7 @@ def test_adaptive_steps_shrink_at_the_impact_and_bound_penetration_and_timing_by
     assert np.diff(E).max() < 1e-12 * E[0]                      # never gains energy
 
 
+@pytest.mark.slow
 def test_adaptive_is_cheaper_than_the_fixed_step_of_equal_impact_accuracy():
     fixed = bouncing_ball(1.0, 1.0, 1e-5, t_out=[1.0])
     adaptive = bouncing_ball(1.0, 1.0, 1e-2, integrator="moreau-adaptive", atol=1e-5, t_out=[1.0])

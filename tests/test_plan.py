@@ -47,6 +47,7 @@ def step_response_oracle(data, tip, times):
     return r @ data.phi[3 * tip + 1]
 
 
+@pytest.mark.slow
 def test_frame_fixed_body_without_contact_is_propagated_exactly_on_fewer_modes(beam_data):
     system, beam, tip = clamped_beam(beam_data)
     plan = system.plan(0.02)
@@ -82,6 +83,7 @@ def free_flight_system(free_beam, omega=(0.0, 0.0, 0.0), scale=1.0):
     return system, beam, beam.node(probe)
 
 
+@pytest.mark.slow
 def test_free_body_with_negligible_coupling_runs_simple_rb_and_matches_full_ffr(free_beam):
     system, beam, node = free_flight_system(free_beam)
     plan = system.plan(0.6)

@@ -16,6 +16,8 @@ from ffrmbs.errors import ModelError
 from validation.moving_load import CantileverEB, static_cantilever_deflection
 from validation.scenes import sliding_ball as sb
 
+pytestmark = pytest.mark.slow   # seconds each: left out of the fast subset (-m "not slow")
+
 E, RHO, L, H = 5e7, 920.0, 1.5, 0.05
 I, A = H**4 / 12, H * H
 

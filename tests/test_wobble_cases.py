@@ -12,6 +12,8 @@ from validation.cases import wobble_boundary, wobble_energy, wobble_shear, wobbl
 
 from case_rows import quick_rows_by_case, select
 
+pytestmark = pytest.mark.slow   # seconds each: left out of the fast subset (-m "not slow")
+
 CASES = (wobble_step, wobble_energy, wobble_shear, wobble_boundary)
 
 
