@@ -18,7 +18,9 @@ separators, Fortran exponents (``1.0E+05``, ``1.0D+05``, ``1.0d-3``, ``1.0-100``
 Every value must be finite and at most :data:`~preprocess.body.MAX_MAGNITUDE` in
 magnitude. The stiffness file may hold the lower triangle, the upper triangle or the
 full matrix: an entry present on both sides must agree (relative tolerance 1e-9 of
-max|K|), an entry present on one side only is mirrored. Only regular files are read
+max|K|); in a file holding one triangle each entry is mirrored, a file holding entries
+of both triangles is full storage and must hold both entries of every pair (an entry
+without its mirror there is a fault, not a guess). Only regular files are read
 (:mod:`preprocess.inputfiles`). Every fault raises
 :class:`~ffrmbs.errors.InputFileError` with the 1-based line (None for faults of the
 whole file); file content in a message is a short sanitized quote
@@ -223,6 +225,13 @@ def parse_stiffness(path, n_dof: int | None = None) -> sp.csr_matrix:
                              f" = {float(values[later])!r} but K[{rows[earlier] + 1},"
                              f"{cols[earlier] + 1}] = {float(values[earlier])!r}"
                              f" on line {lines[earlier]}")
+    lonely = ~has_mirror & (rows != cols)
+    if lonely.any() and (rows > cols).any() and (rows < cols).any():
+        i = np.flatnonzero(lonely)[np.argmax(lines[lonely])]       # the later one, as for a mismatch
+        raise InputFileError(path, int(lines[i]),
+                             f"stiffness entry K[{rows[i] + 1},{cols[i] + 1}] has no mirror K[{cols[i] + 1},"
+                             f"{rows[i] + 1}]: the file holds entries of both triangles (full storage), "
+                             f"so every pair must be given twice")
     keep = (rows >= cols) | ~has_mirror
     low_r = np.maximum(rows, cols)[keep]
     low_c = np.minimum(rows, cols)[keep]

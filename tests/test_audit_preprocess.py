@@ -448,3 +448,20 @@ def test_a_vtu_mesh_is_read_through_its_own_reader(tmp_path):
     meshio.write(tmp_path / "b.vtu", meshio.Mesh(mesh.points, [("tetra", mesh.tets)]))
     back = read_mesh(tmp_path / "b.vtu")
     np.testing.assert_array_equal(back.tets, mesh.tets)
+
+
+def test_a_stiffness_file_of_both_triangles_needs_every_mirror(tmp_path):
+    """A lower-triangle stiffness file with one entry added in the upper triangle, where
+    the lower triangle holds no mirror: the storage is mixed, so the lone entry is a
+    fault (it was taken silently as a new symmetric coupling)."""
+    from preprocess.textfiles import parse_stiffness
+
+    lines = ["1,1, 1,1, 4.0", "1,2, 1,2, 4.0", "2,1, 1,1, -1.0", "2,1, 2,1, 4.0"]
+    path = tmp_path / "stiffnessMatrix.dat"
+    path.write_text("\n".join(lines) + "\n")
+    k = parse_stiffness(path, 6).toarray()                     # one triangle: mirrored
+    assert k[3, 0] == k[0, 3] == -1.0
+    path.write_text("\n".join(lines + ["1,2, 2,1, 7.0"]) + "\n")
+    with pytest.raises(InputFileError) as err:
+        parse_stiffness(path, 6)
+    assert err.value.line == 5 and "no mirror" in str(err.value)
