@@ -229,9 +229,8 @@ def parse_stiffness(path, n_dof: int | None = None) -> sp.csr_matrix:
     if lonely.any() and (rows > cols).any() and (rows < cols).any():
         i = np.flatnonzero(lonely)[np.argmax(lines[lonely])]       # the later one, as for a mismatch
         raise InputFileError(path, int(lines[i]),
-                             f"stiffness entry K[{rows[i] + 1},{cols[i] + 1}] has no mirror K[{cols[i] + 1},"
-                             f"{rows[i] + 1}]: the file holds entries of both triangles (full storage), "
-                             f"so every pair must be given twice")
+                             f"K[{rows[i] + 1},{cols[i] + 1}] has no mirror K[{cols[i] + 1},{rows[i] + 1}] "
+                             f"(a file of both triangles must give each pair twice)")
     keep = (rows >= cols) | ~has_mirror
     low_r = np.maximum(rows, cols)[keep]
     low_c = np.minimum(rows, cols)[keep]
