@@ -15,7 +15,7 @@ import re
 from pathlib import Path
 
 from ffrmbs.errors import quote
-from preprocess.inputfiles import regular_file
+from preprocess.inputfiles import include_tree
 
 #: Abaqus element types read as tetrahedra (tet4, tet10)
 TET_TYPES = ("C3D4", "C3D10", "C3D10H", "C3D10I", "C3D10M", "C3D10MH")
@@ -38,16 +38,13 @@ def check_includes(path) -> None:
     """InputFileError if ``path`` or a file it includes (``*INCLUDE, INPUT=...``, at any
     depth) is not a regular file. Included paths are resolved as meshio does: as given,
     else relative to the including file's directory."""
-    pending, seen = [Path(path)], set()
-    while pending:
-        current = regular_file(pending.pop())
-        if current.resolve() in seen:
-            continue
-        seen.add(current.resolve())
-        with open(current, encoding="utf-8", errors="replace") as f:
-            for line in _INCLUDE.findall(f.read()):
-                included = Path(line.split("=")[-1].strip())
-                pending.append(included if included.exists() else current.parent / included)
+    def includes(current, text):
+        for line in _INCLUDE.findall(text):
+            included = Path(line.split("=")[-1].strip())
+            yield included if included.exists() else current.parent / included
+
+    for _ in include_tree(path, includes):
+        pass
 
 
 def _records(lines):

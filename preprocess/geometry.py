@@ -31,7 +31,7 @@ import numpy as np
 
 from ffrmbs.errors import InputFileError, ModelError, quote
 from preprocess import limits
-from preprocess.inputfiles import regular_file
+from preprocess.inputfiles import include_tree, regular_file
 from preprocess.mesh import Mesh, canonical_mesh
 
 _GMSH_TET = {1: 4, 2: 11}  # gmsh element type numbers of tet4 and tet10
@@ -172,25 +172,20 @@ def check_geo_file(path, check_limits=True) -> None:
     also if one holds a ``Mesh 1|2|3;`` command (it would mesh while gmsh reads the
     file, before the mesh size is checked). File names built by expressions
     (``StrCat``) are not seen."""
-    pending, seen = [Path(path)], set()
-    while pending:
-        current = regular_file(pending.pop())
-        if current.resolve() in seen:
-            continue
-        seen.add(current.resolve())
-        with open(current, encoding="utf-8", errors="replace") as f:
-            text = _GEO_COMMENT.sub(lambda m: "\n" * m[0].count("\n"), f.read())
+    def reads(current, text):
+        text = _GEO_COMMENT.sub(lambda m: "\n" * m[0].count("\n"), text)
         command = _GEO_MESH.search(text)
         if check_limits and command:
             raise InputFileError(current, text.count("\n", 0, command.start()) + 1,
                                  f"{quote(command[0].strip())} meshes while gmsh reads the file, before its size is "
                                  f"checked; remove it (ffrmbs preprocess meshes the file) or {limits.LIFT}")
         for name in _GEO_READS.findall(text):
-            read = current.parent / name
-            regular_file(read)
+            read = regular_file(current.parent / name)
             if read.suffix.lower() == ".geo":
-                pending.append(read)
+                yield read
 
+    for _ in include_tree(path, reads):
+        pass
 
 def bounding_face_groups(points) -> dict:
     """Node groups on the six bounding planes of ``points`` (N, 3) and ``body``.
