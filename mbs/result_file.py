@@ -62,7 +62,8 @@ deterministic). The checkpoint is removed when the run completes and kept when i
 interrupted or fails.
 
 Reading: :func:`load_result` gives a :class:`~mbs.result.Result` and the file's
-attributes; a damaged file is an InputFileError.
+attributes; a damaged file is an InputFileError (:func:`damaged_result_file`, which the
+plot and the ParaView export read through as well).
 """
 
 from __future__ import annotations
@@ -472,12 +473,21 @@ def load_result(path) -> tuple[Result, dict]:
         f = h5py.File(path, "r")
     except OSError as exc:
         raise InputFileError(path, None, f"not a readable HDF5 file ({exc})") from None
-    with f:
-        try:
-            return _read(f, path)
-        except (OSError, RuntimeError, KeyError, ValueError) as exc:   # h5py on damaged metadata; bad JSON
-            reason = (str(exc).splitlines() or [type(exc).__name__])[0][:120]
-            raise InputFileError(path, None, f"damaged result file ({reason})") from None
+    with f, damaged_result_file(path):
+        return _read(f, path)
+
+
+@contextlib.contextmanager
+def damaged_result_file(path):
+    """Reading the result file ``path`` inside the block: what h5py raises on damaged
+    metadata (OSError, RuntimeError, KeyError, ValueError) and bad JSON in an attribute
+    (ValueError) become InputFileError (path, None, "damaged result file (<reason>)"),
+    the reason the first line of the library's message, at most 120 characters."""
+    try:
+        yield
+    except (OSError, RuntimeError, KeyError, ValueError) as exc:
+        reason = (str(exc).splitlines() or [type(exc).__name__])[0][:120]
+        raise InputFileError(path, None, f"damaged result file ({reason})") from None
 
 
 def _read(f, path) -> tuple[Result, dict]:

@@ -1,0 +1,102 @@
+"""Issue 18, leftovers of the fault audit: result files damaged under `ffrmbs plot` and
+`ffrmbs export`, `--order` for an already meshed file, a FIFO or a directory as the
+scene file."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import re
+import shutil
+from pathlib import Path
+
+import h5py
+import pytest
+
+from ffrmbs import cli
+
+
+def run_cli(*argv) -> tuple[int, str, str]:
+    """ffrmbs.cli.main(argv) in this process: (exit code, stdout, stderr)."""
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = cli.main([str(a) for a in argv])
+    return code, out.getvalue(), err.getvalue()
+
+
+# --- damaged result files under plot and export --------------------------------------------------
+
+@pytest.fixture(scope="module")
+def result_file(tmp_path_factory) -> Path:
+    """The result file of `ffrmbs run` with no scene (15 ms: free flight and the impact)."""
+    out = tmp_path_factory.mktemp("run")
+    code, _, stderr = run_cli("run", "--no-export", "--no-check", "--t-end", "0.015", "--out", out)
+    assert code == 0, stderr
+    return out / "point_mass_beam.h5"
+
+
+def unreadable(path) -> bool:
+    """Whether h5py fails to read some attribute or dataset of ``path`` in full (a direct
+    reading of every object, independent of ffrmbs)."""
+    def read(_, obj):
+        dict(obj.attrs)
+        if isinstance(obj, h5py.Dataset):
+            obj[()]
+    try:
+        with h5py.File(path, "r") as f:
+            dict(f.attrs)
+            f.visititems(read)
+    except Exception:   # noqa: BLE001 — any failure of the library is what is sought
+        return True
+    return False
+
+
+def test_plot_and_export_of_a_damaged_result_file_are_clear_errors(result_file, tmp_path):
+    """64 bytes of 0xff every 4 KiB of a result file, one place at a time (as
+    test_audit_results.py damages one for load_result); at every place where h5py itself
+    cannot read the file, `ffrmbs plot` and `ffrmbs export` either work or exit 2 with one
+    line naming the file (h5py raised a raw OSError, RuntimeError or KeyError through
+    both), and write nothing."""
+    data = result_file.read_bytes()
+    damaged = tmp_path / "damaged.h5"
+    png, paraview = tmp_path / "damaged.png", tmp_path / "damaged-paraview"
+    places, errors = 0, {"plot": 0, "export": 0}
+    for offset in range(0, len(data), 4096):
+        damaged.write_bytes(data[:offset] + b"\xff" * 64 + data[offset + 64:])
+        if not unreadable(damaged):
+            continue
+        places += 1
+        for command, output in (("plot", png), ("export", paraview)):
+            code, _, stderr = run_cli(command, damaged, "--out", output)
+            if code == 0:
+                shutil.rmtree(output) if output.is_dir() else output.unlink()
+                continue
+            errors[command] += 1
+            assert code == 2 and stderr.startswith(f"ffrmbs: error: {damaged}: "), (offset, stderr)
+            assert stderr.count("\n") == 1 and len(stderr) < 300, (offset, stderr)
+            assert not output.exists(), (offset, command)
+    assert places >= 3
+    assert errors["plot"] >= 2 and errors["export"] >= 2, errors
+
+
+def test_export_of_a_result_file_with_a_damaged_chunk_index_names_the_file(result_file, tmp_path):
+    """The signature of each chunk index node (HDF5 v1 B-tree "TREE", node type 1: raw
+    data chunks) overwritten, one at a time: the per-sample reads during the export fail
+    ("wrong B-tree signature"); that is the result file's fault, not "cannot write the
+    ParaView export" (an OSError from reading was taken for one from writing)."""
+    data = result_file.read_bytes()
+    nodes = [m.start() for m in re.finditer(b"TREE\x01", data)]
+    damaged, paraview = tmp_path / "damaged.h5", tmp_path / "damaged-paraview"
+    assert len(nodes) >= 5
+    errors = 0
+    for offset in nodes:
+        damaged.write_bytes(data[:offset] + b"\xff" * 4 + data[offset + 4:])
+        code, _, stderr = run_cli("export", damaged, "--every", 100, "--out", paraview)
+        if code == 0:
+            shutil.rmtree(paraview)
+            continue
+        errors += 1
+        assert code == 2 and stderr.startswith(f"ffrmbs: error: {damaged}: damaged result file ("), (offset, stderr)
+        assert stderr.count("\n") == 1 and not paraview.exists(), (offset, stderr)
+        assert not list(tmp_path.glob(".damaged-paraview*")), offset      # no temporary directory left
+    assert errors >= 3
