@@ -100,3 +100,70 @@ def test_export_of_a_result_file_with_a_damaged_chunk_index_names_the_file(resul
         assert stderr.count("\n") == 1 and not paraview.exists(), (offset, stderr)
         assert not list(tmp_path.glob(".damaged-paraview*")), offset      # no temporary directory left
     assert errors >= 3
+
+
+# --- --order for an already meshed file -----------------------------------------------------------
+
+PREPROCESS = ["--modes", "2", "--free", "--density", "7800", "--young", "2e11", "--poisson", "0.3"]
+
+
+@pytest.fixture(scope="module")
+def meshed_files(tmp_path_factory) -> dict:
+    """A 0.2 x 0.05 x 0.05 box of tet4 and of tet10 elements, each as .inp and .msh:
+    {(suffix, order): path}."""
+    import meshio
+
+    from preprocess.geometry import box
+
+    directory = tmp_path_factory.mktemp("meshed")
+    files = {}
+    for order, cell in ((1, "tetra"), (2, "tetra10")):
+        mesh = box(0.2, 0.05, 0.05, 0.05, order)
+        for suffix, fmt in ((".inp", "abaqus"), (".msh", "gmsh")):
+            path = directory / f"box{order}{suffix}"
+            meshio.write(path, meshio.Mesh(mesh.points, [(cell, mesh.tets)]), file_format=fmt)
+            files[suffix, order] = path
+    return files
+
+
+def order_column(stdout) -> str:
+    """The element type printed by the mesh statistics (the row under "element type")."""
+    lines = stdout.splitlines()
+    head = next(i for i, line in enumerate(lines) if "element type" in line)
+    return lines[head + 1].split()[3]
+
+
+@pytest.mark.parametrize("suffix", [".inp", ".msh"])
+@pytest.mark.parametrize("order", ["1", "2"])
+def test_an_order_for_a_meshed_file_is_refused(meshed_files, tmp_path, suffix, order):
+    """`--order` was silently ignored for a .msh or .inp (the file's elements decide the
+    order): it is refused in one line, like `--mesh-size` for such a file, before anything
+    is written."""
+    path = meshed_files[suffix, 1]
+    code, stdout, stderr = run_cli("preprocess", path, "--order", order, *PREPROCESS, "--out", tmp_path / "out")
+    assert code == 2 and stderr.count("\n") == 1 and stderr.startswith("ffrmbs: error: "), stderr
+    assert "--order" in stderr and str(path) in stderr and "already meshed" in stderr, stderr
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("suffix", [".inp", ".msh"])
+@pytest.mark.parametrize("order, element", [(1, "tet4"), (2, "tet10")])
+def test_a_meshed_file_keeps_its_order(meshed_files, tmp_path, suffix, order, element):
+    code, stdout, stderr = run_cli("preprocess", meshed_files[suffix, order], *PREPROCESS, "--out", tmp_path / "out")
+    assert code == 0, stderr
+    assert order_column(stdout) == element
+
+
+@pytest.mark.parametrize("option, element", [((), "tet10"), (("--order", "1"), "tet4"), (("--order", "2"), "tet10")])
+def test_a_built_in_geometry_is_tet10_unless_asked(tmp_path, option, element):
+    code, stdout, stderr = run_cli("preprocess", "box:0.2,0.05,0.05", "--mesh-size", "0.05", *option, *PREPROCESS,
+                                   "--out", tmp_path / "out")
+    assert code == 0, stderr
+    assert order_column(stdout) == element
+
+
+def test_the_order_help_says_what_it_applies_to(capsys):
+    with pytest.raises(SystemExit):
+        cli.main(["preprocess", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert "--order {1,2}" in text and ".geo" in text and "default 2" in text and "own order" in text
