@@ -6,14 +6,19 @@ from __future__ import annotations
 
 import contextlib
 import io
+import os
 import re
 import shutil
+import subprocess
+import sys
 from pathlib import Path
 
 import h5py
 import pytest
 
 from ffrmbs import cli
+
+REPO = str(Path(__file__).resolve().parents[1])
 
 
 def run_cli(*argv) -> tuple[int, str, str]:
@@ -167,3 +172,29 @@ def test_the_order_help_says_what_it_applies_to(capsys):
         cli.main(["preprocess", "--help"])
     text = " ".join(capsys.readouterr().out.split())
     assert "--order {1,2}" in text and ".geo" in text and "default 2" in text and "own order" in text
+
+
+# --- a FIFO or a directory as the scene file -------------------------------------------------------
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no FIFOs on this platform")
+@pytest.mark.parametrize("name", ["scene.toml", "model.py"])
+def test_a_fifo_as_the_scene_file_is_named_and_not_opened(tmp_path, name):
+    """`ffrmbs run FIFO` said "no such scene file"; it says what the path is, and never
+    opens it (opening a FIFO without a writer blocks: the command runs in a child process
+    with a time limit)."""
+    fifo = tmp_path / name
+    os.mkfifo(fifo)
+    res = subprocess.run([sys.executable, "-m", "ffrmbs.cli", "run", str(fifo), "--out", str(tmp_path / "out")],
+                         capture_output=True, text=True, timeout=120, env=os.environ | {"PYTHONPATH": REPO})
+    assert res.returncode == 2, res.stderr
+    assert res.stderr == f"ffrmbs: error: {fifo}: not a regular file (a FIFO)\n"
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("name", ["scene.toml", "model.py"])
+def test_a_directory_as_the_scene_file_is_named(tmp_path, name):
+    directory = tmp_path / name
+    directory.mkdir()
+    code, _, stderr = run_cli("run", directory, "--out", tmp_path / "out")
+    assert code == 2 and stderr == f"ffrmbs: error: {directory}: not a regular file (a directory)\n"
+    assert not (tmp_path / "out").exists()
