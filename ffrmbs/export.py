@@ -64,6 +64,7 @@ import numpy as np
 
 from ffrmbs.errors import FfrmbsError, InputFileError, OutputFileError, os_reason
 from mbs.result_file import FORMAT, FORMAT_VERSION, damaged_result_file
+from preprocess.inputfiles import regular_file
 
 MARKER = ".ffrmbs-export"
 POINT_BODY_VELOCITY = ("PointMass", "RigidBody")   # kinds whose u[:3] is Ṙ (world) [m/s]
@@ -89,13 +90,12 @@ def open_result(path):
     """Open an ffrmbs result file read-only and check that it is one.
 
     Yields the ``h5py.File``. Raises :class:`InputFileError` (path, None, fault) when the
-    file is missing, not HDF5, not of format ``ffrmbs-result`` version 1, or has no ``/t``,
-    and when reading it fails inside the ``with`` block (a damaged file:
-    :func:`mbs.result_file.damaged_result_file`).
+    file is missing or not a regular file (never opened then:
+    :func:`preprocess.inputfiles.regular_file`), not HDF5, not of format ``ffrmbs-result``
+    version 1, or has no ``/t``, and when reading it fails inside the ``with`` block (a
+    damaged file: :func:`mbs.result_file.damaged_result_file`).
     """
-    path = Path(path)
-    if not path.is_file():
-        raise InputFileError(path, None, "no such result file")
+    path = regular_file(path)
     try:
         f = h5py.File(path, "r")
     except OSError as exc:

@@ -107,6 +107,29 @@ def test_export_of_a_result_file_with_a_damaged_chunk_index_names_the_file(resul
     assert errors >= 3
 
 
+@pytest.mark.parametrize("command", ["plot", "export"])
+def test_a_directory_as_the_result_file_is_named(tmp_path, command):
+    """A directory given as the result file said "no such result file"."""
+    directory = tmp_path / "run.h5"
+    directory.mkdir()
+    code, _, stderr = run_cli(command, directory, "--out", tmp_path / "out")
+    assert code == 2 and stderr == f"ffrmbs: error: {directory}: not a regular file (a directory)\n"
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no FIFOs on this platform")
+@pytest.mark.parametrize("command", ["plot", "export"])
+def test_a_fifo_as_the_result_file_is_named_and_not_opened(tmp_path, command):
+    """A FIFO given as the result file said "no such result file"; it is named, and never
+    opened (a child process with a time limit: opening it would block)."""
+    fifo = tmp_path / "run.h5"
+    os.mkfifo(fifo)
+    res = subprocess.run([sys.executable, "-m", "ffrmbs.cli", command, str(fifo), "--out", str(tmp_path / "out")],
+                         capture_output=True, text=True, timeout=120, env=os.environ | {"PYTHONPATH": REPO})
+    assert res.returncode == 2 and res.stderr == f"ffrmbs: error: {fifo}: not a regular file (a FIFO)\n", res.stderr
+    assert not (tmp_path / "out").exists()
+
+
 # --- --order for an already meshed file -----------------------------------------------------------
 
 PREPROCESS = ["--modes", "2", "--free", "--density", "7800", "--young", "2e11", "--poisson", "0.3"]
