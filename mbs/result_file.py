@@ -82,6 +82,7 @@ import h5py
 import numpy as np
 
 from ffrmbs.errors import InputFileError, OutputFileError, os_reason
+from preprocess.inputfiles import regular_file
 
 from .body import Frame
 from .checkpoint import read_checkpoint, write_checkpoint
@@ -467,8 +468,10 @@ def load_result(path) -> tuple[Result, dict]:
 
     A file cut short (a killed run) may hold more rows in some per-sample datasets than
     in others; every one is read up to the shortest, and the trace up to its shortest key.
+    A path that is missing or not a regular file is an InputFileError and never opened
+    (:func:`preprocess.inputfiles.regular_file`).
     """
-    path = Path(path)
+    path = regular_file(path)
     try:
         f = h5py.File(path, "r")
     except OSError as exc:

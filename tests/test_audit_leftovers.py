@@ -130,6 +130,22 @@ def test_a_fifo_as_the_result_file_is_named_and_not_opened(tmp_path, command):
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no FIFOs on this platform")
+def test_load_result_of_a_fifo_is_refused_without_opening_it(tmp_path):
+    """mbs.result_file.load_result handed the FIFO to HDF5, whose open blocks without a
+    writer (a child process with a time limit)."""
+    fifo = tmp_path / "run.h5"
+    os.mkfifo(fifo)
+    code = ("from ffrmbs.errors import InputFileError\nfrom mbs.result_file import load_result\n"
+            f"try:\n    load_result({str(fifo)!r})\nexcept InputFileError as exc:\n    print(exc)\n")
+    try:
+        res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60,
+                             env=os.environ | {"PYTHONPATH": REPO})
+    except subprocess.TimeoutExpired:
+        pytest.fail("load_result opened the FIFO and blocked")
+    assert res.stdout == f"{fifo}: not a regular file (a FIFO)\n", res.stderr
+
+
 # --- --order for an already meshed file -----------------------------------------------------------
 
 PREPROCESS = ["--modes", "2", "--free", "--density", "7800", "--young", "2e11", "--poisson", "0.3"]
