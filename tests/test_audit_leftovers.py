@@ -56,6 +56,7 @@ def unreadable(path) -> bool:
     return False
 
 
+@pytest.mark.slow
 def test_plot_and_export_of_a_damaged_result_file_are_clear_errors(result_file, tmp_path):
     """64 bytes of 0xff every 4 KiB of a result file, one place at a time (as
     test_audit_results.py damages one for load_result); at every place where h5py itself
@@ -84,6 +85,7 @@ def test_plot_and_export_of_a_damaged_result_file_are_clear_errors(result_file, 
     assert errors["plot"] >= 2 and errors["export"] >= 2, errors
 
 
+@pytest.mark.slow
 def test_export_of_a_result_file_with_a_damaged_chunk_index_names_the_file(result_file, tmp_path):
     """The signature of each chunk index node (HDF5 v1 B-tree "TREE", node type 1: raw
     data chunks) overwritten, one at a time: the per-sample reads during the export fail
