@@ -67,15 +67,14 @@ def _stage(label, fn, *args, **kwargs):
 
 def _preprocess(spec, modes, clamp, units, density, young, poisson, order, mesh_size, out, check_limits=True):
     from preprocess.bodyfiles import write_body
-    from preprocess.geometry import check_mesh_size
-    from preprocess.pipeline import Material, build_body, check_n_modes, mesh_source, mesh_statistics
+    from preprocess.pipeline import (Material, build_body, check_mesh_options, check_n_modes, mesh_source,
+                                     mesh_statistics)
 
     from ffrmbs.progress import stage_bar, write
 
     material = Material(density, young, poisson)        # every option checked before meshing
     check_n_modes(modes)
-    if mesh_size is not None:
-        check_mesh_size(mesh_size)
+    check_mesh_options(spec, order, mesh_size)
     with stage_bar(4 if out is not None else 3, "preprocess") as bar:
         bar.stage("meshing")
         mesh = _stage(f"meshing {spec}", mesh_source, spec, order, mesh_size, check_limits)
@@ -186,8 +185,11 @@ def build_parser():
     pre.add_argument("--density", type=float, required=True, help="kg/m^3 (t/mm^3 for si-mm)")
     pre.add_argument("--young", type=float, required=True, help="Pa (N/mm^2 for si-mm)")
     pre.add_argument("--poisson", type=float, required=True)
-    pre.add_argument("--order", type=int, choices=(1, 2), default=2, help="tet4 (1) or tet10 (2)")
-    pre.add_argument("--mesh-size", type=float, help="maximum element size, input units")
+    pre.add_argument("--order", type=int, choices=(1, 2),
+                     help="tet4 (1) or tet10 (2) elements for a built-in geometry or a .geo file (default 2); "
+                          "a .msh or .inp mesh keeps its own order")
+    pre.add_argument("--mesh-size", type=float, help="maximum element size, input units (built-in geometries "
+                                                     "and .geo files)")
     pre.add_argument("--out", type=output_dir, required=True, help="output directory")
     pre.add_argument("--no-limits", action="store_true",
                      help="mesh and solve even when the mesh is estimated over 5e6 nodes or half the physical "

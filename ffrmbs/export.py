@@ -63,9 +63,9 @@ import h5py
 import numpy as np
 
 from ffrmbs.errors import FfrmbsError, InputFileError, OutputFileError, os_reason
+from mbs.result_file import FORMAT, FORMAT_VERSION, damaged_result_file
+from preprocess.inputfiles import regular_file
 
-FORMAT = "ffrmbs-result"
-FORMAT_VERSION = 1
 MARKER = ".ffrmbs-export"
 POINT_BODY_VELOCITY = ("PointMass", "RigidBody")   # kinds whose u[:3] is Ṙ (world) [m/s]
 TRIANGLE_CELLS = {3: "triangle", 6: "triangle6"}  # VTK cell type of a surface triangle by its node count
@@ -90,16 +90,17 @@ def open_result(path):
     """Open an ffrmbs result file read-only and check that it is one.
 
     Yields the ``h5py.File``. Raises :class:`InputFileError` (path, None, fault) when the
-    file is missing, not HDF5, not of format ``ffrmbs-result`` version 1, or has no ``/t``.
+    file is missing or not a regular file (never opened then:
+    :func:`preprocess.inputfiles.regular_file`), not HDF5, not of format ``ffrmbs-result``
+    version 1, or has no ``/t``, and when reading it fails inside the ``with`` block (a
+    damaged file: :func:`mbs.result_file.damaged_result_file`).
     """
-    path = Path(path)
-    if not path.is_file():
-        raise InputFileError(path, None, "no such result file")
+    path = regular_file(path)
     try:
         f = h5py.File(path, "r")
     except OSError as exc:
         raise InputFileError(path, None, f"not an HDF5 file ({exc})") from None
-    try:
+    with f, damaged_result_file(path):
         fmt = _attr(f, "format")
         if fmt != FORMAT:
             raise InputFileError(path, None, f"not an ffrmbs result file (format attribute {fmt!r}, "
@@ -114,8 +115,6 @@ def open_result(path):
         if t.ndim != 1:
             raise InputFileError(path, None, f"/t must be one-dimensional, has shape {t.shape}")
         yield f
-    finally:
-        f.close()
 
 
 def _child(group, name, path, cls, kind):
@@ -228,8 +227,8 @@ def export_paraview(result_path, out_dir=None, every=1, bodies=None, compress=Fa
     Raises
     ------
     InputFileError
-        The file is not an ffrmbs result file, or a group or dataset the export needs is
-        missing or malformed; an unknown body name. Nothing is written.
+        The file is not an ffrmbs result file or is damaged, or a group or dataset the
+        export needs is missing or malformed; an unknown body name. Nothing is written.
     FfrmbsError
         ``every`` is not a positive integer, or ``out_dir`` exists and is not an earlier
         export.
@@ -262,7 +261,7 @@ def export_paraview(result_path, out_dir=None, every=1, bodies=None, compress=Fa
                     name, label, t = series["name"], series["label"], plan["t"]
                     (tmp / name).mkdir()
                     own = []
-                    for k, points, cells, point_data in series["samples"](series, idx):
+                    for k, points, cells, point_data in _read(series["samples"](series, idx), result_path):
                         file = f"{name}_{k:0{width}d}.vtu"
                         _write_vtu(tmp / name / file, points, cells, point_data, compress)
                         own.append((t[k], file, 0, label))
@@ -405,6 +404,18 @@ def _plan(f, path, bodies):
     if n == 0:
         raise InputFileError(path, None, "no samples written yet")
     return dict(n=n, t=t, series=series)
+
+
+def _read(samples, path):
+    """The items of ``samples`` (a generator reading the result file ``path`` as it goes),
+    a failed read being the file's fault (InputFileError: a damaged file), not the
+    export's."""
+    while True:
+        with damaged_result_file(path):
+            item = next(samples, None)
+        if item is None:
+            return
+        yield item
 
 
 def _blocks(idx, per_sample):

@@ -204,8 +204,8 @@ def plot_result(result_path, names=None, out=None, overwrite=False) -> Path:
     Raises
     ------
     InputFileError
-        Not an ffrmbs result file, a missing or malformed dataset, or an unknown name (the
-        message lists the available ones). No PNG is written.
+        Not an ffrmbs result file, a damaged one, a missing or malformed dataset, or an
+        unknown name (the message lists the available ones). No PNG is written.
     OutputFileError
         The PNG cannot be written (a full disk, no permission); no partial file is left.
     """

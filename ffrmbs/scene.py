@@ -90,10 +90,11 @@ class Scene:
 
 def load_scene(path) -> Scene:
     """The scene of a TOML scene file (``.toml``) or a Python model script (``.py``
-    defining ``scene()``)."""
-    path = Path(path)
-    if not path.is_file():
-        raise InputFileError(path, None, "no such scene file")
+    defining ``scene()``); a path that is missing or not a regular file (a directory, a
+    FIFO, ...) is an InputFileError saying so, and is never opened."""
+    from preprocess.inputfiles import regular_file
+
+    path = regular_file(path)
     if path.suffix == ".toml":
         from ffrmbs.scene_toml import read_scene
 

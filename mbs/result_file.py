@@ -62,7 +62,8 @@ deterministic). The checkpoint is removed when the run completes and kept when i
 interrupted or fails.
 
 Reading: :func:`load_result` gives a :class:`~mbs.result.Result` and the file's
-attributes; a damaged file is an InputFileError.
+attributes; a damaged file is an InputFileError (:func:`damaged_result_file`, which the
+plot and the ParaView export read through as well).
 """
 
 from __future__ import annotations
@@ -81,6 +82,7 @@ import h5py
 import numpy as np
 
 from ffrmbs.errors import InputFileError, OutputFileError, os_reason
+from preprocess.inputfiles import regular_file
 
 from .body import Frame
 from .checkpoint import read_checkpoint, write_checkpoint
@@ -466,18 +468,29 @@ def load_result(path) -> tuple[Result, dict]:
 
     A file cut short (a killed run) may hold more rows in some per-sample datasets than
     in others; every one is read up to the shortest, and the trace up to its shortest key.
+    A path that is missing or not a regular file is an InputFileError and never opened
+    (:func:`preprocess.inputfiles.regular_file`).
     """
-    path = Path(path)
+    path = regular_file(path)
     try:
         f = h5py.File(path, "r")
     except OSError as exc:
         raise InputFileError(path, None, f"not a readable HDF5 file ({exc})") from None
-    with f:
-        try:
-            return _read(f, path)
-        except (OSError, RuntimeError, KeyError, ValueError) as exc:   # h5py on damaged metadata; bad JSON
-            reason = (str(exc).splitlines() or [type(exc).__name__])[0][:120]
-            raise InputFileError(path, None, f"damaged result file ({reason})") from None
+    with f, damaged_result_file(path):
+        return _read(f, path)
+
+
+@contextlib.contextmanager
+def damaged_result_file(path):
+    """Reading the result file ``path`` inside the block: what h5py raises on damaged
+    metadata (OSError, RuntimeError, KeyError, ValueError) and bad JSON in an attribute
+    (ValueError) become InputFileError (path, None, "damaged result file (<reason>)"),
+    the reason the first line of the library's message, at most 120 characters."""
+    try:
+        yield
+    except (OSError, RuntimeError, KeyError, ValueError) as exc:
+        reason = (str(exc).splitlines() or [type(exc).__name__])[0][:120]
+        raise InputFileError(path, None, f"damaged result file ({reason})") from None
 
 
 def _read(f, path) -> tuple[Result, dict]:

@@ -24,6 +24,7 @@ Readers (regular files only, :mod:`preprocess.inputfiles`):
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 import scipy.sparse as sp
@@ -186,24 +187,35 @@ def _sort_mid_nodes(points, tets, source):
     return out
 
 
-def read_mesh(path, order=2, mesh_size=None, check_limits=True) -> Mesh:
+def read_mesh(path, order=None, mesh_size=None, check_limits=True) -> Mesh:
     """Read a tetrahedral mesh from ``.msh`` (gmsh), ``.geo`` or ``.inp`` (Abaqus)
     and other meshio formats. Units are those of the file.
 
-    ``order`` (1 or 2), ``mesh_size`` (maximum element size, file units) and
+    ``order`` (1 or 2; None: 2), ``mesh_size`` (maximum element size, file units) and
     ``check_limits`` (the limits of :mod:`preprocess.limits`, checked before meshing)
     apply to ``.geo`` files, which are meshed here; meshes read from files keep their
-    order, and a ``mesh_size`` for them is a ModelError.
+    order, and an ``order`` or a ``mesh_size`` for them is a ModelError.
     """
     path = regular_file(path)
     suffix = path.suffix.lower()
-    if suffix != ".geo" and mesh_size is not None:
-        raise ModelError(f"--mesh-size applies to built-in geometries and .geo files; {path} is already meshed")
+    check_meshing_options(path, order, mesh_size)
     if suffix in (".geo", ".msh"):
         from preprocess.geometry import mesh_geo_file
 
-        return mesh_geo_file(path, order, mesh_size, check_limits) if suffix == ".geo" else _read_gmsh_msh(path)
+        return (mesh_geo_file(path, 2 if order is None else order, mesh_size, check_limits) if suffix == ".geo"
+                else _read_gmsh_msh(path))
     return _read_meshio(path)
+
+
+def check_meshing_options(path, order=None, mesh_size=None):
+    """A ModelError when an element ``order`` or a ``mesh_size`` is given (not None) for
+    the mesh file ``path``: they apply to ``.geo`` files (and built-in geometries) only,
+    a mesh file keeps its own elements."""
+    if Path(path).suffix.lower() == ".geo":
+        return
+    for option, value in (("--order", order), ("--mesh-size", mesh_size)):
+        if value is not None:
+            raise ModelError(f"{option} applies to built-in geometries and .geo files; {path} is already meshed")
 
 
 def _read_gmsh_msh(path) -> Mesh:

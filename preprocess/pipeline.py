@@ -17,7 +17,8 @@ import numpy as np
 from ffrmbs.errors import InputFileError, ModelError
 from preprocess import fe, geometry, limits, modes, units as unitsys
 from preprocess.body import BodyData
-from preprocess.mesh import Mesh, read_mesh
+from preprocess.inputfiles import regular_file
+from preprocess.mesh import Mesh, check_meshing_options, read_mesh
 
 BUILTINS = ("box:LX,LY,LZ", "stepped-beam")
 
@@ -43,25 +44,39 @@ class Material:
         return Material(self.density * f.density, self.young * f.stress, self.poisson)
 
 
-def mesh_source(spec: str, order=2, mesh_size=None, check_limits=True) -> Mesh:
+def check_mesh_options(spec: str, order=None, mesh_size=None):
+    """The checks of :func:`mesh_source` on its options, before anything is read or
+    meshed: a ModelError for a ``mesh_size`` that is not positive and finite, and for an
+    ``order`` or a ``mesh_size`` given for a mesh file
+    (:func:`~preprocess.mesh.check_meshing_options`); an InputFileError for a file that
+    is missing or not a regular file (:func:`~preprocess.inputfiles.regular_file`)."""
+    if mesh_size is not None:
+        geometry.check_mesh_size(mesh_size)
+    if not (spec.startswith("box:") or spec == "stepped-beam"):
+        check_meshing_options(regular_file(spec), order, mesh_size)
+
+
+def mesh_source(spec: str, order=None, mesh_size=None, check_limits=True) -> Mesh:
     """The mesh named by ``spec``: a file path, ``box:LX,LY,LZ`` or ``stepped-beam``.
 
     Built-in sizes and ``mesh_size`` are in the units of the run (m for SI, mm for SI(mm));
     ``mesh_size`` must be positive and finite (ModelError) or None (a default), and None
-    for a mesh file. ``check_limits``: a mesh estimated over the limits of
-    :mod:`preprocess.limits` is a ModelError before meshing.
+    for a mesh file. ``order``: 1 (tet4) or 2 (tet10) for a built-in geometry or a
+    ``.geo`` file, None meaning 2; None for a mesh file, which keeps its own order
+    (:func:`~preprocess.mesh.read_mesh`). ``check_limits``: a mesh estimated over the
+    limits of :mod:`preprocess.limits` is a ModelError before meshing.
     """
-    if mesh_size is not None:
-        geometry.check_mesh_size(mesh_size)
+    check_mesh_options(spec, order, mesh_size)
     if spec.startswith("box:"):
         try:
             lx, ly, lz = (float(v) for v in spec[4:].split(","))
         except ValueError:
             raise ModelError(f"built-in box needs three lengths, e.g. box:1,1,5 — got {spec!r}") from None
-        return geometry.box(lx, ly, lz, min(lx, ly, lz) / 2 if mesh_size is None else mesh_size, order,
-                            check_limits=check_limits)
+        return geometry.box(lx, ly, lz, min(lx, ly, lz) / 2 if mesh_size is None else mesh_size,
+                            2 if order is None else order, check_limits=check_limits)
     if spec == "stepped-beam":
-        return geometry.stepped_beam(5.0 if mesh_size is None else mesh_size, order, check_limits=check_limits)
+        return geometry.stepped_beam(5.0 if mesh_size is None else mesh_size, 2 if order is None else order,
+                                     check_limits=check_limits)
     return read_mesh(Path(spec), order, mesh_size, check_limits)
 
 

@@ -205,7 +205,7 @@ def test_a_disconnected_part_is_named_for_free_modes(tmp_path):
 
 def test_disconnected_mesh_on_the_command_line(tmp_path, capsys):
     path = write_inp(tmp_path)
-    rc = main(["preprocess", str(path), "--clamp", "base", "--modes", "2", "--order", "1", "--density",
+    rc = main(["preprocess", str(path), "--clamp", "base", "--modes", "2", "--density",
                "1000", "--young", "1e9", "--poisson", "0.3", "--out", str(tmp_path / "out")])
     assert_one_clear_line(rc, capsys, str(path), "unconstrained")
     assert not (tmp_path / "out").exists()

@@ -243,7 +243,7 @@ def test_bad_files_raise_and_leave_nothing(tmp_path, damage, fault):
 
 
 def test_missing_file_raises(tmp_path):
-    with pytest.raises(InputFileError, match="no such result file"):
+    with pytest.raises(InputFileError, match="file not found"):
         export_paraview(tmp_path / "none.h5")
     assert list(tmp_path.iterdir()) == []
 

@@ -524,7 +524,7 @@ def test_syntax_errors_carry_the_line(tmp_path):
     assert info.value.line == 2
     with pytest.raises(InputFileError, match="no such scene file"):
         read_scene(tmp_path / "none.toml")
-    with pytest.raises(InputFileError, match="no such scene file"):
+    with pytest.raises(InputFileError, match="file not found"):
         load_scene(tmp_path / "none.toml")
 
 

@@ -1,0 +1,241 @@
+"""Issue 18, leftovers of the fault audit: result files damaged under `ffrmbs plot` and
+`ffrmbs export`, `--order` for an already meshed file, a FIFO or a directory as the
+scene file."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import os
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import h5py
+import pytest
+
+from ffrmbs import cli
+
+REPO = str(Path(__file__).resolve().parents[1])
+
+
+def run_cli(*argv) -> tuple[int, str, str]:
+    """ffrmbs.cli.main(argv) in this process: (exit code, stdout, stderr)."""
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = cli.main([str(a) for a in argv])
+    return code, out.getvalue(), err.getvalue()
+
+
+# --- damaged result files under plot and export --------------------------------------------------
+
+@pytest.fixture(scope="module")
+def result_file(tmp_path_factory) -> Path:
+    """The result file of `ffrmbs run` with no scene (15 ms: free flight and the impact)."""
+    out = tmp_path_factory.mktemp("run")
+    code, _, stderr = run_cli("run", "--no-export", "--no-check", "--t-end", "0.015", "--out", out)
+    assert code == 0, stderr
+    return out / "point_mass_beam.h5"
+
+
+def unreadable(path) -> bool:
+    """Whether h5py fails to read some attribute or dataset of ``path`` in full (a direct
+    reading of every object, independent of ffrmbs)."""
+    def read(_, obj):
+        dict(obj.attrs)
+        if isinstance(obj, h5py.Dataset):
+            obj[()]
+    try:
+        with h5py.File(path, "r") as f:
+            dict(f.attrs)
+            f.visititems(read)
+    except Exception:   # noqa: BLE001 — any failure of the library is what is sought
+        return True
+    return False
+
+
+@pytest.mark.slow
+def test_plot_and_export_of_a_damaged_result_file_are_clear_errors(result_file, tmp_path):
+    """64 bytes of 0xff every 4 KiB of a result file, one place at a time (as
+    test_audit_results.py damages one for load_result); at every place where h5py itself
+    cannot read the file, `ffrmbs plot` and `ffrmbs export` either work or exit 2 with one
+    line naming the file (h5py raised a raw OSError, RuntimeError or KeyError through
+    both), and write nothing."""
+    data = result_file.read_bytes()
+    damaged = tmp_path / "damaged.h5"
+    png, paraview = tmp_path / "damaged.png", tmp_path / "damaged-paraview"
+    places, errors = 0, {"plot": 0, "export": 0}
+    for offset in range(0, len(data), 4096):
+        damaged.write_bytes(data[:offset] + b"\xff" * 64 + data[offset + 64:])
+        if not unreadable(damaged):
+            continue
+        places += 1
+        for command, output in (("plot", png), ("export", paraview)):
+            code, _, stderr = run_cli(command, damaged, "--out", output)
+            if code == 0:
+                shutil.rmtree(output) if output.is_dir() else output.unlink()
+                continue
+            errors[command] += 1
+            assert code == 2 and stderr.startswith(f"ffrmbs: error: {damaged}: "), (offset, stderr)
+            assert stderr.count("\n") == 1 and len(stderr) < 300, (offset, stderr)
+            assert not output.exists(), (offset, command)
+    assert places >= 3
+    assert errors["plot"] >= 2 and errors["export"] >= 2, errors
+
+
+@pytest.mark.slow
+def test_export_of_a_result_file_with_a_damaged_chunk_index_names_the_file(result_file, tmp_path):
+    """The signature of each chunk index node (HDF5 v1 B-tree "TREE", node type 1: raw
+    data chunks) overwritten, one at a time: the per-sample reads during the export fail
+    ("wrong B-tree signature"); that is the result file's fault, not "cannot write the
+    ParaView export" (an OSError from reading was taken for one from writing)."""
+    data = result_file.read_bytes()
+    nodes = [m.start() for m in re.finditer(b"TREE\x01", data)]
+    damaged, paraview = tmp_path / "damaged.h5", tmp_path / "damaged-paraview"
+    assert len(nodes) >= 5
+    errors = 0
+    for offset in nodes:
+        damaged.write_bytes(data[:offset] + b"\xff" * 4 + data[offset + 4:])
+        code, _, stderr = run_cli("export", damaged, "--every", 100, "--out", paraview)
+        if code == 0:
+            shutil.rmtree(paraview)
+            continue
+        errors += 1
+        assert code == 2 and stderr.startswith(f"ffrmbs: error: {damaged}: damaged result file ("), (offset, stderr)
+        assert stderr.count("\n") == 1 and not paraview.exists(), (offset, stderr)
+        assert not list(tmp_path.glob(".damaged-paraview*")), offset      # no temporary directory left
+    assert errors >= 3
+
+
+@pytest.mark.parametrize("command", ["plot", "export"])
+def test_a_directory_as_the_result_file_is_named(tmp_path, command):
+    """A directory given as the result file said "no such result file"."""
+    directory = tmp_path / "run.h5"
+    directory.mkdir()
+    code, _, stderr = run_cli(command, directory, "--out", tmp_path / "out")
+    assert code == 2 and stderr == f"ffrmbs: error: {directory}: not a regular file (a directory)\n"
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no FIFOs on this platform")
+@pytest.mark.parametrize("command", ["plot", "export"])
+def test_a_fifo_as_the_result_file_is_named_and_not_opened(tmp_path, command):
+    """A FIFO given as the result file said "no such result file"; it is named, and never
+    opened (a child process with a time limit: opening it would block)."""
+    fifo = tmp_path / "run.h5"
+    os.mkfifo(fifo)
+    res = subprocess.run([sys.executable, "-m", "ffrmbs.cli", command, str(fifo), "--out", str(tmp_path / "out")],
+                         capture_output=True, text=True, timeout=120, env=os.environ | {"PYTHONPATH": REPO})
+    assert res.returncode == 2 and res.stderr == f"ffrmbs: error: {fifo}: not a regular file (a FIFO)\n", res.stderr
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no FIFOs on this platform")
+def test_load_result_of_a_fifo_is_refused_without_opening_it(tmp_path):
+    """mbs.result_file.load_result handed the FIFO to HDF5, whose open blocks without a
+    writer (a child process with a time limit)."""
+    fifo = tmp_path / "run.h5"
+    os.mkfifo(fifo)
+    code = ("from ffrmbs.errors import InputFileError\nfrom mbs.result_file import load_result\n"
+            f"try:\n    load_result({str(fifo)!r})\nexcept InputFileError as exc:\n    print(exc)\n")
+    try:
+        res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60,
+                             env=os.environ | {"PYTHONPATH": REPO})
+    except subprocess.TimeoutExpired:
+        pytest.fail("load_result opened the FIFO and blocked")
+    assert res.stdout == f"{fifo}: not a regular file (a FIFO)\n", res.stderr
+
+
+# --- --order for an already meshed file -----------------------------------------------------------
+
+PREPROCESS = ["--modes", "2", "--free", "--density", "7800", "--young", "2e11", "--poisson", "0.3"]
+
+
+@pytest.fixture(scope="module")
+def meshed_files(tmp_path_factory) -> dict:
+    """A 0.2 x 0.05 x 0.05 box of tet4 and of tet10 elements, each as .inp and .msh:
+    {(suffix, order): path}."""
+    import meshio
+
+    from preprocess.geometry import box
+
+    directory = tmp_path_factory.mktemp("meshed")
+    files = {}
+    for order, cell in ((1, "tetra"), (2, "tetra10")):
+        mesh = box(0.2, 0.05, 0.05, 0.05, order)
+        for suffix, fmt in ((".inp", "abaqus"), (".msh", "gmsh")):
+            path = directory / f"box{order}{suffix}"
+            meshio.write(path, meshio.Mesh(mesh.points, [(cell, mesh.tets)]), file_format=fmt)
+            files[suffix, order] = path
+    return files
+
+
+def order_column(stdout) -> str:
+    """The element type printed by the mesh statistics (the row under "element type")."""
+    lines = stdout.splitlines()
+    head = next(i for i, line in enumerate(lines) if "element type" in line)
+    return lines[head + 1].split()[3]
+
+
+@pytest.mark.parametrize("suffix", [".inp", ".msh"])
+@pytest.mark.parametrize("order", ["1", "2"])
+def test_an_order_for_a_meshed_file_is_refused(meshed_files, tmp_path, suffix, order):
+    """`--order` was silently ignored for a .msh or .inp (the file's elements decide the
+    order): it is refused in one line, like `--mesh-size` for such a file, before anything
+    is written."""
+    path = meshed_files[suffix, 1]
+    code, stdout, stderr = run_cli("preprocess", path, "--order", order, *PREPROCESS, "--out", tmp_path / "out")
+    assert code == 2 and stderr.count("\n") == 1 and stderr.startswith("ffrmbs: error: "), stderr
+    assert "--order" in stderr and str(path) in stderr and "already meshed" in stderr, stderr
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("suffix", [".inp", ".msh"])
+@pytest.mark.parametrize("order, element", [(1, "tet4"), (2, "tet10")])
+def test_a_meshed_file_keeps_its_order(meshed_files, tmp_path, suffix, order, element):
+    code, stdout, stderr = run_cli("preprocess", meshed_files[suffix, order], *PREPROCESS, "--out", tmp_path / "out")
+    assert code == 0, stderr
+    assert order_column(stdout) == element
+
+
+@pytest.mark.parametrize("option, element", [((), "tet10"), (("--order", "1"), "tet4"), (("--order", "2"), "tet10")])
+def test_a_built_in_geometry_is_tet10_unless_asked(tmp_path, option, element):
+    code, stdout, stderr = run_cli("preprocess", "box:0.2,0.05,0.05", "--mesh-size", "0.05", *option, *PREPROCESS,
+                                   "--out", tmp_path / "out")
+    assert code == 0, stderr
+    assert order_column(stdout) == element
+
+
+def test_the_order_help_says_what_it_applies_to(capsys):
+    with pytest.raises(SystemExit):
+        cli.main(["preprocess", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert "--order {1,2}" in text and ".geo" in text and "default 2" in text and "own order" in text
+
+
+# --- a FIFO or a directory as the scene file -------------------------------------------------------
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no FIFOs on this platform")
+@pytest.mark.parametrize("name", ["scene.toml", "model.py"])
+def test_a_fifo_as_the_scene_file_is_named_and_not_opened(tmp_path, name):
+    """`ffrmbs run FIFO` said "no such scene file"; it says what the path is, and never
+    opens it (opening a FIFO without a writer blocks: the command runs in a child process
+    with a time limit)."""
+    fifo = tmp_path / name
+    os.mkfifo(fifo)
+    res = subprocess.run([sys.executable, "-m", "ffrmbs.cli", "run", str(fifo), "--out", str(tmp_path / "out")],
+                         capture_output=True, text=True, timeout=120, env=os.environ | {"PYTHONPATH": REPO})
+    assert res.returncode == 2, res.stderr
+    assert res.stderr == f"ffrmbs: error: {fifo}: not a regular file (a FIFO)\n"
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("name", ["scene.toml", "model.py"])
+def test_a_directory_as_the_scene_file_is_named(tmp_path, name):
+    directory = tmp_path / name
+    directory.mkdir()
+    code, _, stderr = run_cli("run", directory, "--out", tmp_path / "out")
+    assert code == 2 and stderr == f"ffrmbs: error: {directory}: not a regular file (a directory)\n"
+    assert not (tmp_path / "out").exists()
