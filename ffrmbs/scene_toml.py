@@ -240,6 +240,7 @@ else:   # pragma: no cover - Python 3.10
 
 from ffrmbs.errors import FfrmbsError, InputFileError, ModelError, quote
 from ffrmbs.scene import Scene, name_fault
+from preprocess.inputfiles import regular_file
 
 GROUND = "ground"
 BUILTIN = "builtin:"
@@ -1359,11 +1360,9 @@ def read_scene(path) -> Scene:
     the file and the line, or the body or force file at fault. ``Scene.inputs`` lists
     the scene file and each body and force file read, as label -> path.
     """
-    path = Path(path)
+    path = regular_file(path)                 # never open a FIFO or a device
     try:
         raw = path.read_bytes()
-    except FileNotFoundError:
-        raise InputFileError(path, None, "no such scene file") from None
     except OSError as exc:
         raise InputFileError(path, None, f"cannot read the scene file: {exc.strerror or exc}") from None
     text, doc = _parse(path, raw)

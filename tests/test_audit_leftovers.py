@@ -239,3 +239,14 @@ def test_a_directory_as_the_scene_file_is_named(tmp_path, name):
     code, _, stderr = run_cli("run", directory, "--out", tmp_path / "out")
     assert code == 2 and stderr == f"ffrmbs: error: {directory}: not a regular file (a directory)\n"
     assert not (tmp_path / "out").exists()
+
+
+def test_read_scene_refuses_a_fifo_without_opening_it(tmp_path):
+    """ffrmbs.scene_toml.read_scene called from Python (not through load_scene) on a
+    FIFO: refused at once (it blocked in read_bytes)."""
+    fifo = tmp_path / "scene.toml"
+    os.mkfifo(fifo)
+    code = ("import sys\nfrom ffrmbs.errors import InputFileError\nfrom ffrmbs.scene_toml import read_scene\n"
+            "try:\n    read_scene(sys.argv[1])\nexcept InputFileError as exc:\n    print(exc)\n")
+    res = subprocess.run([sys.executable, "-c", code, str(fifo)], capture_output=True, text=True, timeout=60)
+    assert "not a regular file (a FIFO)" in res.stdout, res.stdout + res.stderr
