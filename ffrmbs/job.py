@@ -43,7 +43,7 @@ import numpy as np
 from ffrmbs.compile_clock import CompileClock
 from ffrmbs.errors import ModelError
 from ffrmbs.limits import check_resources
-from ffrmbs.output_lock import in_use, output_lock
+from ffrmbs.output_lock import output_lock
 from mbs.integrators import driver
 from mbs.result_file import ResultRecorder, resume_recording
 
@@ -112,8 +112,7 @@ def run_scene(make_scene, out, check=True, resume=False, checkpoint_every=60.0, 
     Refused before anything is written (ModelError): ``checkpoint_every`` [s] not a
     finite number > 0 (None: no checkpoints), or a scene over the step or memory limits
     of :mod:`ffrmbs.limits` unless ``no_limits``. One job at a time writes a result file
-    (:mod:`ffrmbs.output_lock`); another is refused, as is a result file another process
-    holds open."""
+    (:mod:`ffrmbs.output_lock`); another is refused."""
     scene = make_scene()                      # a bad scene stops here, before anything is written
     if checkpoint_every is not None and not (isinstance(checkpoint_every, (int, float))
                                              and math.isfinite(checkpoint_every) and checkpoint_every > 0):
@@ -122,10 +121,7 @@ def run_scene(make_scene, out, check=True, resume=False, checkpoint_every=60.0, 
     check_resources(scene, check, no_limits)
     path = result_path(scene, out)
     with output_lock(path):
-        try:
-            return _run(make_scene, scene, path, check, resume, checkpoint_every, flush_every, export, plot, log)
-        except BlockingIOError:               # HDF5's own lock: the file is open in another process
-            raise in_use(path, "another process (HDF5 file lock)") from None
+        return _run(make_scene, scene, path, check, resume, checkpoint_every, flush_every, export, plot, log)
 
 
 def _run(make_scene, scene, path, check, resume, checkpoint_every, flush_every, export, plot, log) -> dict:

@@ -17,9 +17,9 @@ from pathlib import Path
 from ffrmbs.errors import FfrmbsError
 
 
-def in_use(result_path, owner="another run", pid=None) -> FfrmbsError:
-    """The error of a result file that ``owner`` (with ``pid``, if known) is writing."""
-    return FfrmbsError(f"{result_path} is in use by {owner}" + (f" (pid {pid})" if pid else "")
+def in_use(result_path, pid=None) -> FfrmbsError:
+    """The error of a result file that another run (with ``pid``, if known) is writing."""
+    return FfrmbsError(f"{result_path} is in use by another run" + (f" (pid {pid})" if pid else "")
                        + "; wait for it to end or choose another --out")
 
 

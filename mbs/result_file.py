@@ -192,11 +192,17 @@ class ResultRecorder:
         if not self.path.is_file():
             raise InputFileError(self.path, None, "the result file of the run to resume is missing")
         try:
-            self.file = f = h5py.File(self.path, "r+")
+            f = h5py.File(self.path, "r+")
+        except BlockingIOError:              # HDF5's own file lock: another process has it open
+            raise OutputFileError(self.path, "in use by another process (HDF5 file lock); wait for it to "
+                                             "end") from None
         except OSError as exc:
-            raise InputFileError(self.path, None, f"cannot reopen the result file to resume ({exc})") from None
+            raise InputFileError(self.path, None, f"cannot reopen the result file to resume "
+                                                  f"({os_reason(exc)})") from None
         if f.attrs.get("format") != FORMAT:
+            f.close()
             raise InputFileError(self.path, None, "not an ffrmbs result file")
+        self.file = f
         with self._writing(self.path, "result file"):
             self.written = n = integ.state.recorded
             traced = {key: len(rows) for key, rows in integ.trace().items()}
@@ -234,14 +240,17 @@ class ResultRecorder:
         close the file."""
         if self.file is None:
             return
-        with self._writing(self.path, "result file"):
-            self._flush(integ)
-            f = self.file
-            f.attrs["status"] = status
-            f.attrs["stats"] = json.dumps(integ.diagnostics() | {"steps": integ.steps,
-                                                                 "checkpoints": self.checkpoints}, default=float)
-            f.close()
-        self.file = None
+        try:
+            with self._writing(self.path, "result file"):
+                self._flush(integ)
+                f = self.file
+                f.attrs["status"] = status
+                f.attrs["stats"] = json.dumps(integ.diagnostics() | {"steps": integ.steps,
+                                                                     "checkpoints": self.checkpoints}, default=float)
+                f.close()
+                self.file = None
+        finally:                             # an unexpected error: the file is closed all the same
+            self._close_failed(f"failed: the file could not be finished ({status})")
         if status == "complete":
             self.checkpoint_path.unlink(missing_ok=True)
 
@@ -483,14 +492,27 @@ def load_result(path) -> tuple[Result, dict]:
 @contextlib.contextmanager
 def damaged_result_file(path):
     """Reading the result file ``path`` inside the block: what h5py raises on damaged
-    metadata (OSError, RuntimeError, KeyError, ValueError) and bad JSON in an attribute
-    (ValueError) become InputFileError (path, None, "damaged result file (<reason>)"),
-    the reason the first line of the library's message, at most 120 characters."""
+    metadata (OSError, RuntimeError, KeyError, ValueError) and the json module on bad
+    JSON in an attribute (ValueError) become InputFileError (path, None, "damaged result
+    file (<reason>)"), the reason the first line of the library's message, at most 120
+    characters. The same exceptions raised by other code in the block (a bug of ours,
+    numpy, matplotlib) pass unchanged: they are not the file's fault."""
     try:
         yield
     except (OSError, RuntimeError, KeyError, ValueError) as exc:
+        if not _raised_by_a_reader(exc):
+            raise
         reason = (str(exc).splitlines() or [type(exc).__name__])[0][:120]
         raise InputFileError(path, None, f"damaged result file ({reason})") from None
+
+
+def _raised_by_a_reader(exc) -> bool:
+    """Whether ``exc`` was raised inside h5py or the json module (its innermost frame)."""
+    tb = exc.__traceback__
+    while tb.tb_next is not None:
+        tb = tb.tb_next
+    where = Path(tb.tb_frame.f_code.co_filename).parts
+    return "h5py" in where or "json" in where
 
 
 def _read(f, path) -> tuple[Result, dict]:

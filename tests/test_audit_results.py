@@ -377,3 +377,38 @@ def test_a_damaged_result_file_is_a_clear_error(default_run, tmp_path):
             assert str(exc).startswith(f"{damaged}: ") and "\n" not in str(exc) and len(str(exc)) < 300
     assert faults >= 3
 
+
+
+def test_an_unexpected_error_while_finishing_closes_the_file_as_failed(tmp_path, monkeypatch):
+    """A bug-like error (not a disk fault) in the last flush: it propagates as itself, and
+    the result file is closed all the same, readable, with status 'failed: …' (it stayed
+    open with status 'running')."""
+    real = ResultRecorder._flush
+
+    def flush(self, integ):
+        if integ.state.recorded == len(integ.state.times):       # the final flush only
+            raise ZeroDivisionError("a bug in a flush")
+        real(self, integ)
+
+    monkeypatch.setattr(ResultRecorder, "_flush", flush)
+    with pytest.raises(ZeroDivisionError):
+        run_cli("run", "--no-check", "--no-export", "--t-end", "0.002", "--out", str(tmp_path))
+    monkeypatch.undo()
+    _, attrs = load_result(tmp_path / "point_mass_beam.h5")
+    assert attrs["status"].startswith("failed: the file could not be finished")
+
+
+def test_a_non_reading_error_in_a_result_block_is_not_blamed_on_the_file(tmp_path):
+    """damaged_result_file turns what h5py or json raise into 'damaged result file', but
+    lets an error of other code in the block (here numpy) pass as itself."""
+    from ffrmbs.errors import InputFileError
+    from mbs.result_file import damaged_result_file
+
+    path = tmp_path / "r.h5"
+    h5py.File(path, "w").close()
+    with pytest.raises(InputFileError, match="damaged result file"):
+        with h5py.File(path, "r") as f, damaged_result_file(path):
+            f["missing"]
+    with pytest.raises(ValueError, match="cannot reshape"):
+        with damaged_result_file(path):
+            np.zeros(2).reshape(3)
