@@ -82,6 +82,7 @@ import h5py
 import numpy as np
 
 from ffrmbs.errors import InputFileError, OutputFileError, os_reason
+from preprocess.body import mass_normalized
 from preprocess.inputfiles import regular_file
 
 from .body import Frame
@@ -411,9 +412,7 @@ def modal_units(body) -> tuple[str, str]:
     masses = getattr(getattr(body, "data", None), "masses", None)
     if masses is None:
         return "SI", "SI"
-    phi = body.phi
-    gram = phi.T @ (np.repeat(masses, 3)[:, None] * phi)
-    if np.allclose(gram, np.eye(len(gram)), rtol=0, atol=1e-6):
+    if mass_normalized(body.phi, masses):
         return "kg^(-1/2)", "kg^(1/2) m"
     return "SI", "SI"
 

@@ -37,6 +37,16 @@ MAX_MAGNITUDE = 1e100
 #: K must equal Kᵀ within this tolerance relative to max|K|
 SYMMETRY_RTOL = 1e-9
 
+#: max|Φᵀ M Φ − I| of mass-normalized modes
+NORMALIZED_TOL = 1e-6
+
+
+def mass_normalized(phi: np.ndarray, masses: np.ndarray) -> bool:
+    """Whether the mode shapes ``phi`` (3N, n_f) are normalized to the lumped ``masses``
+    (N,): max|Φᵀ M Φ − I| < NORMALIZED_TOL with M = diag(masses, each repeated 3x)."""
+    gram = phi.T @ (np.repeat(masses, 3)[:, None] * phi)
+    return bool(np.abs(gram - np.eye(phi.shape[1])).max() < NORMALIZED_TOL)
+
 
 @dataclass
 class BodyData:

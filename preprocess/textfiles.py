@@ -51,7 +51,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ffrmbs.errors import InputFileError, ModelError, quote
-from preprocess.body import MAX_MAGNITUDE, SYMMETRY_RTOL, BodyData
+from preprocess.body import MAX_MAGNITUDE, SYMMETRY_RTOL, BodyData, mass_normalized
 from preprocess.inputfiles import regular_file
 from preprocess.units import unit_system
 
@@ -61,7 +61,6 @@ MASSES_FILE = "mij.dat"
 STIFFNESS_FILE = "stiffnessMatrix.dat"
 TEXT_FILES = (U0_FILE, MODES_FILE, MASSES_FILE, STIFFNESS_FILE)
 
-NORMALIZED_TOL = 1e-6       # max|Φᵀ M Φ − I| of mass-normalized modes
 
 _NUMBER = re.compile(
     r"(?P<mantissa>[+-]?(?:\d+\.?\d*|\.\d+))(?:[eEdD](?P<exp>[+-]?\d+)|(?P<fortran>[+-]\d{3}))?")
@@ -242,12 +241,6 @@ def parse_stiffness(path, n_dof: int | None = None) -> sp.csr_matrix:
     return k.tocsr()
 
 
-def _mass_normalized(phi: np.ndarray, masses: np.ndarray) -> bool:
-    """Whether max|Φᵀ M Φ − I| < NORMALIZED_TOL with M = diag(masses repeated 3x)."""
-    gram = phi.T @ (np.repeat(masses, 3)[:, None] * phi)
-    return bool(np.abs(gram - np.eye(phi.shape[1])).max() < NORMALIZED_TOL)
-
-
 def read_text_body(directory, units: str = "si") -> BodyData:
     """The body stored as the four text files in ``directory``, converted to SI.
 
@@ -266,7 +259,7 @@ def read_text_body(directory, units: str = "si") -> BodyData:
                              f" nodes in {U0_FILE}")
     phi = parse_mode_shapes(directory / MODES_FILE, n_nodes)
     stiffness = parse_stiffness(directory / STIFFNESS_FILE, 3 * n_nodes)
-    if system.mass != 1.0 and _mass_normalized(phi, masses):
+    if system.mass != 1.0 and mass_normalized(phi, masses):
         phi = phi / math.sqrt(system.mass)
     return BodyData(u0=u0 * system.length, phi=phi, masses=masses * system.mass,
                     stiffness=(stiffness * system.stiffness).tocsr())
@@ -295,7 +288,7 @@ def write_text_files(paths: dict, body: BodyData, units: str = "si") -> None:
         raise ModelError("stiffness matrix is not symmetric; "
                          "the text files store its lower triangle only")
     phi = body.phi
-    if system.mass != 1.0 and _mass_normalized(phi, body.masses):
+    if system.mass != 1.0 and mass_normalized(phi, body.masses):
         phi = phi * math.sqrt(system.mass)
     u0 = (np.asarray(body.u0) / system.length).tolist()
     masses = (np.asarray(body.masses) / system.mass).tolist()
