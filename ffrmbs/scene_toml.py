@@ -238,7 +238,7 @@ if sys.version_info >= (3, 11):
 else:   # pragma: no cover - Python 3.10
     import tomli as tomllib
 
-from ffrmbs.errors import FfrmbsError, InputFileError, ModelError, quote
+from ffrmbs.errors import FfrmbsError, InputFileError, ModelError, os_reason, quote
 from ffrmbs.scene import Scene, name_fault
 from preprocess.inputfiles import regular_file
 
@@ -1364,7 +1364,7 @@ def read_scene(path) -> Scene:
     try:
         raw = path.read_bytes()
     except OSError as exc:
-        raise InputFileError(path, None, f"cannot read the scene file: {exc.strerror or exc}") from None
+        raise InputFileError(path, None, f"cannot read the scene file: {os_reason(exc)}") from None
     text, doc = _parse(path, raw)
     reader = _SceneReader(path, text, doc)
     settings = reader.settings()
