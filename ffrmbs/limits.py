@@ -14,25 +14,17 @@ memory, saying the numbers and how to lift the limits (``ffrmbs run --no-limits`
 from __future__ import annotations
 
 import math
-import os
 
 import numpy as np
 
 from ffrmbs.errors import ModelError
+from preprocess.limits import physical_memory
 
 MAX_STEPS = 10 ** 8
 MEMORY_SHARE = 0.25
 TRACE_BYTES = 8 + 24 + 8          # list slot + float object + array entry [bytes]
 CONTACT_NUMBERS = 1 + 3 + 3 + 3    # gap, point, normal, force per sample (+ 1 byte "active")
 LIFT = "lift the limits with --no-limits (no_limits=True in Python)"
-
-
-def physical_memory() -> int | None:
-    """The machine's physical memory [bytes], None where the system does not say."""
-    try:
-        return os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
-    except (ValueError, OSError, AttributeError):
-        return None
 
 
 def estimate(scene, check=True) -> dict:

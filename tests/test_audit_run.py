@@ -279,7 +279,7 @@ def test_too_much_memory_is_refused_with_the_numbers(tmp_path):
     of the physical memory, four times the limit."""
     from ffrmbs.limits import physical_memory
 
-    n_out = physical_memory() // 80
+    n_out = int(physical_memory()) // 80
     res = ffrmbs("run", scene_file(tmp_path, n_out=n_out), "--out", tmp_path / "out", "--no-check")
     line = one_clear_line(res, f"({n_out} samples x 80 bytes)", "over 25% of the machine's", "--no-limits")
     assert f"about {n_out * 80 / 1e9:.3g} GB" in line
