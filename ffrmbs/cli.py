@@ -168,7 +168,16 @@ def cmd_export(args):
     print(f"wrote {pvd} (open it in ParaView: File > Open, Apply, then play)")
 
 
+def _percent(share) -> str:
+    """``share`` (a fraction) as a percentage for an argparse help text (% escaped)."""
+    return f"{share:.0%}".replace("%", "%%")
+
+
 def build_parser():
+    from preprocess import limits as mesh_limits
+
+    from ffrmbs import limits as run_limits
+
     p = argparse.ArgumentParser(prog="ffrmbs", description=__doc__.split("\n")[0])
     p.add_argument("--version", action="version", version=f"ffrmbs {__version__}")
     sub = p.add_subparsers(dest="command", required=True)
@@ -192,8 +201,8 @@ def build_parser():
                                                      "and .geo files)")
     pre.add_argument("--out", type=output_dir, required=True, help="output directory")
     pre.add_argument("--no-limits", action="store_true",
-                     help="mesh and solve even when the mesh is estimated over 5e6 nodes or half the physical "
-                          "memory (preprocess.limits)")
+                     help=f"mesh and solve even when the mesh is estimated over {mesh_limits.MAX_NODES:.0e} nodes "
+                          f"or {_percent(mesh_limits.MEMORY_SHARE)} of the physical memory (preprocess.limits)")
     pre.set_defaults(func=cmd_preprocess)
 
     info = sub.add_parser("info", help="summary of a body file or directory")
@@ -221,7 +230,8 @@ def build_parser():
     run.add_argument("--no-check", action="store_true", help="skip the second run at dt/2 (error estimate)")
     run.add_argument("--no-export", action="store_true", help="skip the ParaView export")
     run.add_argument("--no-limits", action="store_true",
-                     help="run even beyond 1e8 time steps or 25%% of the physical memory (ffrmbs.limits)")
+                     help=f"run even beyond {run_limits.MAX_STEPS:.0e} time steps or "
+                          f"{_percent(run_limits.MEMORY_SHARE)} of the physical memory (ffrmbs.limits)")
     default = run.add_argument_group("default scene")
     default.add_argument("--setup", choices=("A", "B"), help="initial position of the point mass (default A)")
     default.add_argument("--modes", type=int, help="elastic modes of the beam (1..750, default 20)")

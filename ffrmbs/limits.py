@@ -8,7 +8,7 @@ of a Moreau run with ``trace`` the TRACE_KEYS records, each a Python float in a 
 later a copy in an array (TRACE_BYTES each). :func:`check_resources` refuses a job of more
 than MAX_STEPS steps or of more memory than MEMORY_SHARE of the machine's physical
 memory, saying the numbers and how to lift the limits (``ffrmbs run --no-limits``,
-``no_limits=True``).
+``no_limits=True``; :func:`preprocess.limits.lift`).
 """
 
 from __future__ import annotations
@@ -18,13 +18,13 @@ import math
 import numpy as np
 
 from ffrmbs.errors import ModelError
-from preprocess.limits import physical_memory
+from preprocess.limits import lift, physical_memory
 
 MAX_STEPS = 10 ** 8
 MEMORY_SHARE = 0.25
 TRACE_BYTES = 8 + 24 + 8          # list slot + float object + array entry [bytes]
 CONTACT_NUMBERS = 1 + 3 + 3 + 3    # gap, point, normal, force per sample (+ 1 byte "active")
-LIFT = "lift the limits with --no-limits (no_limits=True in Python)"
+LIFT = lift("no_limits=True")
 
 
 def estimate(scene, check=True) -> dict:

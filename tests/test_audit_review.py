@@ -36,3 +36,31 @@ def test_a_checkpoint_of_the_older_unsigned_format_is_named_as_such(tmp_path):
     ckpt.write_bytes(b"ffrmbs-checkpoint-1\n" + b"\x80\x05N.")
     with pytest.raises(InputFileError, match="older, unsigned checkpoint format.*restart the run"):
         read_checkpoint(ckpt)
+
+
+def _help(argv, capsys):
+    from ffrmbs.cli import build_parser
+
+    with pytest.raises(SystemExit):
+        build_parser().parse_args([*argv, "--help"])
+    return " ".join(capsys.readouterr().out.split())
+
+
+def test_the_no_limits_help_gives_the_limits_in_force(monkeypatch, capsys):
+    from ffrmbs import limits as run_limits
+    from preprocess import limits as mesh_limits
+
+    monkeypatch.setattr(mesh_limits, "MAX_NODES", 7_000)
+    monkeypatch.setattr(mesh_limits, "MEMORY_SHARE", 0.3)
+    monkeypatch.setattr(run_limits, "MAX_STEPS", 9_000)
+    monkeypatch.setattr(run_limits, "MEMORY_SHARE", 0.1)
+    assert "over 7e+03 nodes or 30% of the physical memory" in _help(["preprocess"], capsys)
+    assert "beyond 9e+03 time steps or 10% of the physical memory" in _help(["run"], capsys)
+
+
+def test_both_limits_say_how_to_lift_them_in_one_wording():
+    from ffrmbs import limits as run_limits
+    from preprocess import limits as mesh_limits
+
+    assert mesh_limits.LIFT == "pass --no-limits (check_limits=False from Python) to run it anyway"
+    assert run_limits.LIFT == "pass --no-limits (no_limits=True from Python) to run it anyway"
