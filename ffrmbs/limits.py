@@ -42,8 +42,7 @@ def estimate(scene, check=True) -> dict:
     contacts = len(system.contacts)
     numbers = 1 + system.nq + system.nu + outputs + 2 * bool(scene.energies) + CONTACT_NUMBERS * contacts
     sample_bytes = 8 * numbers + contacts
-    traced = scene.integrator.startswith("moreau") and scene.options.get("trace", True)
-    step_bytes = len(TRACE_KEYS) * TRACE_BYTES if traced else 0
+    step_bytes = len(TRACE_KEYS) * TRACE_BYTES if scene.keeps_trace() else 0
     runs = (1, 2) if check else (1,)             # the run at dt, the check at dt/2 (twice the steps)
     total = sum(scene.n_out * sample_bytes + k * steps * step_bytes for k in runs)
     return {"steps": steps, "sample_bytes": sample_bytes, "step_bytes": step_bytes, "bytes": total}

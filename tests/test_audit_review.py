@@ -64,3 +64,19 @@ def test_both_limits_say_how_to_lift_them_in_one_wording():
 
     assert mesh_limits.LIFT == "pass --no-limits (check_limits=False from Python) to run it anyway"
     assert run_limits.LIFT == "pass --no-limits (no_limits=True from Python) to run it anyway"
+
+
+@pytest.mark.parametrize("integrator, options, traced", [
+    ("moreau", {}, True), ("moreau-adaptive", {}, True), ("moreau", {"trace": False}, False),
+    ("moreau", {"trace": True}, True), ("rk4", {}, False), ("generalized-alpha", {}, False)])
+def test_a_scene_says_whether_its_run_keeps_a_trace_and_the_limits_count_it(integrator, options, traced):
+    from ffrmbs.limits import TRACE_BYTES, estimate
+    from ffrmbs.scene import Scene
+    from mbs import PointMass, System
+    from mbs.integrators.moreau import TRACE_KEYS
+
+    system = System(gravity=(0.0, -9.81, 0.0))
+    system.add(PointMass(1.0, position=(0.0, 0.0, 0.0)))
+    scene = Scene(system, 0.01, 1e-3, integrator, options=options, energies=False, plan=False)
+    assert scene.keeps_trace() is traced
+    assert estimate(scene)["step_bytes"] == (len(TRACE_KEYS) * TRACE_BYTES if traced else 0)
