@@ -56,10 +56,21 @@ def _log(msg):
     write(msg, sys.stderr)      # print(..., flush=True), or above a progress bar being drawn
 
 
-def _stage(label, fn, *args, **kwargs):
-    """Run one long step, telling the user what happens and how long it took."""
-    _log(f"{label} ...")
+def _stage(label, fn, *args, announce_in=None, on_start=None, **kwargs):
+    """Run one long step, telling the user what happens and how long it took; ``on_start``
+    (no arguments, e.g. a progress bar's next stage) is called as it starts. With
+    ``announce_in`` (a keyword argument of ``fn`` taking a callback) ``fn`` announces the
+    step itself once its checks pass, so a refused input prints no stage line."""
+    def announce():
+        if on_start is not None:
+            on_start()
+        _log(f"{label} ...")
+
     t0 = time.perf_counter()
+    if announce_in is None:
+        announce()
+    else:
+        kwargs[announce_in] = announce
     out = fn(*args, **kwargs)
     _log(f"{label}: done in {time.perf_counter() - t0:.2f} s")
     return out
@@ -67,17 +78,15 @@ def _stage(label, fn, *args, **kwargs):
 
 def _preprocess(spec, modes, clamp, units, density, young, poisson, order, mesh_size, out, check_limits=True):
     from preprocess.bodyfiles import write_body
-    from preprocess.pipeline import (Material, build_body, check_mesh_options, check_n_modes, mesh_source,
-                                     mesh_statistics)
+    from preprocess.pipeline import Material, build_body, check_n_modes, mesh_source, mesh_statistics
 
     from ffrmbs.progress import stage_bar, write
 
-    material = Material(density, young, poisson)        # every option checked before meshing
-    check_n_modes(modes)
-    check_mesh_options(spec, order, mesh_size)
+    material = Material(density, young, poisson)        # every option checked before meshing:
+    check_n_modes(modes)                                # these here, the mesh options by mesh_source
     with stage_bar(4 if out is not None else 3, "preprocess") as bar:
-        bar.stage("meshing")
-        mesh = _stage(f"meshing {spec}", mesh_source, spec, order, mesh_size, check_limits)
+        mesh = _stage(f"meshing {spec}", mesh_source, spec, order, mesh_size, check_limits,
+                      announce_in="announce", on_start=lambda: bar.stage("meshing"))
         write(mesh_statistics(mesh), sys.stdout)
         params = dict(input=spec, mesh_size=mesh_size)
         body = build_body(mesh, material, modes, clamp=clamp, units=units, params=params, log=_log,

@@ -80,3 +80,17 @@ def test_a_scene_says_whether_its_run_keeps_a_trace_and_the_limits_count_it(inte
     scene = Scene(system, 0.01, 1e-3, integrator, options=options, energies=False, plan=False)
     assert scene.keeps_trace() is traced
     assert estimate(scene)["step_bytes"] == (len(TRACE_KEYS) * TRACE_BYTES if traced else 0)
+
+
+def test_a_preprocess_checks_its_mesh_options_once_before_meshing(tmp_path, capsys, monkeypatch):
+    from ffrmbs.cli import main
+    from preprocess import pipeline
+
+    calls = []
+    check = pipeline.check_mesh_options
+    monkeypatch.setattr(pipeline, "check_mesh_options", lambda *a: calls.append(a) or check(*a))
+    rc = main(["preprocess", "box:1,0.2,0.2", "--clamp", "x0", "--modes", "2", "--density", "7800",
+               "--young", "2e11", "--poisson", "0.3", "--mesh-size", "0.2", "--order", "1",
+               "--out", str(tmp_path / "out")])
+    assert rc in (0, None) and calls == [("box:1,0.2,0.2", 1, 0.2)]
+    assert "meshing box:1,0.2,0.2 ..." in capsys.readouterr().err
