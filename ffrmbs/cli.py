@@ -56,10 +56,21 @@ def _log(msg):
     write(msg, sys.stderr)      # print(..., flush=True), or above a progress bar being drawn
 
 
-def _stage(label, fn, *args, **kwargs):
-    """Run one long step, telling the user what happens and how long it took."""
-    _log(f"{label} ...")
+def _stage(label, fn, *args, announce_in=None, on_start=None, **kwargs):
+    """Run one long step, telling the user what happens and how long it took; ``on_start``
+    (no arguments, e.g. a progress bar's next stage) is called as it starts. With
+    ``announce_in`` (a keyword argument of ``fn`` taking a callback) ``fn`` announces the
+    step itself once its checks pass, so a refused input prints no stage line."""
+    def announce():
+        if on_start is not None:
+            on_start()
+        _log(f"{label} ...")
+
     t0 = time.perf_counter()
+    if announce_in is None:
+        announce()
+    else:
+        kwargs[announce_in] = announce
     out = fn(*args, **kwargs)
     _log(f"{label}: done in {time.perf_counter() - t0:.2f} s")
     return out
@@ -67,17 +78,15 @@ def _stage(label, fn, *args, **kwargs):
 
 def _preprocess(spec, modes, clamp, units, density, young, poisson, order, mesh_size, out, check_limits=True):
     from preprocess.bodyfiles import write_body
-    from preprocess.pipeline import (Material, build_body, check_mesh_options, check_n_modes, mesh_source,
-                                     mesh_statistics)
+    from preprocess.pipeline import Material, build_body, check_n_modes, mesh_source, mesh_statistics
 
     from ffrmbs.progress import stage_bar, write
 
-    material = Material(density, young, poisson)        # every option checked before meshing
-    check_n_modes(modes)
-    check_mesh_options(spec, order, mesh_size)
+    material = Material(density, young, poisson)        # every option checked before meshing:
+    check_n_modes(modes)                                # these here, the mesh options by mesh_source
     with stage_bar(4 if out is not None else 3, "preprocess") as bar:
-        bar.stage("meshing")
-        mesh = _stage(f"meshing {spec}", mesh_source, spec, order, mesh_size, check_limits)
+        mesh = _stage(f"meshing {spec}", mesh_source, spec, order, mesh_size, check_limits,
+                      announce_in="announce", on_start=lambda: bar.stage("meshing"))
         write(mesh_statistics(mesh), sys.stdout)
         params = dict(input=spec, mesh_size=mesh_size)
         body = build_body(mesh, material, modes, clamp=clamp, units=units, params=params, log=_log,
@@ -168,7 +177,16 @@ def cmd_export(args):
     print(f"wrote {pvd} (open it in ParaView: File > Open, Apply, then play)")
 
 
+def _percent(share) -> str:
+    """``share`` (a fraction) as a percentage for an argparse help text (% escaped)."""
+    return f"{share:.0%}".replace("%", "%%")
+
+
 def build_parser():
+    from preprocess import limits as mesh_limits
+
+    from ffrmbs import limits as run_limits
+
     p = argparse.ArgumentParser(prog="ffrmbs", description=__doc__.split("\n")[0])
     p.add_argument("--version", action="version", version=f"ffrmbs {__version__}")
     sub = p.add_subparsers(dest="command", required=True)
@@ -192,8 +210,8 @@ def build_parser():
                                                      "and .geo files)")
     pre.add_argument("--out", type=output_dir, required=True, help="output directory")
     pre.add_argument("--no-limits", action="store_true",
-                     help="mesh and solve even when the mesh is estimated over 5e6 nodes or half the physical "
-                          "memory (preprocess.limits)")
+                     help=f"mesh and solve even when the mesh is estimated over {mesh_limits.MAX_NODES:.0e} nodes "
+                          f"or {_percent(mesh_limits.MEMORY_SHARE)} of the physical memory (preprocess.limits)")
     pre.set_defaults(func=cmd_preprocess)
 
     info = sub.add_parser("info", help="summary of a body file or directory")
@@ -221,7 +239,8 @@ def build_parser():
     run.add_argument("--no-check", action="store_true", help="skip the second run at dt/2 (error estimate)")
     run.add_argument("--no-export", action="store_true", help="skip the ParaView export")
     run.add_argument("--no-limits", action="store_true",
-                     help="run even beyond 1e8 time steps or 25%% of the physical memory (ffrmbs.limits)")
+                     help=f"run even beyond {run_limits.MAX_STEPS:.0e} time steps or "
+                          f"{_percent(run_limits.MEMORY_SHARE)} of the physical memory (ffrmbs.limits)")
     default = run.add_argument_group("default scene")
     default.add_argument("--setup", choices=("A", "B"), help="initial position of the point mass (default A)")
     default.add_argument("--modes", type=int, help="elastic modes of the beam (1..750, default 20)")

@@ -83,4 +83,6 @@ class CompileClock:
         if self.compiled:
             return (f"kernels: {self.compiled} compiled in {self.seconds:.2f} s (cached on disk for the next run; "
                     f"not counted in the cost)")
+        if self.seconds == 0.0:
+            return "kernels: already loaded in this process"
         return f"kernels: loaded from numba's disk cache in {self.seconds:.2f} s (not counted in the cost)"

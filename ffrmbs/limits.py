@@ -8,31 +8,23 @@ of a Moreau run with ``trace`` the TRACE_KEYS records, each a Python float in a 
 later a copy in an array (TRACE_BYTES each). :func:`check_resources` refuses a job of more
 than MAX_STEPS steps or of more memory than MEMORY_SHARE of the machine's physical
 memory, saying the numbers and how to lift the limits (``ffrmbs run --no-limits``,
-``no_limits=True``).
+``no_limits=True``; :func:`preprocess.limits.lift`).
 """
 
 from __future__ import annotations
 
 import math
-import os
 
 import numpy as np
 
 from ffrmbs.errors import ModelError
+from preprocess.limits import lift, physical_memory
 
 MAX_STEPS = 10 ** 8
 MEMORY_SHARE = 0.25
 TRACE_BYTES = 8 + 24 + 8          # list slot + float object + array entry [bytes]
 CONTACT_NUMBERS = 1 + 3 + 3 + 3    # gap, point, normal, force per sample (+ 1 byte "active")
-LIFT = "lift the limits with --no-limits (no_limits=True in Python)"
-
-
-def physical_memory() -> int | None:
-    """The machine's physical memory [bytes], None where the system does not say."""
-    try:
-        return os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
-    except (ValueError, OSError, AttributeError):
-        return None
+LIFT = lift("no_limits=True")
 
 
 def estimate(scene, check=True) -> dict:
@@ -50,8 +42,7 @@ def estimate(scene, check=True) -> dict:
     contacts = len(system.contacts)
     numbers = 1 + system.nq + system.nu + outputs + 2 * bool(scene.energies) + CONTACT_NUMBERS * contacts
     sample_bytes = 8 * numbers + contacts
-    traced = scene.integrator.startswith("moreau") and scene.options.get("trace", True)
-    step_bytes = len(TRACE_KEYS) * TRACE_BYTES if traced else 0
+    step_bytes = len(TRACE_KEYS) * TRACE_BYTES if scene.keeps_trace() else 0
     runs = (1, 2) if check else (1,)             # the run at dt, the check at dt/2 (twice the steps)
     total = sum(scene.n_out * sample_bytes + k * steps * step_bytes for k in runs)
     return {"steps": steps, "sample_bytes": sample_bytes, "step_bytes": step_bytes, "bytes": total}

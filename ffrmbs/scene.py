@@ -31,6 +31,9 @@ def name_fault(name) -> str | None:
     return None
 
 
+MOREAU = ("moreau", "moreau-adaptive")      # the integrators keeping a per-step trace
+
+
 @dataclass
 class Scene:
     """A simulation job.
@@ -74,6 +77,11 @@ class Scene:
         if int(self.n_out) < 2:
             raise ModelError(f"scene {self.name!r}: need at least 2 output samples, got {self.n_out}")
         self.n_out = int(self.n_out)
+
+    def keeps_trace(self) -> bool:
+        """Whether the run keeps the per-step trace: a Moreau integrator (MOREAU) does
+        unless ``options`` say ``trace=False``; the others keep none."""
+        return self.integrator in MOREAU and bool(self.options.get("trace", True))
 
     def output_units(self) -> dict:
         """{output name: unit}: the unit given in ``units``, else "m" for a Frame output

@@ -18,7 +18,8 @@ leaves either the previous checkpoint or the new one, never a torn file.
 Unpickling runs code, so a checkpoint is signed: the file is ``MAGIC``, the hex
 HMAC-SHA256 of the pickle under a per-user secret key and a newline, then the pickle.
 :func:`read_checkpoint` checks the signature before anything is unpickled and refuses
-any checkpoint this installation did not write. The key (32 random bytes) is
+any checkpoint this installation did not write, naming the older unsigned format
+(``UNSIGNED_MAGIC``) as such. The key (32 random bytes) is
 ``checkpoint.key`` in ``$FFRMBS_CONFIG`` (default ``~/.config/ffrmbs``), outside every
 output directory; it is created on first use with mode 0600 in a directory of mode 0700.
 """
@@ -37,8 +38,9 @@ import numpy as np
 from ffrmbs.errors import InputFileError
 
 MAGIC = b"ffrmbs-checkpoint-2\n"
+UNSIGNED_MAGIC = b"ffrmbs-checkpoint-1\n"                   # the older format: no signature
 KEY_FILE, KEY_BYTES = "checkpoint.key", 32
-_SIGNATURE_CHARS = 2 * hashlib.sha256().digest_size        # hex HMAC-SHA256
+SIGNATURE_CHARS = 2 * hashlib.sha256().digest_size         # hex HMAC-SHA256
 
 
 def key_path() -> Path:
@@ -50,12 +52,31 @@ def key_path() -> Path:
 
 def _key() -> bytes:
     """The checkpoint key, created (os.urandom, mode 0600, directory 0700) on first use;
-    a new key is linked into place whole, so concurrent first runs agree on one."""
+    a new key is linked into place whole, so concurrent first runs agree on one.
+    InputFileError if the key cannot be created (read-only directory, no hard links)."""
     path = key_path()
     if not path.exists():
-        path.parent.mkdir(mode=0o700, parents=True, exist_ok=True)
-        tmp = path.with_name(f"{KEY_FILE}.{os.getpid()}.tmp")
-        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+        try:
+            _create_key(path)
+        except OSError as exc:
+            raise InputFileError(path, None, f"cannot create the checkpoint key ({exc.strerror})") from None
+    try:
+        key = path.read_bytes() if path.is_file() else b""
+    except OSError as exc:
+        raise InputFileError(path, None, f"cannot read the checkpoint key ({exc.strerror})") from None
+    if len(key) != KEY_BYTES:
+        raise InputFileError(path, None, f"the checkpoint key must be a file of {KEY_BYTES} bytes; remove it "
+                                         "and a new one is made (older checkpoints are then refused)")
+    return key
+
+
+def _create_key(path: Path) -> None:
+    """Write a new random key to a temporary file and link it to ``path`` (kept if
+    another process linked its key first); OSError if the file system refuses."""
+    path.parent.mkdir(mode=0o700, parents=True, exist_ok=True)
+    tmp = path.with_name(f"{KEY_FILE}.{os.getpid()}.tmp")
+    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+    try:
         try:
             os.write(fd, os.urandom(KEY_BYTES))
             os.fsync(fd)
@@ -65,16 +86,8 @@ def _key() -> bytes:
             os.link(tmp, path)
         except FileExistsError:
             pass                       # another process made it first: use theirs
-        finally:
-            tmp.unlink()
-    try:
-        key = path.read_bytes() if path.is_file() else b""
-    except OSError as exc:
-        raise InputFileError(path, None, f"cannot read the checkpoint key ({exc.strerror})") from None
-    if len(key) != KEY_BYTES:
-        raise InputFileError(path, None, f"the checkpoint key must be a file of {KEY_BYTES} bytes; remove it "
-                                         "and a new one is made (older checkpoints are then refused)")
-    return key
+    finally:
+        tmp.unlink(missing_ok=True)
 
 
 def _signature(payload: bytes) -> bytes:
@@ -141,7 +154,10 @@ def read_checkpoint(path):
         data = path.read_bytes()
     except OSError as exc:
         raise InputFileError(path, None, f"cannot read the checkpoint ({exc.strerror})") from None
-    head = len(MAGIC) + _SIGNATURE_CHARS + 1
+    if data.startswith(UNSIGNED_MAGIC):
+        raise InputFileError(path, None, "an older, unsigned checkpoint format: refused (it could run code); "
+                                         "restart the run")
+    head = len(MAGIC) + SIGNATURE_CHARS + 1
     signature, payload = data[len(MAGIC):head - 1], data[head:]
     if not (data.startswith(MAGIC) and data[head - 1:head] == b"\n"
             and hmac.compare_digest(signature, _signature(payload))):

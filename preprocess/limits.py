@@ -48,7 +48,15 @@ K_BYTES = 2 * 12                       # per K nonzero: CSR and its CSC copy (8 
 
 MAX_NODES = 5_000_000
 MEMORY_SHARE = 0.5                     # of the physical memory
-LIFT = "pass --no-limits to run it anyway"
+
+
+def lift(python: str) -> str:
+    """The advice that ends a refusal over a limit: the command-line flag and ``python``,
+    the Python argument lifting the same limits. One wording for every limit."""
+    return f"pass --no-limits ({python} from Python) to run it anyway"
+
+
+LIFT = lift("check_limits=False")
 
 
 @dataclass(frozen=True)

@@ -56,7 +56,7 @@ def check_mesh_options(spec: str, order=None, mesh_size=None):
         check_meshing_options(regular_file(spec), order, mesh_size)
 
 
-def mesh_source(spec: str, order=None, mesh_size=None, check_limits=True) -> Mesh:
+def mesh_source(spec: str, order=None, mesh_size=None, check_limits=True, announce=None) -> Mesh:
     """The mesh named by ``spec``: a file path, ``box:LX,LY,LZ`` or ``stepped-beam``.
 
     Built-in sizes and ``mesh_size`` are in the units of the run (m for SI, mm for SI(mm));
@@ -64,9 +64,13 @@ def mesh_source(spec: str, order=None, mesh_size=None, check_limits=True) -> Mes
     for a mesh file. ``order``: 1 (tet4) or 2 (tet10) for a built-in geometry or a
     ``.geo`` file, None meaning 2; None for a mesh file, which keeps its own order
     (:func:`~preprocess.mesh.read_mesh`). ``check_limits``: a mesh estimated over the
-    limits of :mod:`preprocess.limits` is a ModelError before meshing.
+    limits of :mod:`preprocess.limits` is a ModelError before meshing. ``announce``: called
+    (no arguments) once the options pass :func:`check_mesh_options`, before anything is
+    read or meshed, so a caller reporting progress says nothing for a refused option.
     """
     check_mesh_options(spec, order, mesh_size)
+    if announce is not None:
+        announce()
     if spec.startswith("box:"):
         try:
             lx, ly, lz = (float(v) for v in spec[4:].split(","))

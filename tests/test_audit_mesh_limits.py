@@ -93,7 +93,8 @@ def test_a_known_mesh_is_estimated_from_its_counts():
 def test_a_tiny_mesh_size_is_refused_before_meshing(tmp_path):
     rc, errors, err = preprocess_bounded("box:1,1,1", tmp_path, "--mesh-size", "1e-4")
     line = assert_refused(rc, errors, err, "<builtin box>", "element size 0.0001", "tet10 elements", "nodes",
-                          "GB of memory", "5e+06 nodes", "of physical memory", "pass --no-limits to run it anyway")
+                          "GB of memory", "5e+06 nodes", "of physical memory",
+                          "pass --no-limits (check_limits=False from Python) to run it anyway")
     elements = number_before(line, " tet10 elements")
     assert 4.5e12 <= elements <= 7e12          # 4.6 to 5.9 V / h³ measured in gmsh meshes, V = 1, h = 1e-4
     assert not (tmp_path / "out").exists()
@@ -109,7 +110,7 @@ def test_a_geo_file_with_a_tiny_characteristic_length_is_refused_before_meshing(
         """))
     rc, errors, err = preprocess_bounded("part.geo", tmp_path)
     line = assert_refused(rc, errors, err, "part.geo", "element size 0.0001", "(volume 1)",
-                          "pass --no-limits to run it anyway")
+                          "pass --no-limits (check_limits=False from Python) to run it anyway")
     assert 4.5e12 <= number_before(line, " tet10 elements") <= 7e12     # V = 2 x 1 x 0.5, h = 1e-4
 
 
@@ -124,7 +125,7 @@ def test_a_structured_box_of_too_many_cells_is_refused_before_meshing(tmp_path):
         """)], tmp_path)
     assert res.returncode == 0, res.stderr
     assert "about 4.8e+10 tet4 elements" in res.stdout           # 6 tetrahedra per cell
-    assert "pass --no-limits to run it anyway" in res.stdout
+    assert "pass --no-limits (check_limits=False from Python) to run it anyway" in res.stdout
 
 
 def test_no_limits_lifts_the_limit(tmp_path, capsys, monkeypatch):
@@ -132,7 +133,8 @@ def test_no_limits_lifts_the_limit(tmp_path, capsys, monkeypatch):
     argv = ["preprocess", "box:1,1,1", "--mesh-size", "0.5", "--order", "1", "--modes", "2", "--free", *MATERIAL]
     rc = main(argv + ["--out", str(tmp_path / "limited")])
     err = capsys.readouterr().err
-    assert rc == 2 and "2e+01 nodes" in err and "pass --no-limits to run it anyway" in err, err
+    assert rc == 2 and "2e+01 nodes" in err, err
+    assert "pass --no-limits (check_limits=False from Python) to run it anyway" in err, err
     assert not (tmp_path / "limited").exists()
     assert main(argv + ["--out", str(tmp_path / "lifted"), "--no-limits"]) == 0
     assert (tmp_path / "lifted" / "body.h5").is_file()
@@ -170,7 +172,7 @@ def test_a_mesh_file_over_the_node_limit_is_refused_before_assembly(tmp_path, mo
         build_body(mesh, Material(1000.0, 1e9, 0.3), n_modes=2)
     message = str(info.value)
     assert message.startswith(f"{path}: about 2 tet4 elements, 5 nodes") and "4e+00 nodes" in message
-    assert message.endswith("pass --no-limits to run it anyway")
+    assert message.endswith("pass --no-limits (check_limits=False from Python) to run it anyway")
 
 
 def test_a_mesh_over_the_memory_limit_is_refused_with_the_machine_memory(tmp_path, monkeypatch, capsys):

@@ -33,6 +33,7 @@ def test_clock_counts_a_compilation_once_and_announces_it():
     with CompileClock(lines.append) as again:
         kernel(3.0)
     assert again.compiled == 0 and again.seconds == 0.0 and len(lines) == 1
+    assert again.describe() == "kernels: already loaded in this process"
 
 
 class _SlowCompile(event.Listener):

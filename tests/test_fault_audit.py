@@ -8,6 +8,8 @@ from collections import Counter
 
 import pytest
 
+from ffrmbs.errors import InputFileError
+from mbs.checkpoint import read_checkpoint
 from validation import fault_audit as fa
 
 LONG = "ffrmbs: error: x.toml: " + "y" * 300
@@ -69,12 +71,24 @@ def test_bad_preprocess_options_reach_the_command(name, source, options, expect)
 def test_the_planted_pickle_runs_its_command_when_loaded(tmp_path):
     """The planted checkpoint is a real threat: unpickling it creates the marker."""
     ckpt = tmp_path / "x.h5.ckpt"
-    fa.planted_pickle(fa.CHECKPOINT_MAGIC, "EXECUTED")(ckpt, tmp_path)
+    fa.planted_pickle(fa.FORGED_HEADER, "EXECUTED")(ckpt, tmp_path)
     data = ckpt.read_bytes()
-    assert data.startswith(fa.CHECKPOINT_MAGIC)
+    assert data.startswith(fa.FORGED_HEADER)
     assert not (tmp_path / "EXECUTED").exists()
-    pickle.loads(data[len(fa.CHECKPOINT_MAGIC):])
+    pickle.loads(data[len(fa.FORGED_HEADER):])
     assert (tmp_path / "EXECUTED").exists()
+
+
+@pytest.mark.parametrize("name", ["resume_planted_pickle_with_header", "resume_truncated_checkpoint"])
+def test_the_planted_checkpoints_pass_the_header_and_reach_the_signature_check(tmp_path, name):
+    """The header cases carry mbs.checkpoint's current header (magic, 64 hex characters,
+    newline), so it is the signature check that refuses them, not the header."""
+    path, make = [f for f in _case(f"run_{name}").files if f[0] == fa.CKPT][0]
+    ckpt = tmp_path / "x.h5.ckpt"
+    make(ckpt, tmp_path)
+    with pytest.raises(InputFileError, match="signature does not match"):
+        read_checkpoint(ckpt)
+    assert not (tmp_path / "EXECUTED").exists()
 
 
 @pytest.fixture(scope="module")

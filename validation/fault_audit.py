@@ -53,7 +53,8 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from validation.harness import _cell, _write_atomic
+from mbs.checkpoint import MAGIC, SIGNATURE_CHARS
+from validation.harness import cell, write_atomic
 
 KINDS = ("scene", "body", "mesh", "run", "result")
 OUTCOMES = ("clear", "traceback", "unclear", "silent", "hang")
@@ -61,7 +62,7 @@ TIMEOUT = 60.0                  # [s] per case
 MEMORY_LIMIT = 4 << 30          # [bytes] address space per case
 MAX_MESSAGE = 300               # [characters] of a clear message
 ERROR_PREFIX = "ffrmbs: error:"
-CHECKPOINT_MAGIC = b"ffrmbs-checkpoint-1\n"     # the header mbs.checkpoint writes
+FORGED_HEADER = MAGIC + b"0" * SIGNATURE_CHARS + b"\n"   # mbs.checkpoint's header, a forged signature
 FAST_RUN = ("--t-end", "0.001", "--no-check", "--no-export")   # the default scene, 100 steps
 OUT = "{case}/out"
 
@@ -698,10 +699,10 @@ RESUME_CASES = [
     ("resume_without_checkpoint", _resume(RESULT)),
     ("resume_garbage_checkpoint", _resume((*RESULT, (CKPT, text("garbage\n" * 10))))),
     ("resume_empty_checkpoint", _resume((*RESULT, (CKPT, raw(b""))))),
-    ("resume_truncated_checkpoint", _resume((*RESULT, (CKPT, raw(CHECKPOINT_MAGIC + b"\x80\x05\x95"))))),
+    ("resume_truncated_checkpoint", _resume((*RESULT, (CKPT, raw(FORGED_HEADER + b"\x80\x05\x95"))))),
     ("resume_planted_pickle", _resume((*RESULT, (CKPT, planted_pickle(b"", "EXECUTED"))), marker="out/EXECUTED")),
     ("resume_planted_pickle_with_header",
-     _resume((*RESULT, (CKPT, planted_pickle(CHECKPOINT_MAGIC, "EXECUTED"))), marker="out/EXECUTED")),
+     _resume((*RESULT, (CKPT, planted_pickle(FORGED_HEADER, "EXECUTED"))), marker="out/EXECUTED")),
     ("resume_checkpoint_directory", _resume((*RESULT, (CKPT, folder())))),
 ]
 
@@ -825,8 +826,8 @@ def run_audit(root, only=None, jobs=2, timeout=TIMEOUT, log=print) -> dict:
            "controls": [vars(c) for c in checks], "cases": [vars(r) for r in results],
            "limits": {"timeout_s": timeout, "memory_bytes": MEMORY_LIMIT}}
     doc["counts"] = {k: doc["counts"].get(k, 0) for k in OUTCOMES}
-    _write_atomic(root / "audit.json", lambda f: f.write(json.dumps(doc, indent=1).encode()))
-    _write_atomic(root / "audit.md", lambda f: f.write(markdown(doc).encode()))
+    write_atomic(root / "audit.json", lambda f: f.write(json.dumps(doc, indent=1).encode()))
+    write_atomic(root / "audit.md", lambda f: f.write(markdown(doc).encode()))
     return doc
 
 
@@ -847,8 +848,8 @@ def markdown(doc) -> str:
     lines += ["", f"Controls (valid inputs): {len(doc['controls']) - len(failed)} of {len(doc['controls'])} ran cleanly"
               + (": failed " + ", ".join(c["case"] for c in failed) if failed else "."), "",
               "| case | kind | outcome | exit | s | message |", "|---|---|---|---|---|---|"]
-    lines += [f"| {_cell(r['case'])} | {r['kind']} | {r['outcome']} | {_cell(r['returncode'])} | {r['seconds']:.1f} | "
-              f"{_cell(r['message'][:100])} |" for r in doc["cases"]]
+    lines += [f"| {cell(r['case'])} | {r['kind']} | {r['outcome']} | {cell(r['returncode'])} | {r['seconds']:.1f} | "
+              f"{cell(r['message'][:100])} |" for r in doc["cases"]]
     return "\n".join(lines) + "\n"
 
 

@@ -276,14 +276,14 @@ def _select(registry, only):
     return wanted
 
 
-def _json_safe(value):
+def json_safe(value):
     """``value`` with numpy types as Python types, non-finite floats as None, tuples as lists."""
     if isinstance(value, dict):
-        return {str(k): _json_safe(v) for k, v in value.items()}
+        return {str(k): json_safe(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
-        return [_json_safe(v) for v in value]
+        return [json_safe(v) for v in value]
     if isinstance(value, np.ndarray):
-        return _json_safe(value.tolist())
+        return json_safe(value.tolist())
     if isinstance(value, np.generic):
         value = value.item()
     if isinstance(value, float):
@@ -293,7 +293,7 @@ def _json_safe(value):
     return str(value)
 
 
-def _write_atomic(path, write):
+def write_atomic(path, write):
     """Write ``path`` by ``write(binary_file)`` into a temporary file, then os.replace."""
     fd, tmp = tempfile.mkstemp(dir=os.path.dirname(os.path.abspath(path)), prefix=".tmp-")
     try:
@@ -348,13 +348,13 @@ def _plot(path, name, rows, group_keys):
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize="small")
     fig.tight_layout()
-    _write_atomic(path, lambda f: fig.savefig(f, format="png", dpi=120))
+    write_atomic(path, lambda f: fig.savefig(f, format="png", dpi=120))
 
 
-def _cell(value):
+def cell(value):
     """A markdown table cell: floats to 6 significant digits, NaN/None as n/a, dicts as k=v."""
     if isinstance(value, dict):
-        text = ", ".join(f"{k}={_cell(v)}" for k, v in value.items())
+        text = ", ".join(f"{k}={cell(v)}" for k, v in value.items())
     elif isinstance(value, (float, np.floating)):
         text = "n/a" if not math.isfinite(value) else f"{value:.6g}"
     elif value is None:
@@ -391,7 +391,7 @@ def _case_report(outcome, png_name, figures=()):
     if outcome.description:
         lines += [outcome.description, ""]
     if outcome.failure is not None:
-        return lines + [f"FAILED: {_cell(outcome.failure)}", ""]
+        return lines + [f"FAILED: {cell(outcome.failure)}", ""]
     result = outcome.result
     rows = result.rows
     if rows:
@@ -400,10 +400,10 @@ def _case_report(outcome, png_name, figures=()):
         lines += ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
         for row in rows:
             error = row["error"]
-            cells = [_cell(row["code"]), _cell(row["config"]), _cell(row["cpu_s"]),
+            cells = [cell(row["code"]), cell(row["config"]), cell(row["cpu_s"]),
                      "n/a" if error is None or not math.isfinite(error) else f"{error:.3e}",
-                     _cell(row["error_kind"]), _cell(row["reference"])]
-            cells += [_cell(row.get(k, "")) for k in extra]
+                     cell(row["error_kind"]), cell(row["reference"])]
+            cells += [cell(row.get(k, "")) for k in extra]
             lines.append("| " + " | ".join(cells) + " |")
         lines.append("")
     elif result.skipped:
@@ -470,7 +470,7 @@ def _results_json(outcomes, quick, machine, date):
                          "failure": o.failure, "traceback": o.traceback, "cpu_s": o.cpu_s,
                          "skipped": list(r.skipped) if r else [], "notes": list(r.notes) if r else []}
     rows = [row for o in outcomes if o.result for row in o.result.rows]
-    return _json_safe({"date": date, "quick": quick, "machine": machine, "rows": rows, "cases": cases})
+    return json_safe({"date": date, "quick": quick, "machine": machine, "rows": rows, "cases": cases})
 
 
 def run_validation(out_dir, quick=False, only=None, cases=None, progress=print):
@@ -521,10 +521,10 @@ def run_validation(out_dir, quick=False, only=None, cases=None, progress=print):
     machine = _machine()
     date = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
     doc = _results_json(outcomes, quick, machine, date)
-    _write_atomic(os.path.join(out_dir, "results.json"),
+    write_atomic(os.path.join(out_dir, "results.json"),
                   lambda f: f.write(json.dumps(doc, indent=1, allow_nan=False).encode()))
     report_path = os.path.join(out_dir, "report.md")
-    _write_atomic(report_path, lambda f: f.write(_report(outcomes, pngs, figures, quick, machine, date).encode()))
+    write_atomic(report_path, lambda f: f.write(_report(outcomes, pngs, figures, quick, machine, date).encode()))
     say(f"wrote {report_path}")
     failed = [o.name for o in outcomes if o.failure is not None]
     if failed:

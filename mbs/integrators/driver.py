@@ -47,6 +47,12 @@ def _probe(system, spec):
     raise ModelError(f"an output must be a Frame or a callable (t, q, u), got {spec!r}")
 
 
+def non_finite(t, step, what) -> SimulationError:
+    """The error stopping a run whose ``what`` (``"q/u"``, ``"energy"``, a probe's name)
+    became NaN or infinite at time ``t`` [s], step ``step``: one wording for every check."""
+    return SimulationError(t, step, f"state became non-finite (NaN/inf) in {what}")
+
+
 class StepFailure(Exception):
     """Raised by an integrator's ``step`` when it cannot complete the step; the driver turns
     it into a SimulationError with the time and step number."""
@@ -124,7 +130,7 @@ class Integrator:
         does a requested stop (:func:`request_stop`)."""
         self.steps += 1
         if not math.isfinite(self.q.sum() + self.u.sum()):     # a NaN or inf anywhere propagates
-            raise SimulationError(self.t, self.steps, "the state became NaN or infinite")
+            raise non_finite(self.t, self.steps, "q/u")
         if _stop[1] > 1:
             raise RunInterrupted(self.t, self.steps, _stop[0])
 
@@ -285,7 +291,8 @@ class Integrator:
     def _record(self, i):
         """Sample row ``i`` of the result at the current state; SimulationError if q, u or
         the energy there is NaN or infinite (the steps check only the integrated
-        coordinates, and a finite state can have an infinite energy)."""
+        coordinates, and a finite state can have an infinite energy); such a sample is not
+        counted, so the result keeps the finite ones before it."""
         st, sys = self.state, self.system
         res, n = st.result, len(st.times)
         res.t[i], res.q[i], res.u[i] = self.t, self.q, self.u
@@ -294,7 +301,7 @@ class Integrator:
             q[b.q_slice], u[b.u_slice] = qb[i], ub[i]
         bad = [name for name, values in (("q", q), ("u", u)) if not np.isfinite(values).all()]
         if bad:
-            self._non_finite("/".join(bad))
+            raise non_finite(self.t, self.steps, "/".join(bad))
         self.monitor.check(self.t, q, u)
         for name, probe in st.probes.items():
             value = np.asarray(probe(self.t, q, u), dtype=float)
@@ -307,7 +314,7 @@ class Integrator:
             res.energy["kinetic"][i] = sys.kinetic_energy(self.t, q, u)
             res.energy["potential"][i] = sys.potential_energy(self.t, q)
         if st.energies and not math.isfinite(res.energy["kinetic"][i] + res.energy["potential"][i]):
-            self._non_finite("energy")
+            raise non_finite(self.t, self.steps, "energy")
         if st.contacts:
             for c in sys.contacts:
                 rec, k = res.contacts[c.name], c.kinematics
@@ -317,11 +324,6 @@ class Integrator:
                     rec["point"][i] = k.point2.r
                     rec["normal"][i] = k.n
                 self.contact_force(c, rec["force"][i])
-
-    def _non_finite(self, where):
-        """Stop at a sample whose ``where`` is NaN or infinite; the sample is not counted, so
-        the result keeps the finite ones before it."""
-        raise SimulationError(self.t, self.steps, f"state became non-finite (NaN/inf) in {where}")
 
 
 def resume(integrator, recorder=None, progress=None):

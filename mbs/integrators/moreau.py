@@ -85,9 +85,9 @@ from scipy.linalg.lapack import dpotrf, dpotrs
 from contact.laws import Bilateral
 from contact.solver import ContactSet, ProxSolver
 from contours import Contour1sNeutralFFR, Contour2sNeutralFFR, PointContour, SphereContour
-from ffrmbs.errors import ModelError, SimulationError
+from ffrmbs.errors import ModelError
 
-from .driver import Integrator, StepFailure
+from .driver import Integrator, StepFailure, non_finite
 
 NEUTRAL_FFR = (Contour1sNeutralFFR, Contour2sNeutralFFR)
 TRACE_KEYS = ("t", "dt", "closed", "penetration", "iterations", "residual", "impulse_work", "energy")
@@ -154,7 +154,7 @@ class MoreauTimeStepping(Integrator):
             sys = self.system
             energy = sys.kinetic_energy(self.t, self.q, self.u) + sys.potential_energy(self.t, self.q)
             if not math.isfinite(energy):
-                raise SimulationError(self.t, self.steps, "state became non-finite (NaN/inf) in energy")
+                raise non_finite(self.t, self.steps, "energy")
             for key, value in zip(TRACE_KEYS, (self.t, h, *self._last, energy)):
                 self._trace[key].append(value)
         self._last[:] = 0, 0.0, 0, 0.0, 0.0

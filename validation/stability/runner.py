@@ -20,7 +20,7 @@ import traceback
 
 from ffrmbs.errors import FfrmbsError, SimulationError
 from validation.bench.common import machine
-from validation.harness import _cell, _json_safe, _write_atomic
+from validation.harness import cell, json_safe, write_atomic
 from validation.stability.core import CASES, StabilityCase, StabilityRow, graceful_row
 
 COLUMNS = ("case", "finished", "stable", "energy drift", "max penetration [m]", "error (reference)", "run time [s]",
@@ -82,7 +82,7 @@ def run_stability(out_dir, quick=False, only=None, progress=print, cases=None) -
     os.makedirs(out_dir, exist_ok=True)
     doc = {"suite": "stability", "quick": bool(quick), "only": list(only) if only else None,
            "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
-           "machine": machine(), "rows": [_json_safe(r.as_dict()) for r in rows]}
+           "machine": machine(), "rows": [json_safe(r.as_dict()) for r in rows]}
     json_path = os.path.join(out_dir, "stability.json")
     _write_text(json_path, json.dumps(doc, indent=1, allow_nan=False) + "\n")
     table = markdown_table(rows)
@@ -101,7 +101,7 @@ def markdown_table(rows) -> str:
         error = "—" if r.error is None else f"{_num(r.error)} ({r.reference})"
         cells = (r.case, _yes(r.finished), _yes(r.stable), _num(r.energy_drift), _num(r.max_penetration), error,
                  f"{r.run_time_s:.2f}", r.outcome)
-        lines.append("| " + " | ".join(_cell(c) for c in cells) + " |")
+        lines.append("| " + " | ".join(cell(c) for c in cells) + " |")
     return "\n".join(lines)
 
 
@@ -125,5 +125,5 @@ def _num(x) -> str:
 
 
 def _write_text(path, text):
-    """Write ``text`` (UTF-8) to ``path`` atomically (:func:`validation.harness._write_atomic`)."""
-    _write_atomic(path, lambda f: f.write(text.encode("utf-8")))
+    """Write ``text`` (UTF-8) to ``path`` atomically (:func:`validation.harness.write_atomic`)."""
+    write_atomic(path, lambda f: f.write(text.encode("utf-8")))
