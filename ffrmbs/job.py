@@ -44,10 +44,9 @@ from ffrmbs.compile_clock import CompileClock
 from ffrmbs.errors import ModelError
 from ffrmbs.limits import check_resources
 from ffrmbs.output_lock import output_lock
+from ffrmbs.scene import MOREAU
 from mbs.integrators import driver
 from mbs.result_file import ResultRecorder, resume_recording
-
-MOREAU = ("moreau", "moreau-adaptive")
 
 
 def contact_intervals(t, dt, closed):
@@ -72,7 +71,7 @@ def energy_balance(system, trace) -> dict:
 def _simulate(scene, dt=None, t_end=None, n_out=None, **extra):
     options = dict(scene.options)
     if scene.integrator in MOREAU:
-        options.setdefault("trace", True)
+        options["trace"] = scene.keeps_trace()
     t_end = scene.t_end if t_end is None else t_end
     n_out = scene.n_out if n_out is None else n_out
     return scene.system.simulate(t_end, scene.dt if dt is None else dt, integrator=scene.integrator,
