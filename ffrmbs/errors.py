@@ -52,10 +52,16 @@ class OutputFileError(FfrmbsError):
         super().__init__(f"{self.path}: {fault}")
 
 
+def first_line(exc: Exception, limit: int = 200) -> str:
+    """The first line of ``exc``'s message (its class name when empty), at most ``limit``
+    characters: a library's multi-line message in a one-line error."""
+    return (str(exc).splitlines() or [type(exc).__name__])[0][:limit]
+
+
 def os_reason(exc: OSError) -> str:
     """The system's reason of an OSError in a few words (e.g. "No space left on device"):
-    its strerror, else the first line of its message, at most 200 characters."""
-    return exc.strerror or (str(exc).splitlines() or [type(exc).__name__])[0][:200]
+    its strerror, else :func:`first_line` of its message."""
+    return exc.strerror or first_line(exc)
 
 
 class ModelError(FfrmbsError):

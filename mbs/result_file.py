@@ -81,7 +81,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from ffrmbs.errors import InputFileError, OutputFileError, os_reason
+from ffrmbs.errors import InputFileError, OutputFileError, first_line, os_reason
 from preprocess.body import mass_normalized
 from preprocess.inputfiles import regular_file
 
@@ -501,8 +501,7 @@ def damaged_result_file(path):
     except (OSError, RuntimeError, KeyError, ValueError) as exc:
         if not _raised_by_a_reader(exc):
             raise
-        reason = (str(exc).splitlines() or [type(exc).__name__])[0][:120]
-        raise InputFileError(path, None, f"damaged result file ({reason})") from None
+        raise InputFileError(path, None, f"damaged result file ({first_line(exc, 120)})") from None
 
 
 def _raised_by_a_reader(exc) -> bool:
