@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from ffrmbs.errors import InputFileError, ModelError, quote
-from preprocess import limits
+from preprocess import fe, limits
 from preprocess.inputfiles import include_tree, regular_file
 from preprocess.mesh import Mesh, canonical_mesh
 
@@ -82,22 +82,13 @@ def mesh_from_gmsh_model(gmsh, source) -> Mesh:
     return canonical_mesh(points, blocks[0], groups, source)
 
 
-def check_mesh_size(mesh_size) -> float:
-    """``mesh_size`` as a float if it is a usable maximum element size (finite, > 0),
-    else a ModelError."""
-    size = float(mesh_size)
-    if not (math.isfinite(size) and size > 0):
-        raise ModelError(f"mesh size must be a positive finite length, not {size!r}")
-    return size
-
-
 def _generate(gmsh, order, mesh_size, source, check_limits=True, n_elements=None):
     """Mesh the current (synchronized) model; a ModelError first if it is estimated over
     the limits (from ``n_elements`` tetrahedra if known, else from the mesh size)."""
     if order not in (1, 2):
         raise ModelError(f"element order must be 1 or 2, not {order}")
     if mesh_size is not None:
-        gmsh.option.setNumber("Mesh.MeshSizeMax", check_mesh_size(mesh_size))
+        gmsh.option.setNumber("Mesh.MeshSizeMax", fe.check_positive("mesh size", mesh_size))
     if check_limits:
         volume, box = model_volume(gmsh), np.array(gmsh.model.getBoundingBox(-1, -1))
         extent = float((box[3:] - box[:3]).max())
@@ -250,8 +241,8 @@ def box(lx, ly, lz, mesh_size, order=2, divisions=None, check_limits=True) -> Me
     ``check_limits``: a mesh estimated over the limits of :mod:`preprocess.limits` is a
     ModelError before meshing.
     """
-    if not all(math.isfinite(v) and v > 0 for v in (lx, ly, lz)):
-        raise ModelError(f"box dimensions must be positive and finite, got {lx}, {ly}, {lz}")
+    for name, length in (("box length lx", lx), ("box length ly", ly), ("box length lz", lz)):
+        fe.check_positive(name, length)
     if divisions is not None:
         divisions = _check_divisions(divisions)
     return _mesh_occ("box", lambda occ: occ.addBox(0, 0, 0, lx, ly, lz), mesh_size, order, divisions,

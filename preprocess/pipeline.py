@@ -51,7 +51,7 @@ def check_mesh_options(spec: str, order=None, mesh_size=None):
     (:func:`~preprocess.mesh.check_meshing_options`); an InputFileError for a file that
     is missing or not a regular file (:func:`~preprocess.inputfiles.regular_file`)."""
     if mesh_size is not None:
-        geometry.check_mesh_size(mesh_size)
+        fe.check_positive("mesh size", mesh_size)
     if not (spec.startswith("box:") or spec == "stepped-beam"):
         check_meshing_options(regular_file(spec), order, mesh_size)
 
