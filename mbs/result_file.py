@@ -208,7 +208,7 @@ class ResultRecorder:
             self.written = n = integ.state.recorded
             traced = {key: len(rows) for key, rows in integ.trace().items()}
             self.traced = min(traced.values(), default=0)
-            for name, obj in _datasets(f):
+            for name, obj in datasets(f):
                 keep = traced.get(name[len("trace/"):], 0) if name.startswith("trace/") else n
                 if obj.maxshape[0] is None and obj.shape[0] > keep:
                     obj.resize(keep, axis=0)
@@ -464,10 +464,17 @@ def _frame_rows(body, q, t):
     return R, A
 
 
-def _datasets(f):
+def datasets(f) -> list:
+    """(name, h5py Dataset) of every dataset of the open file ``f``."""
     found = []
     f.visititems(lambda name, obj: found.append((name, obj)) if isinstance(obj, h5py.Dataset) else None)
     return found
+
+
+def per_sample(name) -> bool:
+    """Whether the dataset ``name`` holds one row per output sample (not the per-step
+    trace, not a body's fixed surface mesh)."""
+    return not name.startswith("trace/") and "/surface/" not in name
 
 
 def load_result(path) -> tuple[Result, dict]:
@@ -519,9 +526,7 @@ def _read(f, path) -> tuple[Result, dict]:
         raise InputFileError(path, None, "not an ffrmbs result file (attribute format missing)")
     attrs = {k: (json.loads(v) if k in ("options", "versions", "inputs", "summary", "stats") else v)
              for k, v in f.attrs.items()}
-    per_sample = [obj for name, obj in _datasets(f)
-                  if not name.startswith("trace/") and "/surface/" not in name]
-    n = min((d.shape[0] for d in per_sample), default=0)
+    n = min((d.shape[0] for name, d in datasets(f) if per_sample(name)), default=0)
     t = f["t"][:n] if "t" in f else np.zeros(0)
     bodies = f.get("bodies", {})
     nq = max((g.attrs["q_stop"] for g in bodies.values()), default=0)

@@ -38,7 +38,7 @@ from pathlib import Path
 import h5py
 
 from ffrmbs.errors import FfrmbsError
-from mbs.result_file import load_result
+from mbs.result_file import datasets, load_result, per_sample
 
 NAME = "point_mass_beam.h5"
 ENV = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
@@ -49,17 +49,15 @@ def command(out: Path, t_end: float, *extra) -> list[str]:
             "--t-end", repr(t_end), "--out", str(out), *extra]
 
 
-def datasets(path) -> dict:
+def arrays(path) -> dict:
     """{name: array} of every dataset of an HDF5 file."""
-    found = {}
     with h5py.File(path, "r") as f:
-        f.visititems(lambda name, obj: found.__setitem__(name, obj[()]) if isinstance(obj, h5py.Dataset) else None)
-    return found
+        return {name: obj[()] for name, obj in datasets(f)}
 
 
 def bitwise_equal(a, b) -> bool:
     """The same datasets, dtypes, shapes and bytes in the two files."""
-    da, db = datasets(a), datasets(b)
+    da, db = arrays(a), arrays(b)
     return sorted(da) == sorted(db) and all(
         da[k].dtype == db[k].dtype and da[k].shape == db[k].shape and da[k].tobytes() == db[k].tobytes() for k in da)
 
@@ -73,18 +71,11 @@ def inspect(path: Path) -> dict:
     except FfrmbsError as exc:
         return {"readable": f"NO: {exc}", "samples": 0}
     with h5py.File(path, "r") as f:
-        lengths = {name: obj.shape[0] for name, obj in _items(f)
-                   if not name.startswith("trace/") and "/surface/" not in name}
-        trace = {obj.shape[0] for name, obj in _items(f) if name.startswith("trace/")}
+        lengths = {name: obj.shape[0] for name, obj in datasets(f) if per_sample(name)}
+        trace = {obj.shape[0] for name, obj in datasets(f) if name.startswith("trace/")}
     consistent = set(lengths.values()) == {len(res.t)} and len(trace) <= 1
     return {"readable": "yes" if consistent else "NO: datasets of different lengths", "samples": len(res.t),
             "status": str(attrs.get("status"))}
-
-
-def _items(f):
-    found = []
-    f.visititems(lambda name, obj: found.append((name, obj)) if isinstance(obj, h5py.Dataset) else None)
-    return found
 
 
 def reference_run(out: Path, t_end: float) -> dict:
