@@ -195,14 +195,15 @@ def _progress(t_end):
 
 def _summary(scene, res, wall, cpu, warm_s) -> dict:
     steps = int(res.stats["steps"])
+    timed = steps - int(res.stats.get("resumed_steps", 0))     # the steps of this process
     s = {"scene": scene.name, "integrator": scene.integrator, "dt_s": scene.dt, "t_end_s": scene.t_end,
-         "steps": steps, "wall_s": wall, "cpu_s": cpu, "warmup_s": warm_s,
-         "us_per_step": 1e6 * wall / max(steps, 1),
+         "steps": steps, "timed_steps": timed, "wall_s": wall, "cpu_s": cpu, "warmup_s": warm_s,
+         "us_per_step": 1e6 * wall / max(timed, 1),
          "final": {name: np.asarray(v[-1]).tolist() for name, v in res.outputs.items()},
          "units": scene.output_units()}
     if res.stats.get("resumed_at"):
         s["resumed_at_s"] = res.stats["resumed_at"]
-        s["note"] = "resumed: wall and CPU seconds are those of the last process only"
+        s["note"] = "resumed: wall and CPU seconds and the cost per step are those of the last process only"
     if res.energy:
         E = res.total_energy()
         s["energy_J"] = {"initial": float(E[0]), "final": float(E[-1])}
@@ -234,5 +235,5 @@ def _report(s, log):
         est = ", ".join(_estimate_text(name, e) for name, e in s["error_estimate"].items())
         log(f"accuracy (time step: max |run(dt) - run(dt/2)| per output, absolute and relative to the output's "
             f"range over the run): {est}")
-    log(f"cost: {s['steps']} steps in {s['wall_s']:.2f} s wall ({s['cpu_s']:.2f} s CPU), "
-        f"{s['us_per_step']:.0f} µs per step")
+    log(f"cost: {s['timed_steps']} steps in {s['wall_s']:.2f} s wall ({s['cpu_s']:.2f} s CPU), "
+        f"{s['us_per_step']:.0f} µs per step" + (f" (resumed: {s['steps']} steps in all)" if "note" in s else ""))

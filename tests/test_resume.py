@@ -85,6 +85,8 @@ def test_kill_9_and_resume_is_bit_identical(reference, tmp_path):
     assert attrs["status"] == "complete" and len(attrs["resumed_at"]) == 1
     assert not (tmp_path / "point_mass_beam.h5.ckpt").exists()
     assert_bitwise_equal(reference, path)
+    summary, before = attrs["summary"], round(attrs["resumed_at"][0] / 1e-5)   # fixed Δt = 1e-5 s
+    assert summary["timed_steps"] == summary["steps"] - before > 0      # the cost per step: this process's steps
 
 
 def test_sigterm_closes_the_file_cleanly_and_resume_is_bit_identical(reference, tmp_path):

@@ -84,7 +84,8 @@ class RunState:
     preallocated :class:`~mbs.result.Result`, rows [0, recorded) filled; modal: {body:
     (q (n, nq_b), u (n, nu_b))} of the bodies the plan solves apart; next_landing: index
     into ``landings`` of the next target; cpu_s: CPU seconds spent before this process
-    (a resumed run adds its own); resumed_at: times [s] where the run was resumed.
+    (a resumed run adds its own); resumed_at: times [s] where the run was resumed;
+    resumed_steps: the step count when the last resume began (0 for a fresh run).
     """
 
     times: np.ndarray
@@ -100,6 +101,7 @@ class RunState:
     recorded: int = 0
     cpu_s: float = 0.0
     resumed_at: list = field(default_factory=list)
+    resumed_steps: int = 0
 
 
 class Integrator:
@@ -246,6 +248,7 @@ class Integrator:
                          cpu_s=st.cpu_s + time.process_time() - self._cpu0, **self.diagnostics())
         if st.resumed_at:
             res.stats["resumed_at"] = list(st.resumed_at)
+            res.stats["resumed_steps"] = st.resumed_steps
         if self.monitor.events:
             res.stats["validity_warnings"] = list(self.monitor.events)
         res.trace = self.trace()
@@ -332,4 +335,5 @@ def resume(integrator, recorder=None, progress=None):
     if st is None:
         raise ModelError("this integrator has no run to resume")
     st.resumed_at.append(float(integrator.t))
+    st.resumed_steps = integrator.steps
     return integrator._go(recorder, progress, fresh=False)
