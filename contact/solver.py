@@ -226,7 +226,7 @@ class ProxSolver:
         np.multiply(cs.restitution, gamma_pre, out=c)
         np.add(xi_free, c, out=c)
         if not np.any(c):               # Λ = 0 solves every law
-            lam[:] = 0.0
+            lam.fill(0.0)
             gamma_plus[:] = xi_free
             return 0, 0.0, True
         if self.method == "newton":

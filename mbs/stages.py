@@ -135,9 +135,9 @@ def constraints(model, data, dt):
         return
     nu, n_c = model.nu, model.n_c
     W, MW, G, lam, gamma_plus, xi_free, gamma_pre, closing, offset, work = data.problem(nu, m)
-    W[...] = 0.0
-    closing[...] = 0.0
-    offset[...] = 0.0
+    W.fill(0.0)
+    closing.fill(0.0)
+    offset.fill(0.0)
     eq = model.equations
     if n_c:
         W[:, :n_c] = eq.constraint_jacobian(data.t_m, data.q_m).T
@@ -166,7 +166,7 @@ def impulses(model, data, dt):
     m = data.m
     if m == 0:
         if data.warm_joints or data.warm.any():
-            data.warm[:] = False             # nothing closed: no warm start, no resting contact
+            data.warm.fill(False)            # nothing closed: no warm start, no resting contact
             data.warm_joints = False
         return
     W, MW, G, lam, gamma_plus, xi_free, gamma_pre, closing, offset, work = data.problem(model.nu, m)
@@ -292,7 +292,7 @@ def solve(model, data, factor, b):
     act, x = model.active_u, data.rhs_act
     np.take(b, act, out=x)
     dpotrs(factor, x, lower=True, overwrite_b=True)
-    b[...] = 0.0
+    b.fill(0.0)
     b[act] = x
 
 
@@ -304,7 +304,7 @@ def solve_matrix(model, data, factor, W, MW):
         return
     act = model.active_u
     x = dpotrs(factor, W[act], lower=True)[0]
-    MW[...] = 0.0
+    MW.fill(0.0)
     MW[act] = x
 
 
@@ -340,7 +340,7 @@ def contact_set(model, data):
 
 def warm_start(model, data, lam):
     """Λ of the last step for the joints and the contacts closed again, else zero."""
-    lam[...] = 0.0
+    lam.fill(0.0)
     n_c = model.n_c
     if n_c and data.warm_joints:
         lam[:n_c] = data.lam_joints
@@ -360,7 +360,7 @@ def keep_warm_start(model, data, lam):
     n_c = model.n_c
     data.lam_joints[:] = lam[:n_c]
     data.warm_joints = True
-    data.warm[:] = False
+    data.warm.fill(False)
     row = n_c
     for j in range(data.n_closed):
         i = data.closed_idx[j]
