@@ -26,7 +26,7 @@ from ..body import Frame
 from ..link import body_q
 from ..model import Data, compile_model
 from ..result import Result
-from ..step_failure import StepFailure  # noqa: F401  (integrators raise it from here)
+from ..step_failure import StepFailure
 from ..validity import SpinMonitor
 
 
