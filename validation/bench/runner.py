@@ -12,7 +12,7 @@ document) and ``DIR/summary.json``: the machine, the options and per benchmark i
 available`` — the module is not written yet, ``failed``), wall seconds, target verdicts,
 the path of its JSON and, on failure, the error with its traceback. A failing benchmark
 does not stop the others; the command exits with status 2 if any failed.
-``python3 -m validation.bench`` is ``ffrmbs bench`` (:mod:`ffrmbs.cli`), which calls
+``python3 -m validation.bench`` is ``ffrmbs bench`` (:mod:`ffrmbs_app.cli`), which calls
 :func:`run_benchmarks`.
 
 Registry and protocol: ``BENCHES`` maps a name to a module path; the module exposes
