@@ -16,7 +16,7 @@ SCALARS_PER_STEP = 16     # bound of those per step (see test_a_steady_step_allo
 
 
 def _default_scene():
-    from validation.scenes import point_mass_beam as pmb
+    from ffrmbs_app.scenes import point_mass_beam as pmb
 
     scene = pmb.build("A", modes=20)
     system = scene.system
@@ -77,7 +77,7 @@ def test_step_is_the_eight_stages_in_order():
 def test_a_planned_run_leaves_the_system_as_it_was():
     """The plan's modal bodies are left out of the compiled model, not of the System."""
     from mbs import FlexibleBodyFFR, PointMass, PrescribedFrameMotion, System
-    from validation.scenes import point_mass_beam as pmb
+    from ffrmbs_app.scenes import point_mass_beam as pmb
 
     system = System()
     beam = system.add(FlexibleBodyFFR(pmb.default_beam_data(), modes=5, frame=PrescribedFrameMotion.fixed()))
