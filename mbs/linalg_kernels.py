@@ -17,14 +17,18 @@ from numba import njit
 def cholesky_into(A, L):
     """Lower Cholesky factor of the symmetric (n, n) ``A`` (only its lower triangle is
     read) into ``L`` (n, n; the strict upper triangle is set to zero). Returns 0, or
-    j + 1 when the leading (j+1) × (j+1) minor is not positive definite (LAPACK's
-    ``info``); L is then incomplete. ``L`` may be ``A``."""
+    j + 1 when the leading (j+1) × (j+1) minor is not positive definite to working
+    precision: its pivot a_jj − Σ_k l_jk² is at most n ε a_jj (like LAPACK's ``info``,
+    with a rounding-level margin, so a matrix singular but for rounding is reported,
+    not factored); L is then incomplete. ``L`` may be ``A``."""
     n = A.shape[0]
+    tol = n * 2.220446049250313e-16
     for j in range(n):
         s = A[j, j]
+        floor = tol * abs(s)
         for k in range(j):
             s -= L[j, k] * L[j, k]
-        if not s > 0.0:
+        if not s > floor:
             return j + 1
         d = math.sqrt(s)
         L[j, j] = d
