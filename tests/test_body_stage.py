@@ -328,10 +328,10 @@ def test_generalized_alpha_equals_its_previous_algorithm(data):
 
 # --- allocations ------------------------------------------------------------------------
 
-def free_flight_system(data):
+def free_flight_system(data, n_modes=N_F):
     """A free FFR body under two body-fixed step loads (the Exudyn free-flight scene)."""
     system = System()
-    beam = system.add(FlexibleBodyFFR(data, N_F, name="beam"))
+    beam = system.add(FlexibleBodyFFR(data, n_modes, name="beam"))
     for z, f in ((5.0, -100.0), (0.0, 100.0)):
         nodes = np.flatnonzero(np.abs(data.u0[:, 2] - z) < 1e-9)
         system.add(DistributedForce(beam, nodes, np.full(nodes.size, 1.0 / nodes.size),
@@ -339,44 +339,77 @@ def free_flight_system(data):
     return system
 
 
-def numpy_allocations(fn, repeats):
-    """(count, bytes) of numpy array buffers allocated by ``repeats`` calls of ``fn``."""
+def memory_of(fn, repeats):
+    """(numpy buffers left allocated, largest transient peak [bytes]) of ``repeats`` calls of
+    ``fn``: the first counts array buffers (numpy's tracemalloc domain) still alive after
+    the calls, the second the peak of all traced memory above its level at each call's
+    start (Python objects included: it catches temporaries freed within the call)."""
     domain = np.lib.tracemalloc_domain
     tracemalloc.start()
     try:
         before = tracemalloc.take_snapshot()
+        peak = 0
         for _ in range(repeats):
+            current = tracemalloc.get_traced_memory()[0]
+            tracemalloc.reset_peak()
             fn()
+            peak = max(peak, tracemalloc.get_traced_memory()[1] - current)
         after = tracemalloc.take_snapshot()
     finally:
         tracemalloc.stop()
     filters = [tracemalloc.DomainFilter(True, domain)]
     stats = after.filter_traces(filters).compare_to(before.filter_traces(filters), "traceback")
-    return sum(s.count_diff for s in stats if s.count_diff > 0), sum(s.size_diff for s in stats if s.size_diff > 0)
+    return sum(s.count_diff for s in stats if s.count_diff > 0), peak
 
 
-def test_steady_generalized_alpha_step_allocates_no_numpy_array(data):
-    system = free_flight_system(data)
+@pytest.fixture(scope="module")
+def data_60():
+    return build_body(box(1.0, 1.0, 5.0, 1.0, order=2), MATERIAL, 60, clamp=None)
+
+
+def steady_step(data, n_modes, extra=None):
+    """A function taking one steady generalized-α step of the free-flight scene (after
+    the kernels compiled and the workspace was built); ``extra`` runs after it."""
+    system = free_flight_system(data, n_modes)
     integ = GeneralizedAlpha(system)
-    q, u = system.initial_state()
-    integ.start(0.0, q, u)
+    integ.start(0.0, *system.initial_state())
     for _ in range(3):
-        integ.step(1e-3)                        # compiled, workspace built
-    count, size = numpy_allocations(lambda: integ.step(1e-3), 20)
-    assert (count, size) == (0, 0)
+        integ.step(1e-3)
+
+    def step():
+        integ.step(1e-3)
+        if extra is not None:
+            extra(system.nu)
+    return step
 
 
-def test_stage_calls_allocate_no_numpy_array(data):
-    system = free_flight_system(data)
-    stage = BodyStage.of_system(system)
-    q, u = system.initial_state()
-    M, h, out = np.empty((system.nu, system.nu)), np.empty(system.nu), np.empty(system.nq)
-    du = np.full(system.nu, 1e-3)
+def test_steady_generalized_alpha_step_allocates_no_numpy_array(data, data_60):
+    """No array outlives a step, and the step's transient memory does not grow with the
+    body (a 5-mode and a 60-mode body: any temporary vector or matrix of size nu would
+    differ by at least 55 x 8 bytes); the probe catches one temporary vector."""
+    small, large = memory_of(steady_step(data, 5), 20), memory_of(steady_step(data_60, 60), 20)
+    assert small[0] == large[0] == 0
+    assert large[1] == small[1]
+    probe = memory_of(steady_step(data_60, 60, lambda nu: np.zeros(nu) + 1.0), 20)
+    assert probe[1] >= small[1] + 8 * 66
 
-    def calls():
-        stage.mass_and_h(0.1, q, u, M, h)
-        stage.h_only(0.1, q, u, h)
-        stage.increment(q, du, out)
-        stage.normalize(out)
-    calls()
-    assert numpy_allocations(calls, 10) == (0, 0)
+
+def test_stage_calls_allocate_no_numpy_array(data, data_60):
+    peaks = []
+    for d, n in ((data, 5), (data_60, 60)):
+        system = free_flight_system(d, n)
+        stage = BodyStage.of_system(system)
+        q, u = system.initial_state()
+        M, h, out = np.empty((system.nu, system.nu)), np.empty(system.nu), np.empty(system.nq)
+        du = np.full(system.nu, 1e-3)
+
+        def calls():
+            stage.mass_and_h(0.1, q, u, M, h)
+            stage.h_only(0.1, q, u, h)
+            stage.increment(q, du, out)
+            stage.normalize(out)
+        calls()
+        left, peak = memory_of(calls, 10)
+        assert left == 0
+        peaks.append(peak)
+    assert peaks[0] == peaks[1]
