@@ -9,6 +9,8 @@ Generalized-α (:mod:`mbs.integrators.generalized_alpha`, Arnold & Brüls 2007),
 
 and one Newton correction of u̇_{n+1} with the iteration matrix S = M + stiff:
 r = M u̇ − h, S Δu̇ = −r (Cholesky), u̇ += Δu̇.
+
+Moreau–Jean (:mod:`mbs.integrators.moreau`): the iteration matrix M̂ = M + θΔt D + θ²Δt² K.
 """
 
 from __future__ import annotations
@@ -84,3 +86,13 @@ def ga_newton_update(M, stiff, a1, h1, L, res, da):
         if not math.isfinite(a1[i]):
             finite = False
     return 0, err, scale, finite
+
+
+@njit(cache=True)
+def moreau_iteration_matrix(M, D, c_d, K, c_k, out):
+    """M̂ = M + c_d D + c_k K (n, n) of Moreau–Jean's θ-method (c_d = θΔt, c_k = θ²Δt²;
+    :mod:`mbs.integrators.moreau`), summed in that order."""
+    n = M.shape[0]
+    for i in range(n):
+        for j in range(n):
+            out[i, j] = M[i, j] + c_d * D[i, j] + c_k * K[i, j]
