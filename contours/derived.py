@@ -38,7 +38,6 @@ from . import _offset_kernels as OK
 from .base import D_ETA, D_ETA_ETA, D_ETA_XI, D_XI, D_XI_XI, VALUE, Contour
 from .neutral import _kernels as K
 from .neutral.factory import Contour1sNeutralFactory
-from mbs.rotations import skew
 
 
 def offset_frame(a, n0):
@@ -53,7 +52,7 @@ def offset_frame(a, n0):
     Dc = -(np.outer(t, n0) + (n0 @ t) * np.eye(3)) @ Dt
     Dn = (np.eye(3) - np.outer(n, n)) @ Dc / lc
     t2 = np.cross(n, t)
-    Dt2 = -skew(t) @ Dn + skew(n) @ Dt
+    Dt2 = np.cross(n, Dt, axisb=0, axisc=0) - np.cross(t, Dn, axisb=0, axisc=0)   # ñ Dt − t̃ Dn
     return t, t2, n, Dt2, Dn
 
 

@@ -10,10 +10,11 @@ Surface coordinates: sphere (η, ξ) = (longitude, latitude) [rad] in the frame'
 plane (η, ξ) = coordinates [m] along the frame's x and y axes, normal along its z axis.
 
 ``update`` reads the frame through its methods (position, orientation, velocity, angular
-velocity, J_T, J_R), each of which returns a new array. A frame on a point mass takes a
-shortcut that allocates nothing: r = q + ū0, ṙ = u, with the constant orientation
-A_rel, ω = 0, J_T = 1 and J_R = 0 set once (the same values the frame's methods give;
-compared in ``tests/test_compiled_contact.py``).
+velocity, J_T, J_R), each of which returns a new array. A frame on a body that only
+translates (``body.translation_only``: a point mass) takes a shortcut that allocates
+nothing: r = q + ū0, ṙ = u, with the constant orientation A_rel, ω = 0, J_T = 1 and
+J_R = 0 set once (the same values the frame's methods give; compared in
+``tests/test_compiled_contact.py``).
 """
 
 from __future__ import annotations
@@ -21,7 +22,6 @@ from __future__ import annotations
 import numpy as np
 
 from ffrmbs.errors import ModelError
-from mbs.rigid_body import PointMass
 
 from .base import D_ETA, D_ETA_ETA, D_ETA_XI, D_XI, D_XI_XI, VALUE, Contour
 
@@ -40,7 +40,7 @@ class _FrameContour(Contour):
         self._w = np.zeros(3)
         self._J_T = np.zeros((3, self.nu))
         self._J_R = np.zeros((3, self.nu))
-        self._on_point_mass = isinstance(body, PointMass)   # the shortcut of the module docstring
+        self._on_point_mass = body is not None and body.translation_only   # the shortcut of the module docstring
         if self._on_point_mass:
             self._A[:] = frame.A_rel
             self._J_T[:] = np.eye(3)

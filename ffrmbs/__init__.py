@@ -1,9 +1,10 @@
-"""ffrmbs: flexible multibody dynamics with sliding contacts.
+"""ffrmbs: flexible multibody dynamics with sliding contacts — the bottom layer.
 
-This small package holds what every other package shares: the version, the
-exception hierarchy (:mod:`ffrmbs.errors`) and the command line (:mod:`ffrmbs.cli`).
-The physics lives in the top-level packages ``preprocess``, ``mbs``, ``contours``,
-``contact`` and ``validation``.
+This package holds only what every other package shares: the version and the exception
+hierarchy (:mod:`ffrmbs.errors`). It imports nothing of ours. The library lives in
+``preprocess``, ``contours``, ``contact`` and ``mbs``; the application (command line,
+jobs, scene files, built-in scenes, export, plots) in ``ffrmbs_app``; the validation
+cases, benchmarks and stability suite in ``validation``.
 """
 
 __version__ = "0.1.0"

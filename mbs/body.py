@@ -26,6 +26,8 @@ class Body:
     nu: int
     constant_mass = False   # True when M does not depend on q or t (Moreau then factors once)
     additive = False        # True when q ⊕ Δu = q + Δu (no rotation coordinates)
+    translation_only = False  # True when q = u = the position and velocity of every frame's
+                              # origin offset (a point mass: J_T = 1, J_R = 0, constant A)
 
     def __init__(self, name: str):
         self.name = name

@@ -70,6 +70,7 @@ class PointMass(Body):
     n_modes = 0
     constant_mass = True
     additive = True
+    translation_only = True
 
     def __init__(self, mass, position=(0.0, 0.0, 0.0), velocity=(0.0, 0.0, 0.0), name="point"):
         super().__init__(name)

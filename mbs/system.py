@@ -295,7 +295,7 @@ class System:
         ``contacts``: also record each contact's state at the outputs (``Result.contacts``).
         ``recorder``: streams the samples to a result file while the run goes and takes
         checkpoints (:class:`mbs.result_file.ResultRecorder`); ``progress``: a callable
-        (t) called after each output time (e.g. :func:`ffrmbs.progress.progress_bar`).
+        (t) called after each output time (e.g. :func:`ffrmbs_app.progress.progress_bar`).
         """
         from .integrators import integrator_class
 

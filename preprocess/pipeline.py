@@ -92,7 +92,7 @@ def build_body(mesh: Mesh, material: Material, n_modes: int, clamp: str | None =
     ``clamp`` names a node group to clamp (thesis Sec. 2.4.4 (a)); None gives
     free-free modes with the rigid-body modes removed (b). ``log(msg)`` receives
     progress lines with timings; ``progress(label)`` is called as each long step begins
-    ("assembling K", "computing modes"), e.g. a stage bar's ``stage`` (ffrmbs.progress).
+    ("assembling K", "computing modes"), e.g. a stage bar's ``stage`` (ffrmbs_app.progress).
     ``check_limits``: a mesh whose assembly and modes are estimated over the limits of
     :mod:`preprocess.limits` is a ModelError before assembly.
     """

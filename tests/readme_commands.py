@@ -224,11 +224,11 @@ def parse_problem(words: list[str], repo: Path) -> str | None:
 
 
 # modules that run the CLI: ``python3 -m MODULE ARGS`` is ``ffrmbs PREFIX ARGS``
-CLI_MODULES = {"ffrmbs.cli": [], "validation.bench": ["bench"]}
+CLI_MODULES = {"ffrmbs_app.cli": [], "validation.bench": ["bench"]}
 
 
 def _ffrmbs_problem(args):
-    from ffrmbs.cli import build_parser
+    from ffrmbs_app.cli import build_parser
 
     if len(args) == 1 and not args[0].startswith("-"):
         return None if args[0] in _subcommands(build_parser()) else f"no subcommand {args[0]!r}"

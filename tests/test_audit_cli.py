@@ -19,7 +19,7 @@ def test_info_into_a_closed_pipe_ends_quietly(tmp_path):
     read, write = os.pipe()
     os.close(read)
     try:
-        res = subprocess.run([sys.executable, "-m", "ffrmbs.cli", "info", str(tmp_path / "beam" / "body.h5")],
+        res = subprocess.run([sys.executable, "-m", "ffrmbs_app.cli", "info", str(tmp_path / "beam" / "body.h5")],
                              stdout=write, stderr=subprocess.PIPE, text=True, timeout=120)
     finally:
         os.close(write)
@@ -37,7 +37,7 @@ def test_info_into_a_closed_pipe_ends_quietly(tmp_path):
 def test_an_output_directory_that_is_a_file_is_one_clear_line(tmp_path, capsys, argv):
     """--out naming an existing regular file is refused before any work (it was a
     FileExistsError traceback after the run or the meshing)."""
-    from ffrmbs.cli import main
+    from ffrmbs_app.cli import main
 
     blocker = tmp_path / "taken"
     blocker.write_text("not a directory\n")

@@ -16,13 +16,13 @@ from pathlib import Path
 import h5py
 import pytest
 
-from ffrmbs import cli
+from ffrmbs_app import cli
 
 REPO = str(Path(__file__).resolve().parents[1])
 
 
 def run_cli(*argv) -> tuple[int, str, str]:
-    """ffrmbs.cli.main(argv) in this process: (exit code, stdout, stderr)."""
+    """ffrmbs_app.cli.main(argv) in this process: (exit code, stdout, stderr)."""
     out, err = io.StringIO(), io.StringIO()
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
         code = cli.main([str(a) for a in argv])
@@ -126,7 +126,7 @@ def test_a_fifo_as_the_result_file_is_named_and_not_opened(tmp_path, command):
     opened (a child process with a time limit: opening it would block)."""
     fifo = tmp_path / "run.h5"
     os.mkfifo(fifo)
-    res = subprocess.run([sys.executable, "-m", "ffrmbs.cli", command, str(fifo), "--out", str(tmp_path / "out")],
+    res = subprocess.run([sys.executable, "-m", "ffrmbs_app.cli", command, str(fifo), "--out", str(tmp_path / "out")],
                          capture_output=True, text=True, timeout=120, env=os.environ | {"PYTHONPATH": REPO})
     assert res.returncode == 2 and res.stderr == f"ffrmbs: error: {fifo}: not a regular file (a FIFO)\n", res.stderr
     assert not (tmp_path / "out").exists()
@@ -225,7 +225,7 @@ def test_a_fifo_as_the_scene_file_is_named_and_not_opened(tmp_path, name):
     with a time limit)."""
     fifo = tmp_path / name
     os.mkfifo(fifo)
-    res = subprocess.run([sys.executable, "-m", "ffrmbs.cli", "run", str(fifo), "--out", str(tmp_path / "out")],
+    res = subprocess.run([sys.executable, "-m", "ffrmbs_app.cli", "run", str(fifo), "--out", str(tmp_path / "out")],
                          capture_output=True, text=True, timeout=120, env=os.environ | {"PYTHONPATH": REPO})
     assert res.returncode == 2, res.stderr
     assert res.stderr == f"ffrmbs: error: {fifo}: not a regular file (a FIFO)\n"
@@ -242,11 +242,11 @@ def test_a_directory_as_the_scene_file_is_named(tmp_path, name):
 
 
 def test_read_scene_refuses_a_fifo_without_opening_it(tmp_path):
-    """ffrmbs.scene_toml.read_scene called from Python (not through load_scene) on a
+    """ffrmbs_app.scene_toml.read_scene called from Python (not through load_scene) on a
     FIFO: refused at once (it blocked in read_bytes)."""
     fifo = tmp_path / "scene.toml"
     os.mkfifo(fifo)
-    code = ("import sys\nfrom ffrmbs.errors import InputFileError\nfrom ffrmbs.scene_toml import read_scene\n"
+    code = ("import sys\nfrom ffrmbs.errors import InputFileError\nfrom ffrmbs_app.scene_toml import read_scene\n"
             "try:\n    read_scene(sys.argv[1])\nexcept InputFileError as exc:\n    print(exc)\n")
     res = subprocess.run([sys.executable, "-c", code, str(fifo)], capture_output=True, text=True, timeout=60)
     assert "not a regular file (a FIFO)" in res.stdout, res.stdout + res.stderr

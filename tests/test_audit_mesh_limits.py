@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ffrmbs.cli import main
+from ffrmbs_app.cli import main
 from ffrmbs.errors import InputFileError, ModelError
 from preprocess import Material, build_body, fe, limits, read_mesh
 from preprocess.geometry import box, stepped_beam
@@ -43,7 +43,7 @@ def run_bounded(argv, cwd, timeout=30):
 
 def preprocess_bounded(spec, tmp_path, *options):
     """``ffrmbs preprocess spec`` in a bounded child process: (exit status, error lines, stderr)."""
-    res = run_bounded(["-m", "ffrmbs.cli", "preprocess", spec, "--modes", "2", "--free", *MATERIAL,
+    res = run_bounded(["-m", "ffrmbs_app.cli", "preprocess", spec, "--modes", "2", "--free", *MATERIAL,
                        "--out", str(tmp_path / "out"), *options], tmp_path)
     errors = [line for line in res.stderr.splitlines() if line.startswith("ffrmbs: error:")]
     return res.returncode, errors, res.stderr

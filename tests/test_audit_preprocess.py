@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from ffrmbs.cli import main
+from ffrmbs_app.cli import main
 from ffrmbs import errors
 from ffrmbs.errors import InputFileError, ModelError
 from preprocess import Material, build_body, read_body, read_mesh, write_body
@@ -93,7 +93,7 @@ def test_info_on_a_body_directory_prints_the_surface_nodes(small_body, body_dir,
 
 
 def test_a_scene_body_given_as_a_directory_keeps_its_node_groups(body_dir):
-    from ffrmbs.scene_toml import read_scene
+    from ffrmbs_app.scene_toml import read_scene
 
     scene_file = body_dir.parent / "scene.toml"
     scene_file.write_text(textwrap.dedent("""\

@@ -25,8 +25,8 @@ import meshio
 import numpy as np
 import pytest
 
-from ffrmbs import cli
-from ffrmbs.export import export_paraview
+from ffrmbs_app import cli
+from ffrmbs_app.export import export_paraview
 from mbs import FlexibleBodyFFR, System
 from mbs.result_file import ResultRecorder, load_result
 from preprocess import Material, build_body
@@ -82,7 +82,7 @@ PNG = b"\x89PNG\r\n\x1a\n"
 
 
 def run_cli(*argv) -> tuple[int, str, str]:
-    """ffrmbs.cli.main(argv) in this process: (exit code, stdout, stderr)."""
+    """ffrmbs_app.cli.main(argv) in this process: (exit code, stdout, stderr)."""
     out, err = io.StringIO(), io.StringIO()
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
         code = cli.main(list(argv))
@@ -146,7 +146,7 @@ def test_default_and_example_scene_name_and_mean_their_outputs_alike(default_run
     """The same names in both files, and node19 the same quantity in both: node 19's
     displacement Φ_19 q_f, from the beam's body data and the file's modal coordinates (its
     position would add (0.25, 0.05, 0.025) m)."""
-    from validation.scenes import point_mass_beam as pmb
+    from ffrmbs_app.scenes import point_mass_beam as pmb
 
     data = pmb.default_beam_data()
     j = data.node_at(pmb.NODE_19)
@@ -185,7 +185,7 @@ def test_every_dataset_has_units(request, which):
 
 
 def test_plot_axes_carry_the_units(default_run):
-    from ffrmbs.plot import result_figure
+    from ffrmbs_app.plot import result_figure
 
     fig = result_figure(default_run[0] / "point_mass_beam.h5", ["y", "vy", "node19", "energy"])
     assert [ax.get_ylabel() for ax in fig.axes[:4]] == ["y [m]", "vy [m/s]", "node19 [m]", "energy [J]"]
@@ -341,7 +341,7 @@ def test_kill_9_at_random_moments_leaves_a_readable_file(tmp_path):
     for i, (after, delay) in enumerate(moments):
         out = tmp_path / f"kill{i}"
         path = out / "point_mass_beam.h5"
-        proc = subprocess.Popen([sys.executable, "-m", "ffrmbs.cli", "run", str(scene), "--no-check", "--no-export",
+        proc = subprocess.Popen([sys.executable, "-m", "ffrmbs_app.cli", "run", str(scene), "--no-check", "--no-export",
                                  "--out", str(out)], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, env=ENV)
         if after == "file":
             wait_for(path.exists, proc)

@@ -39,7 +39,7 @@ def test_a_checkpoint_of_the_older_unsigned_format_is_named_as_such(tmp_path):
 
 
 def _help(argv, capsys):
-    from ffrmbs.cli import build_parser
+    from ffrmbs_app.cli import build_parser
 
     with pytest.raises(SystemExit):
         build_parser().parse_args([*argv, "--help"])
@@ -47,7 +47,7 @@ def _help(argv, capsys):
 
 
 def test_the_no_limits_help_gives_the_limits_in_force(monkeypatch, capsys):
-    from ffrmbs import limits as run_limits
+    from ffrmbs_app import limits as run_limits
     from preprocess import limits as mesh_limits
 
     monkeypatch.setattr(mesh_limits, "MAX_NODES", 7_000)
@@ -59,7 +59,7 @@ def test_the_no_limits_help_gives_the_limits_in_force(monkeypatch, capsys):
 
 
 def test_both_limits_say_how_to_lift_them_in_one_wording():
-    from ffrmbs import limits as run_limits
+    from ffrmbs_app import limits as run_limits
     from preprocess import limits as mesh_limits
 
     assert mesh_limits.LIFT == "pass --no-limits (check_limits=False from Python) to run it anyway"
@@ -70,8 +70,8 @@ def test_both_limits_say_how_to_lift_them_in_one_wording():
     ("moreau", {}, True), ("moreau-adaptive", {}, True), ("moreau", {"trace": False}, False),
     ("moreau", {"trace": True}, True), ("rk4", {}, False), ("generalized-alpha", {}, False)])
 def test_a_scene_says_whether_its_run_keeps_a_trace_and_the_limits_count_it(integrator, options, traced):
-    from ffrmbs.limits import TRACE_BYTES, estimate
-    from ffrmbs.scene import Scene
+    from ffrmbs_app.limits import TRACE_BYTES, estimate
+    from ffrmbs_app.scene import Scene
     from mbs import PointMass, System
     from mbs.integrators.moreau import TRACE_KEYS
 
@@ -83,7 +83,7 @@ def test_a_scene_says_whether_its_run_keeps_a_trace_and_the_limits_count_it(inte
 
 
 def test_a_preprocess_checks_its_mesh_options_once_before_meshing(tmp_path, capsys, monkeypatch):
-    from ffrmbs.cli import main
+    from ffrmbs_app.cli import main
     from preprocess import pipeline
 
     calls = []

@@ -47,7 +47,7 @@ def scene_file(tmp_path, name="fall", t_end=0.01, dt=1e-3, n_out=11, gravity="[0
 
 
 def ffrmbs(*args, cwd=None):
-    return subprocess.run([sys.executable, "-m", "ffrmbs.cli", *map(str, args)], capture_output=True, text=True,
+    return subprocess.run([sys.executable, "-m", "ffrmbs_app.cli", *map(str, args)], capture_output=True, text=True,
                           env=ENV, cwd=cwd, timeout=600)
 
 
@@ -175,7 +175,7 @@ def test_a_mass_beyond_the_bound_is_refused(tmp_path):
 
 
 def run_python_scene(make, out):
-    from ffrmbs.job import run_scene
+    from ffrmbs_app.job import run_scene
 
     return run_scene(make, out, check=False, export=False, plot=False, log=lambda msg: None)
 
@@ -185,7 +185,7 @@ def test_a_diverging_spring_stops_the_run_and_the_file_says_failed(tmp_path):
     """A point mass on a spring of absurd stiffness (1e12 N/m on 1 kg: ω Δt = 1e3) integrated
     by RK4 grows by about (ω Δt)⁴/24 ≈ 4e10 a step: past 1e308 within ten steps."""
     from ffrmbs.errors import SimulationError
-    from ffrmbs.scene import Scene
+    from ffrmbs_app.scene import Scene
     from mbs import PointMass, SpringDamper, System, ground_frame
 
     def make():
@@ -212,7 +212,7 @@ def test_a_finite_state_whose_energy_overflows_is_not_complete(tmp_path):
     t = 0.962 s, while q and u stay finite. Sampled every 0.1 s: the samples t = 0 .. 0.9 s
     are kept and the run stops at the sample t = 1.0 s."""
     from ffrmbs.errors import SimulationError
-    from ffrmbs.scene import Scene
+    from ffrmbs_app.scene import Scene
     from mbs import PointMass, System
 
     def make():
@@ -231,7 +231,7 @@ def test_a_finite_state_whose_energy_overflows_is_not_complete(tmp_path):
 # --- 10: one run per result file -----------------------------------------------------------------
 
 def test_a_second_run_into_the_same_output_is_refused_with_the_pid(tmp_path):
-    from ffrmbs.output_lock import output_lock
+    from ffrmbs_app.output_lock import output_lock
 
     scene, out = scene_file(tmp_path), tmp_path / "out"
     with output_lock(out / "fall.h5"):                       # this process is the first run
@@ -277,7 +277,7 @@ def test_too_much_memory_is_refused_with_the_numbers(tmp_path):
     """The falling point mass holds per sample t, q (3), u (3), y and two energies: 10
     numbers, 80 bytes; with as many samples as the machine has bytes / 80 it would need all
     of the physical memory, four times the limit."""
-    from ffrmbs.limits import physical_memory
+    from ffrmbs_app.limits import physical_memory
 
     n_out = int(physical_memory()) // 80
     res = ffrmbs("run", scene_file(tmp_path, n_out=n_out), "--out", tmp_path / "out", "--no-check")
@@ -287,8 +287,8 @@ def test_too_much_memory_is_refused_with_the_numbers(tmp_path):
 
 
 def test_no_limits_lifts_both_limits(tmp_path):
-    from ffrmbs.limits import check_resources
-    from ffrmbs.scene import load_scene
+    from ffrmbs_app.limits import check_resources
+    from ffrmbs_app.scene import load_scene
 
     scene = load_scene(scene_file(tmp_path, t_end=1e9, n_out=10 ** 15))
     estimate = check_resources(scene, check=False, no_limits=True)
@@ -317,7 +317,7 @@ def test_a_scene_name_from_the_file_stem_is_checked_too(tmp_path):
 
 def test_a_model_script_scene_name_and_times_are_checked(tmp_path):
     from ffrmbs.errors import ModelError
-    from ffrmbs.scene import Scene
+    from ffrmbs_app.scene import Scene
     from mbs import System
 
     with pytest.raises(ModelError, match="the scene name '../up' is not a plain file stem"):
@@ -360,7 +360,7 @@ def test_the_scene_reader_quotes_a_force_file_short(tmp_path):
     """A nodal load whose force file is a password file: the message names the file, the
     line and the scene entry, and quotes 20 characters of it."""
     from ffrmbs.errors import InputFileError
-    from ffrmbs.scene_toml import read_scene
+    from ffrmbs_app.scene_toml import read_scene
 
     (tmp_path / "passwd").write_text("root:x:0:0:root:/root:/bin/bash\ndaemon:x:1:1:daemon:/usr/sbin\n")
     scene = tmp_path / "scene.toml"
@@ -375,7 +375,7 @@ def test_the_scene_reader_quotes_a_force_file_short(tmp_path):
 
 def test_the_scene_reader_quotes_its_own_strings_short(tmp_path):
     from ffrmbs.errors import InputFileError
-    from ffrmbs.scene_toml import read_scene
+    from ffrmbs_app.scene_toml import read_scene
 
     scene = scene_file(tmp_path)
     scene.write_text(scene.read_text().replace('"rk4"', '"\\u001b[2J' + "r" * 500 + '"'))

@@ -8,7 +8,7 @@ import sys
 
 import pytest
 
-from ffrmbs import cli
+from ffrmbs_app import cli
 from validation.bench import ffr_evaluation, runner
 from validation.bench import point_mass_beam as pmb_bench
 

@@ -12,7 +12,7 @@ from preprocess.textfiles import TEXT_FILES, read_text_body
 
 
 def ffrmbs(*args, cwd=None):
-    return subprocess.run([sys.executable, "-m", "ffrmbs.cli", *args], capture_output=True,
+    return subprocess.run([sys.executable, "-m", "ffrmbs_app.cli", *args], capture_output=True,
                           text=True, cwd=cwd, timeout=300)
 
 
@@ -106,7 +106,7 @@ def test_main_job_runs_the_point_mass_on_the_beam(tmp_path):
 
 
 def test_contact_intervals_from_a_trace():
-    from ffrmbs.job import contact_intervals
+    from ffrmbs_app.job import contact_intervals
 
     t = np.arange(1, 11) * 0.1
     closed = np.array([0, 1, 1, 0, 0, 1, 0, 0, 1, 1])

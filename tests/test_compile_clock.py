@@ -6,9 +6,9 @@ import numpy as np
 from numba import njit
 from numba.core import event
 
-from ffrmbs.compile_clock import CompileClock
-from ffrmbs.job import run_scene
-from ffrmbs.scene import Scene
+from ffrmbs_app.compile_clock import CompileClock
+from ffrmbs_app.job import run_scene
+from ffrmbs_app.scene import Scene
 from mbs import PointMass, System
 
 SLEEP_S = 0.3

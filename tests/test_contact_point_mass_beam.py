@@ -8,7 +8,7 @@ import pytest
 
 from validation.cases import contact_point_mass_beam as case
 from validation.harness import run_validation
-from validation.scenes import point_mass_beam as pmb
+from ffrmbs_app.scenes import point_mass_beam as pmb
 
 pytestmark = pytest.mark.slow   # seconds each: left out of the fast subset (-m "not slow")
 

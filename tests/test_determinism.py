@@ -17,7 +17,8 @@ SCRIPT = r'''
 import hashlib, json
 import numpy as np
 from mbs import FlexibleBodyFFR, System
-from validation.scenes import planner_scene, point_mass_beam as pmb, sliding_ball
+from ffrmbs_app.scenes import point_mass_beam as pmb, sliding_ball
+from validation.scenes import planner_scene
 
 def digest(res):
     h = hashlib.sha256()

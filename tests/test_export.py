@@ -14,10 +14,10 @@ import meshio
 import numpy as np
 import pytest
 
-import ffrmbs.export as export_mod
-from ffrmbs import cli
+import ffrmbs_app.export as export_mod
+from ffrmbs_app import cli
 from ffrmbs.errors import FfrmbsError, InputFileError, OutputFileError
-from ffrmbs.export import export_paraview
+from ffrmbs_app.export import export_paraview
 
 N = 5                                        # samples
 T = np.array([0.0, 0.1, 0.2, 0.3, 0.4])      # [s]

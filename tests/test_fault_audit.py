@@ -58,7 +58,7 @@ def test_the_case_table_covers_every_kind_with_at_least_102_cases():
 def test_bad_preprocess_options_reach_the_command(name, source, options, expect):
     """The bad value of an option appended to a valid command is the one the parser keeps (a
     repeated option keeps its last value; nothing after it overrides it)."""
-    from ffrmbs.cli import build_parser
+    from ffrmbs_app.cli import build_parser
 
     argv = [a.format(case="/c", shared="/s") for a in fa.all_cases_by_name()[f"mesh_{name}"].argv]
     args = build_parser().parse_args(argv)

@@ -13,7 +13,7 @@ from mbs.plan import INTEGRATED, MODAL_EXACT, SIMPLE_RB
 from validation.cases import _wobble as wb
 from validation.cases import ffr_free_flight as ff
 from validation.scenes import planner_scene as ps
-from validation.scenes import point_mass_beam as pmb
+from ffrmbs_app.scenes import point_mass_beam as pmb
 
 TIP_LOAD, OFF = np.array([0.0, -5.0, 0.0]), 5e-3          # [N], [s]
 

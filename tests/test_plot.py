@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 from matplotlib.image import imread
 
-from ffrmbs import cli
+from ffrmbs_app import cli
 from ffrmbs.errors import InputFileError
-from ffrmbs.plot import plot_result, result_figure
+from ffrmbs_app.plot import plot_result, result_figure
 
 T = np.linspace(0.0, 0.4, 41)
 

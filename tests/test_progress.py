@@ -4,8 +4,8 @@ import io
 
 import pytest
 
-from ffrmbs import cli
-from ffrmbs.progress import ENV_VAR, ProgressCallback, progress_bar, progress_enabled, stage_bar, write
+from ffrmbs_app import cli
+from ffrmbs_app.progress import ENV_VAR, ProgressCallback, progress_bar, progress_enabled, stage_bar, write
 
 
 class Terminal(io.StringIO):

@@ -148,7 +148,7 @@ def test_readme_python_snippets_compile_and_import():
 def _argv(words):
     """The process to start for a command's words, with this checkout's code, or None."""
     if words[0] == "ffrmbs":
-        return [sys.executable, "-m", "ffrmbs.cli", *words[1:]]
+        return [sys.executable, "-m", "ffrmbs_app.cli", *words[1:]]
     if words[0] in ("python3", "python"):
         return [sys.executable, *words[1:]]
     return None

@@ -1,4 +1,4 @@
-"""TOML scene files (ffrmbs.scene_toml): the same System as the Python API, and
+"""TOML scene files (ffrmbs_app.scene_toml): the same System as the Python API, and
 errors that name the file, the line and the key."""
 
 from __future__ import annotations
@@ -15,8 +15,8 @@ from contact import (ContactKinematicsPointContour2s, ContactKinematicsPointPlan
                      UnilateralCoulombContact, UnilateralNewtonImpact)
 from contours import Contour1sNeutralFFR, Contour2sNeutralFFR, FlexibleBand, FlexibleCylinder, PlaneContour
 from ffrmbs.errors import InputFileError
-from ffrmbs.scene import Scene, load_scene
-from ffrmbs.scene_toml import read_scene
+from ffrmbs_app.scene import Scene, load_scene
+from ffrmbs_app.scene_toml import read_scene
 from mbs import (DistributedForce, FlexibleBodyFFR, Force, Joint, NodalForces, PointMass, PrescribedFrameMotion,
                  RigidBody, SpringDamper, System, Tabulated, Torque, ground_frame, write_force_file)
 from preprocess import Material, build_body, read_body, write_body
@@ -38,10 +38,10 @@ def simulate(scene: Scene, outputs, t_end, n_out):
 
 def test_example_scene_is_bitwise_the_python_scene():
     """examples/scenes/point_mass_beam.toml and model_script.py against
-    validation.scenes.point_mass_beam.build("A", 20, "impact", 0.0, contour="2s"), run as the
+    ffrmbs_app.scenes.point_mass_beam.build("A", 20, "impact", 0.0, contour="2s"), run as the
     main job runs it (Moreau, θ = 0.5) for 15 ms. The point mass reaches the beam at about
     10 ms, so the run covers free flight and impact."""
-    from validation.scenes import point_mass_beam as pmb
+    from ffrmbs_app.scenes import point_mass_beam as pmb
 
     t_end, n_out = 0.015, 31
     reference = pmb.build("A", 20, "impact", 0.0, contour="2s")

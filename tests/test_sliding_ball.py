@@ -14,7 +14,7 @@ from scipy.integrate import solve_ivp
 
 from ffrmbs.errors import ModelError
 from validation.moving_load import CantileverEB, static_cantilever_deflection
-from validation.scenes import sliding_ball as sb
+from ffrmbs_app.scenes import sliding_ball as sb
 
 pytestmark = pytest.mark.slow   # seconds each: left out of the fast subset (-m "not slow")
 

@@ -10,7 +10,7 @@ import os
 import numpy as np
 import pytest
 
-from ffrmbs.cli import main
+from ffrmbs_app.cli import main
 from ffrmbs.errors import FfrmbsError, SimulationError
 from validation.stability import runner
 from validation.stability.core import StabilityCase, StabilityRow

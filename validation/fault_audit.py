@@ -2,7 +2,7 @@
 
 ``python3 -m validation.fault_audit --out DIR [--only KIND] [--jobs N] [--timeout S]``
 writes over a hundred bad inputs into ``DIR/cases/<case>/`` and runs each through
-``python3 -m ffrmbs.cli ...`` in its own process group (``FFRMBS_PROGRESS=0``, a time limit and
+``python3 -m ffrmbs_app.cli ...`` in its own process group (``FFRMBS_PROGRESS=0``, a time limit and
 an address-space limit of :data:`MEMORY_LIMIT` bytes, so that a run that would eat the
 machine dies instead). Each case is classified (:func:`classify`) as
 
@@ -19,7 +19,7 @@ A case that plants code (a pickle whose ``__reduce__`` runs ``touch MARKER``) is
 ``silent`` whenever the marker exists afterwards, whatever the exit status, and is flagged
 ``EXECUTED``.
 
-Kinds of bad inputs (``--only``): ``scene`` (TOML scene files, :mod:`ffrmbs.scene_toml`),
+Kinds of bad inputs (``--only``): ``scene`` (TOML scene files, :mod:`ffrmbs_app.scene_toml`),
 ``body`` (the thesis's text files and ``body.h5``, via ``ffrmbs info`` and via a scene),
 ``mesh`` (``ffrmbs preprocess`` inputs and options), ``run`` (options of the default
 scene, ``--resume`` with missing, damaged and planted checkpoints) and ``result``
@@ -763,8 +763,8 @@ def controls() -> list[Case]:
 # --- running ---------------------------------------------------------------------------------
 
 LAUNCH = ("import resource, runpy; resource.setrlimit(resource.RLIMIT_AS, ({0}, {0})); "
-          "runpy.run_module('ffrmbs.cli', run_name='__main__', alter_sys=True)").format(MEMORY_LIMIT)
-"""``python3 -c LAUNCH ARGS`` is ``python3 -m ffrmbs.cli ARGS`` with the address space bounded
+          "runpy.run_module('ffrmbs_app.cli', run_name='__main__', alter_sys=True)").format(MEMORY_LIMIT)
+"""``python3 -c LAUNCH ARGS`` is ``python3 -m ffrmbs_app.cli ARGS`` with the address space bounded
 (set in the child itself: ``preexec_fn`` is unsafe beside the runner's threads)."""
 
 

@@ -40,7 +40,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.ticker import NullFormatter
 
-from ffrmbs.compile_clock import CompileClock
+from ffrmbs_app.compile_clock import CompileClock
 from ffrmbs.errors import FfrmbsError, ModelError
 
 ROW_KEYS = ("case", "code", "config", "cpu_s", "error", "error_kind", "reference")
@@ -94,7 +94,7 @@ def timed(fn, *args, **kw):
     ``cpu_s`` [s] is the CPU time of this process (``time.process_time``: user + system,
     summed over all its threads, so a multi-threaded BLAS counts every core it uses;
     sleeping and waiting are not counted), less the time numba spent compiling kernels
-    or loading them from its cache during the call (:class:`ffrmbs.compile_clock.CompileClock`):
+    or loading them from its cache during the call (:class:`ffrmbs_app.compile_clock.CompileClock`):
     compilation is never run time.
     """
     with CompileClock() as clock:

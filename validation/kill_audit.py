@@ -45,7 +45,7 @@ ENV = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
 
 
 def command(out: Path, t_end: float, *extra) -> list[str]:
-    return [sys.executable, "-m", "ffrmbs.cli", "run", "--no-check", "--no-export", "--checkpoint-every", "0.5",
+    return [sys.executable, "-m", "ffrmbs_app.cli", "run", "--no-check", "--no-export", "--checkpoint-every", "0.5",
             "--t-end", repr(t_end), "--out", str(out), *extra]
 
 

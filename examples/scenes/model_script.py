@@ -1,15 +1,15 @@
 """A model script: the scene of ``point_mass_beam.toml`` written in Python.
 
-``ffrmbs run model_script.py`` calls :func:`scene` (see :mod:`ffrmbs.scene`). The script
+``ffrmbs run model_script.py`` calls :func:`scene` (see :mod:`ffrmbs_app.scene`). The script
 shows what each entry of the TOML file maps to. The scene is the thesis's point mass
 dropped on the clamped flexible beam (Sec. 5.2, setup A). SI units.
 """
 
 from contact import Contact, ContactKinematicsPointContour2s, UnilateralNewtonImpact
 from contours import Contour2sNeutralFFR, PointContour
-from ffrmbs.scene import Scene
+from ffrmbs_app.scene import Scene
 from mbs import FlexibleBodyFFR, PointMass, PrescribedFrameMotion, System
-from validation.scenes.point_mass_beam import default_beam_data
+from ffrmbs_app.scenes.point_mass_beam import default_beam_data
 
 
 def scene() -> Scene:

@@ -15,6 +15,6 @@ table with its target verdicts; writes ``DIR/<name>.json`` per benchmark and
 
 import sys
 
-from ffrmbs.cli import main
+from ffrmbs_app.cli import main
 
 sys.exit(main(["bench", *sys.argv[1:]]))

@@ -27,7 +27,7 @@ import numpy as np
 
 from validation.bench.common import machine, write_json
 from validation.scenes import planner_scene as ps
-from validation.scenes import point_mass_beam as pmb
+from ffrmbs_app.scenes import point_mass_beam as pmb
 
 DT = 1e-5
 

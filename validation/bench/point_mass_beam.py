@@ -4,7 +4,7 @@ Mode sweep (the issue-7 target): 20 modes, 0.1 s simulated at a fixed Δt = 1e-5
 (10 000 Moreau steps, θ = 0.5, the contact closed from 10 ms to ~38 ms) in under 0.5 s
 wall on a 2-core machine (the thesis's MBSim took 178 s for the comparable adaptive run
 in 2014, and 74 s for 0.05 s with the 2s contour, Table 5.3). Rows, on the default
-10 x 4 x 4 mesh (275 nodes, :func:`validation.scenes.point_mass_beam.default_beam_data`):
+10 x 4 x 4 mesh (275 nodes, :func:`ffrmbs_app.scenes.point_mass_beam.default_beam_data`):
 the 2s contour at 10, 20, 50 and 100 modes; the FlexibleBand at 20 modes; the adaptive
 integrator (atol 1e-7, largest step 1e-4 s) at 20 modes.
 
@@ -44,7 +44,7 @@ import time
 import numpy as np
 
 from validation.bench.common import divisions_arg, machine, write_json
-from validation.scenes import point_mass_beam as pmb
+from ffrmbs_app.scenes import point_mass_beam as pmb
 
 T_END, DT = 0.1, 1e-5                      # [s]
 TARGET_WALL_S = 0.5                        # [s] wall for 0.1 s at 20 modes (issue 7; issue 6 asked 2 s)

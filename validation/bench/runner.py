@@ -12,7 +12,7 @@ document) and ``DIR/summary.json``: the machine, the options and per benchmark i
 available`` — the module is not written yet, ``failed``), wall seconds, target verdicts,
 the path of its JSON and, on failure, the error with its traceback. A failing benchmark
 does not stop the others; the command exits with status 2 if any failed.
-``python3 -m validation.bench`` is ``ffrmbs bench`` (:mod:`ffrmbs.cli`), which calls
+``python3 -m validation.bench`` is ``ffrmbs bench`` (:mod:`ffrmbs_app.cli`), which calls
 :func:`run_benchmarks`.
 
 Registry and protocol: ``BENCHES`` maps a name to a module path; the module exposes
@@ -37,6 +37,7 @@ BENCHES = {
     "planned_vs_unplanned": "validation.bench.planner",
     "ffr_evaluation": "validation.bench.ffr_evaluation",
     "contour_evaluation": "validation.bench.contour_evaluation",
+    "step_cost": "validation.bench.step_cost",
 }
 
 

@@ -1,6 +1,6 @@
 """A point mass dropped on a clamped flexible beam (thesis Sec. 5.2, Fig. 5.4–5.13, Table 5.3).
 
-Scene: :mod:`validation.scenes.point_mass_beam` — beam 250 x 50 x 50 mm, ρ = 920 kg/m³,
+Scene: :mod:`ffrmbs_app.scenes.point_mass_beam` — beam 250 x 50 x 50 mm, ρ = 920 kg/m³,
 E = 50 MPa, ν = 0.3, clamped at x = 0 (our choice; the thesis leaves the support
 implicit), structured tet4 mesh with 275 nodes and 750 clamped modes; point mass 0.5 kg
 at (235, 52, 25) mm (setup A) or (235, 52, 40) mm (setup B), v = (0, −0.2, 0) m/s, no
@@ -35,9 +35,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ffrmbs.job import contact_intervals, energy_balance
+from ffrmbs_app.job import contact_intervals, energy_balance
 from validation import CaseResult, make_row, timed
-from validation.scenes import point_mass_beam as pmb
+from ffrmbs_app.scenes import point_mass_beam as pmb
 
 NAME = "contact_point_mass_beam"
 DESCRIPTION = ("thesis Sec. 5.2: point mass dropped on a clamped flexible beam; modes, integrator, law and "

@@ -1,6 +1,6 @@
 """The ball sliding on a flexible beam (thesis Sec. 5.3) and its analytic checks.
 
-Scene (:mod:`validation.scenes.sliding_ball`): a 1.5 x 0.05 x 0.05 m cantilever (E = 5e7
+Scene (:mod:`ffrmbs_app.scenes.sliding_ball`): a 1.5 x 0.05 x 0.05 m cantilever (E = 5e7
 Pa, ν = 0.3, ρ = 920 kg/m³; clamped at x = 0, frame fixed — our choice, the thesis leaves
 the support implicit), structured tet10 (30 x 1 x 1 divisions, 61 nodes on the centre
 axis), 20 or 100 clamped modes; a 1 kg ball (a point mass: its 0.001 kg m² rotation
@@ -64,7 +64,7 @@ from scipy.optimize import minimize_scalar
 
 from validation import CaseResult, make_row, timed
 from validation.moving_load import CantileverEB, static_cantilever_deflection
-from validation.scenes import sliding_ball as sb
+from ffrmbs_app.scenes import sliding_ball as sb
 
 NAME = "contact_sliding_ball"
 DESCRIPTION = ("ball sliding on a clamped flexible beam (thesis Sec. 5.3): moving-load oracle, ball frequency, "

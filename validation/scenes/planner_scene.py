@@ -1,7 +1,7 @@
 """A scene for the planner (:mod:`mbs.plan`): every rule has something to do.
 
 Built on the point mass dropped on the clamped beam (thesis Sec. 5.2, setup A,
-:mod:`validation.scenes.point_mass_beam`, 20 modes, Moreau), plus
+:mod:`ffrmbs_app.scenes.point_mass_beam`, 20 modes, Moreau), plus
 
 - a second point mass 1 m beside the beam, drifting at 0.1 m/s, with a contact pair
   against the same beam contour: **far from any contact**, the broad phase prunes the
@@ -20,7 +20,7 @@ from contact import Contact, ContactKinematicsPointContour2s, UnilateralNewtonIm
 from contours import PointContour
 from mbs import FlexibleBodyFFR, Force, PointMass, PrescribedFrameMotion, Tabulated
 
-from . import point_mass_beam as pmb
+from ffrmbs_app.scenes import point_mass_beam as pmb
 
 FAR_POSITION, FAR_VELOCITY = (0.1, 1.05, 0.025), (0.1, 0.0, 0.0)     # [m], [m/s]
 SECOND_BEAM_AT = (0.0, 0.0, -0.5)                                     # [m], its frame origin

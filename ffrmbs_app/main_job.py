@@ -1,6 +1,6 @@
 """The main job: the embedded default scene — the point mass dropped on the clamped
-flexible beam (thesis Sec. 5.2, setup A; :mod:`validation.scenes.point_mass_beam`) —
-run by ``ffrmbs run`` with no scene file, as a job of :mod:`ffrmbs.job`.
+flexible beam (thesis Sec. 5.2, setup A; :mod:`ffrmbs_app.scenes.point_mass_beam`) —
+run by ``ffrmbs run`` with no scene file, as a job of :mod:`ffrmbs_app.job`.
 
 Moreau time-stepping (θ = 0.5: no numerical damping of the elastic forces), 1001
 output samples of the point mass's y position ``y`` [m] and velocity ``vy`` [m/s], node
@@ -40,7 +40,7 @@ class JobSettings:
         """ModelError, one line naming every setting out of range: setup "A" or "B", modes
         >= 1 (at most the beam's modes, checked once it is built), law, contour, 0 <= e <=
         1, t_end [s] and dt [s] finite and > 0, dt < t_end, n_out >= 2."""
-        from validation.scenes.point_mass_beam import SETUPS
+        from ffrmbs_app.scenes.point_mass_beam import SETUPS
 
         def count(n, low):
             return isinstance(n, int) and not isinstance(n, bool) and n >= low
@@ -64,10 +64,10 @@ class JobSettings:
 
 
 def default_scene(settings: JobSettings, data=None):
-    """The default scene as a :class:`~ffrmbs.scene.Scene` (``data``: the beam's body data,
+    """The default scene as a :class:`~ffrmbs_app.scene.Scene` (``data``: the beam's body data,
     preprocessed and cached on first use when None)."""
-    from ffrmbs.scene import Scene
-    from validation.scenes import point_mass_beam as pmb
+    from ffrmbs_app.scene import Scene
+    from ffrmbs_app.scenes import point_mass_beam as pmb
 
     data = pmb.default_beam_data() if data is None else data
     if settings.modes > data.n_modes:
@@ -89,10 +89,10 @@ def default_scene(settings: JobSettings, data=None):
 
 def run_job(settings: JobSettings, out, log=print, resume=False, checkpoint_every=60.0, export=True,
             no_limits=False) -> dict:
-    """Run the default scene as a job (:func:`ffrmbs.job.run_scene`); return the summary.
+    """Run the default scene as a job (:func:`ffrmbs_app.job.run_scene`); return the summary.
     The settings are checked first (:meth:`JobSettings.validate`)."""
-    from ffrmbs.job import run_scene
-    from validation.scenes import point_mass_beam as pmb
+    from ffrmbs_app.job import run_scene
+    from ffrmbs_app.scenes import point_mass_beam as pmb
 
     settings.validate()
     data = pmb.default_beam_data(log=log)

@@ -1,6 +1,6 @@
 """A scene: one simulation job — a System with its initial state set, how to integrate it
 and what to record — as built by the default scene, a TOML scene file
-(:mod:`ffrmbs.scene_toml`) or a Python model script.
+(:mod:`ffrmbs_app.scene_toml`) or a Python model script.
 
 A model script is a Python file defining ``scene() -> Scene``; ``ffrmbs run model.py``
 calls it. :func:`load_scene` dispatches on the file's suffix.
@@ -104,7 +104,7 @@ def load_scene(path) -> Scene:
 
     path = regular_file(path)
     if path.suffix == ".toml":
-        from ffrmbs.scene_toml import read_scene
+        from ffrmbs_app.scene_toml import read_scene
 
         return read_scene(path)
     if path.suffix == ".py":
@@ -122,6 +122,6 @@ def _from_script(path: Path) -> Scene:
     except ModelError as exc:
         raise ModelError(f"{path}: scene(): {exc}") from None
     if not isinstance(scene, Scene):
-        raise InputFileError(path, None, f"scene() returned {type(scene).__name__}, not an ffrmbs.scene.Scene")
+        raise InputFileError(path, None, f"scene() returned {type(scene).__name__}, not an ffrmbs_app.scene.Scene")
     scene.inputs.setdefault("model script", str(path))
     return scene

@@ -22,7 +22,7 @@
   names and meanings as ``examples/scenes/point_mass_beam.toml``.
 
 The body data are preprocessed on first use and cached (:func:`default_beam_data`,
-:mod:`validation.scenes.cache`).
+:mod:`ffrmbs_app.scenes.cache`).
 """
 
 from __future__ import annotations
@@ -49,14 +49,14 @@ CONTACT = "impact"                                # the contact's name, whatever
 
 
 def recipe(divisions=DIVISIONS, modes="all") -> dict:
-    """The cache key of :func:`default_beam_data` (:func:`validation.scenes.cache.cached_body`)."""
+    """The cache key of :func:`default_beam_data` (:func:`ffrmbs_app.scenes.cache.cached_body`)."""
     return {"scene": "point_mass_beam", "size": [LENGTH, HEIGHT, WIDTH], "divisions": list(divisions),
             "material": [DENSITY, YOUNG, POISSON], "clamp": "x0", "modes": modes, "version": 1}
 
 
 def default_beam_data(log=None, divisions=DIVISIONS, modes="all"):
     """The beam's body data, preprocessed once and cached
-    (:func:`validation.scenes.cache.cached_body`).
+    (:func:`ffrmbs_app.scenes.cache.cached_body`).
 
     Default: the 10 x 4 x 4 mesh with all its clamped modes (dense eigensolve).
     ``divisions`` (nx, ny, nz) meshes the same 250 x 50 x 50 mm beam more finely (nz

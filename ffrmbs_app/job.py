@@ -2,15 +2,15 @@
 resume a killed run, estimate the accuracy, report the cost, write the plot and the
 ParaView export.
 
-The job, for a scene (:class:`ffrmbs.scene.Scene`) built fresh by ``make_scene()``:
+The job, for a scene (:class:`ffrmbs_app.scene.Scene`) built fresh by ``make_scene()``:
 
 0. the checks, before anything is written: the options, the step count and memory
-   (:mod:`ffrmbs.limits`), and the lock ``OUT/<scene>.lock`` held for the job
-   (:mod:`ffrmbs.output_lock`: one job per result file);
+   (:mod:`ffrmbs_app.limits`), and the lock ``OUT/<scene>.lock`` held for the job
+   (:mod:`ffrmbs_app.output_lock`: one job per result file);
 1. warm-up (the scene's ``warmup`` run, if any): a short run that compiles the numba
    kernels (or loads them from numba's disk cache) before the timed run. Compilation
    anywhere in the job is announced on its own line and measured apart
-   (:class:`ffrmbs.compile_clock.CompileClock`); it is reported as such and subtracted from
+   (:class:`ffrmbs_app.compile_clock.CompileClock`); it is reported as such and subtracted from
    the run's wall and CPU seconds, so the per-step cost never contains it;
 2. the run, streamed to ``OUT/<scene>.h5`` (:mod:`mbs.result_file`) with a checkpoint
    every ``checkpoint_every`` seconds of wall time; SIGINT and SIGTERM stop it at its next
@@ -26,8 +26,8 @@ The job, for a scene (:class:`ffrmbs.scene.Scene`) built fresh by ``make_scene()
    seconds, µs per step; energy at start and end; for Moreau runs the contact intervals,
    the largest penetration and the energy balance E(end) − E(0) − W of the impulses
    (:func:`energy_balance`); the final outputs; the error estimate;
-5. ``OUT/<scene>.png`` (the outputs against time, :mod:`ffrmbs.plot`; rewritten by
-   each run) and the ParaView series ``OUT/<scene>-paraview/`` (:mod:`ffrmbs.export`).
+5. ``OUT/<scene>.png`` (the outputs against time, :mod:`ffrmbs_app.plot`; rewritten by
+   each run) and the ParaView series ``OUT/<scene>-paraview/`` (:mod:`ffrmbs_app.export`).
 """
 
 from __future__ import annotations
@@ -40,11 +40,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ffrmbs.compile_clock import CompileClock
+from ffrmbs_app.compile_clock import CompileClock
 from ffrmbs.errors import ModelError
-from ffrmbs.limits import check_resources
-from ffrmbs.output_lock import output_lock
-from ffrmbs.scene import MOREAU
+from ffrmbs_app.limits import check_resources
+from ffrmbs_app.output_lock import output_lock
+from ffrmbs_app.scene import MOREAU
 from mbs.integrators import driver
 from mbs.result_file import ResultRecorder, resume_recording
 
@@ -110,8 +110,8 @@ def run_scene(make_scene, out, check=True, resume=False, checkpoint_every=60.0, 
 
     Refused before anything is written (ModelError): ``checkpoint_every`` [s] not a
     finite number > 0 (None: no checkpoints), or a scene over the step or memory limits
-    of :mod:`ffrmbs.limits` unless ``no_limits``. One job at a time writes a result file
-    (:mod:`ffrmbs.output_lock`); another is refused."""
+    of :mod:`ffrmbs_app.limits` unless ``no_limits``. One job at a time writes a result file
+    (:mod:`ffrmbs_app.output_lock`); another is refused."""
     scene = make_scene()                      # a bad scene stops here, before anything is written
     if checkpoint_every is not None and not (isinstance(checkpoint_every, (int, float))
                                              and math.isfinite(checkpoint_every) and checkpoint_every > 0):
@@ -157,11 +157,11 @@ def _run(make_scene, scene, path, check, resume, checkpoint_every, flush_every, 
     recorder.write_summary(summary)
     _report(summary, log)
     if plot:
-        from ffrmbs.plot import plot_result
+        from ffrmbs_app.plot import plot_result
 
         summary["plot"] = str(plot_result(path, out=path.with_suffix(".png")))
     if export:
-        from ffrmbs.export import export_paraview
+        from ffrmbs_app.export import export_paraview
 
         summary["paraview"] = str(export_paraview(path))
     summary["result_file"] = str(path)
@@ -188,7 +188,7 @@ def _estimate_text(name, e) -> str:
 
 
 def _progress(t_end):
-    from ffrmbs.progress import progress_bar
+    from ffrmbs_app.progress import progress_bar
 
     return progress_bar(t_end, "simulating", unit="s")
 

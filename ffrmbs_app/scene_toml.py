@@ -1,8 +1,8 @@
 """Scene files: one simulation job written in TOML.
 
-``read_scene(path)`` reads a scene file and returns a :class:`ffrmbs.scene.Scene`:
+``read_scene(path)`` reads a scene file and returns a :class:`ffrmbs_app.scene.Scene`:
 the :class:`mbs.System` with its initial state set, and how to integrate it and what
-to record. ``ffrmbs.scene.load_scene`` calls it for ``.toml`` files. Every entry maps
+to record. ``ffrmbs_app.scene.load_scene`` calls it for ``.toml`` files. Every entry maps
 onto the Python API (:mod:`mbs`, :mod:`contours`, :mod:`contact`). The physics is
 not implemented here. SI units throughout: m, kg, s, N, rad.
 
@@ -86,7 +86,7 @@ other keys take the default shown.
   ``source`` *req.* is a body directory (the thesis's text files, or ``body.h5``) or
   an ``.h5``/``.hdf5`` file. A relative path is taken from the scene file's
   directory. ``"builtin:point_mass_beam"`` and ``"builtin:sliding_ball"`` are the
-  cached thesis beams of :mod:`validation.scenes`.
+  cached thesis beams of :mod:`ffrmbs_app.scenes`.
   ``units`` ("si"): the unit system of text files (``"si-mm"``).
   ``modes``: a number n (the first n), a list of 0-based mode indices, or "all".
   Omitted, the body keeps all modes and the planner may drop some.
@@ -239,7 +239,7 @@ else:   # pragma: no cover - Python 3.10
     import tomli as tomllib
 
 from ffrmbs.errors import FfrmbsError, InputFileError, ModelError, os_reason, quote
-from ffrmbs.scene import Scene, name_fault
+from ffrmbs_app.scene import Scene, name_fault
 from preprocess.inputfiles import regular_file
 
 GROUND = "ground"
@@ -811,8 +811,8 @@ class _SceneReader:
         return self._sources[key]
 
     def _builtin(self, t: _Table, name, which):
-        from validation.scenes import point_mass_beam, sliding_ball
-        from validation.scenes.cache import cached_body_path
+        from ffrmbs_app.scenes import point_mass_beam, sliding_ball
+        from ffrmbs_app.scenes.cache import cached_body_path
 
         builtins = {"point_mass_beam": point_mass_beam, "sliding_ball": sliding_ball}
         if which not in builtins:
@@ -1351,7 +1351,7 @@ def _parse(path: Path, raw: bytes) -> tuple[str, dict]:
 
 
 def read_scene(path) -> Scene:
-    """The :class:`~ffrmbs.scene.Scene` of the TOML scene file ``path``. The schema is
+    """The :class:`~ffrmbs_app.scene.Scene` of the TOML scene file ``path``. The schema is
     in the module docstring.
 
     The whole file is checked first: its syntax, every key, its type and range, the

@@ -235,7 +235,7 @@ def export_paraview(result_path, out_dir=None, every=1, bodies=None, compress=Fa
     OutputFileError
         The export cannot be written (a full disk, no permission); nothing is left behind.
     """
-    from ffrmbs.progress import progress_bar
+    from ffrmbs_app.progress import progress_bar
 
     result_path = Path(result_path)
     if isinstance(every, bool) or not isinstance(every, (int, np.integer)) or every < 1:

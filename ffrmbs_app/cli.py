@@ -9,11 +9,11 @@ Subcommands
                 ParaView export): the default point mass on the flexible beam (thesis
                 Sec. 5.2), a TOML scene file or a Python model script
 ``bench``       every benchmark in one process: tables, target verdicts, JSON (validation.bench)
-``plot``        outputs, energy and contacts of a result file against time, as a PNG (ffrmbs.plot)
-``export``      a result file to ParaView: deformed surfaces over time, .pvd + .vtu (ffrmbs.export)
+``plot``        outputs, energy and contacts of a result file against time, as a PNG (ffrmbs_app.plot)
+``export``      a result file to ParaView: deformed surfaces over time, .pvd + .vtu (ffrmbs_app.export)
 
 Progress bars (preprocessing stages, export) are drawn on stderr only when it is a
-terminal; ``FFRMBS_PROGRESS=1`` forces them on, ``FFRMBS_PROGRESS=0`` off (ffrmbs.progress).
+terminal; ``FFRMBS_PROGRESS=1`` forces them on, ``FFRMBS_PROGRESS=0`` off (ffrmbs_app.progress).
 
 Errors the user can cause (:class:`ffrmbs.errors.FfrmbsError`) are printed as one
 line ``ffrmbs: error: …`` and exit with status 2, without a traceback. A reader that
@@ -45,13 +45,13 @@ def output_dir(text):
 
 def _say(msg):
     """One line of a job's report on stdout (kept clear of a progress bar being drawn)."""
-    from ffrmbs.progress import write
+    from ffrmbs_app.progress import write
 
     write(msg, sys.stdout)
 
 
 def _log(msg):
-    from ffrmbs.progress import write
+    from ffrmbs_app.progress import write
 
     write(msg, sys.stderr)      # print(..., flush=True), or above a progress bar being drawn
 
@@ -80,7 +80,7 @@ def _preprocess(spec, modes, clamp, units, density, young, poisson, order, mesh_
     from preprocess.bodyfiles import write_body
     from preprocess.pipeline import Material, build_body, check_n_modes, mesh_source, mesh_statistics
 
-    from ffrmbs.progress import stage_bar, write
+    from ffrmbs_app.progress import stage_bar, write
 
     material = Material(density, young, poisson)        # every option checked before meshing:
     check_n_modes(modes)                                # these here, the mesh options by mesh_source
@@ -123,11 +123,11 @@ def cmd_validate(args):
 
 
 def cmd_run(args):
-    """A scene as a job (:mod:`ffrmbs.job`): the default scene — the point mass dropped on
-    the flexible beam (:mod:`ffrmbs.main_job`) — or a TOML scene file / Python model
-    script (:mod:`ffrmbs.scene`)."""
-    from ffrmbs.job import run_scene
-    from ffrmbs.main_job import JobSettings, run_job
+    """A scene as a job (:mod:`ffrmbs_app.job`): the default scene — the point mass dropped on
+    the flexible beam (:mod:`ffrmbs_app.main_job`) — or a TOML scene file / Python model
+    script (:mod:`ffrmbs_app.scene`)."""
+    from ffrmbs_app.job import run_scene
+    from ffrmbs_app.main_job import JobSettings, run_job
 
     given = {k: getattr(args, k) for k in DEFAULT_SCENE_OPTIONS if getattr(args, k) is not None}
     common = dict(resume=args.resume, checkpoint_every=args.checkpoint_every, export=not args.no_export,
@@ -139,7 +139,7 @@ def cmd_run(args):
         if given:
             raise FfrmbsError(f"--{', --'.join(k.replace('_', '-') for k in given)}: options of the default "
                               f"scene; a scene file sets its own")
-        from ffrmbs.scene import load_scene
+        from ffrmbs_app.scene import load_scene
 
         summary = run_scene(lambda: load_scene(args.scene), args.out, check=not args.no_check, log=_say, **common)
     written = [summary["result_file"]] + [summary[k] for k in ("plot", "paraview") if k in summary]
@@ -163,15 +163,15 @@ def cmd_bench(args):
 
 
 def cmd_plot(args):
-    """Plot a result file's outputs, energy and contacts against time (:mod:`ffrmbs.plot`)."""
-    from ffrmbs.plot import plot_result
+    """Plot a result file's outputs, energy and contacts against time (:mod:`ffrmbs_app.plot`)."""
+    from ffrmbs_app.plot import plot_result
 
     print(f"wrote {plot_result(args.result, args.names or None, args.out, overwrite=args.overwrite)}")
 
 
 def cmd_export(args):
-    """Export a result file to ParaView (:mod:`ffrmbs.export`)."""
-    from ffrmbs.export import export_paraview
+    """Export a result file to ParaView (:mod:`ffrmbs_app.export`)."""
+    from ffrmbs_app.export import export_paraview
 
     pvd = export_paraview(args.result, args.out, every=args.every, bodies=args.body, compress=args.compress)
     print(f"wrote {pvd} (open it in ParaView: File > Open, Apply, then play)")
@@ -185,7 +185,7 @@ def _percent(share) -> str:
 def build_parser():
     from preprocess import limits as mesh_limits
 
-    from ffrmbs import limits as run_limits
+    from ffrmbs_app import limits as run_limits
 
     p = argparse.ArgumentParser(prog="ffrmbs", description=__doc__.split("\n")[0])
     p.add_argument("--version", action="version", version=f"ffrmbs {__version__}")
@@ -240,7 +240,7 @@ def build_parser():
     run.add_argument("--no-export", action="store_true", help="skip the ParaView export")
     run.add_argument("--no-limits", action="store_true",
                      help=f"run even beyond {run_limits.MAX_STEPS:.0e} time steps or "
-                          f"{_percent(run_limits.MEMORY_SHARE)} of the physical memory (ffrmbs.limits)")
+                          f"{_percent(run_limits.MEMORY_SHARE)} of the physical memory (ffrmbs_app.limits)")
     default = run.add_argument_group("default scene")
     default.add_argument("--setup", choices=("A", "B"), help="initial position of the point mass (default A)")
     default.add_argument("--modes", type=int, help="elastic modes of the beam (1..750, default 20)")

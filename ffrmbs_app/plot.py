@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from ffrmbs.errors import FfrmbsError, InputFileError, OutputFileError, os_reason
-from ffrmbs.export import _attr, _check_shape, _dataset, _group, open_result
+from ffrmbs_app.export import _attr, _check_shape, _dataset, _group, open_result
 
 COMPONENTS = ("x", "y", "z")
 SUBPLOT_HEIGHT = 2.4   # [in] per subplot

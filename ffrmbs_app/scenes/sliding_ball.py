@@ -37,7 +37,7 @@ Choices where the thesis is silent:
 
 The body data, with the first :data:`STORED_MODES` clamped modes, are preprocessed once
 and cached (:func:`default_beam_data`, like
-:func:`validation.scenes.point_mass_beam.default_beam_data`).
+:func:`ffrmbs_app.scenes.point_mass_beam.default_beam_data`).
 """
 
 from __future__ import annotations
@@ -68,7 +68,7 @@ DEGREE = 3
 
 
 def recipe() -> dict:
-    """The cache key of :func:`default_beam_data` (:func:`validation.scenes.cache.cached_body`)."""
+    """The cache key of :func:`default_beam_data` (:func:`ffrmbs_app.scenes.cache.cached_body`)."""
     return {"scene": "sliding_ball", "size": [LENGTH, HEIGHT, WIDTH], "divisions": list(DIVISIONS),
             "order": ORDER, "material": [DENSITY, YOUNG, POISSON], "clamp": "x0",
             "modes": STORED_MODES, "version": 1}
@@ -76,7 +76,7 @@ def recipe() -> dict:
 
 def default_beam_data(log=None):
     """The beam's body data with its first :data:`STORED_MODES` clamped modes,
-    preprocessed once and cached (:func:`validation.scenes.cache.cached_body`)."""
+    preprocessed once and cached (:func:`ffrmbs_app.scenes.cache.cached_body`)."""
     def build():
         from preprocess import Material, build_body
         from preprocess.geometry import box

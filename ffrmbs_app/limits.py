@@ -1,7 +1,7 @@
 """The resources of a job, bounded before anything is allocated: the number of time steps
 and the memory of the sample buffers and the per-step trace.
 
-A job (:func:`ffrmbs.job.run_scene`) keeps in memory, for its run and for the accuracy
+A job (:func:`ffrmbs_app.job.run_scene`) keeps in memory, for its run and for the accuracy
 check at Δt/2 (when ``check``): per output sample t, q, u, the outputs, the energies and
 each contact's record (active, gap, point, normal, force) — 8 bytes a number; per step
 of a Moreau run with ``trace`` the TRACE_KEYS records, each a Python float in a list and
@@ -30,7 +30,7 @@ LIFT = lift("no_limits=True")
 def estimate(scene, check=True) -> dict:
     """{"steps": time steps of the run (t_end / dt, float: may be huge), "sample_bytes":
     one output sample, "bytes": everything the job holds [bytes]} of a
-    :class:`ffrmbs.scene.Scene`."""
+    :class:`ffrmbs_app.scene.Scene`."""
     from mbs.body import Frame
     from mbs.integrators.moreau import TRACE_KEYS
 
