@@ -29,7 +29,7 @@ import numpy as np
 
 from .bounding_spheres import sphere_pair
 from .equations import Equations
-from .system_body_stage import SystemBodyStage
+from .body_stage import BodyStage
 
 N_FACTORS = 8          # Cholesky factors of a constant M̂ kept for different step sizes (+1)
 
@@ -44,7 +44,7 @@ class Model:
     equations : Equations
         M, h, tangents, constraints over the active bodies (allocating; implicit and
         explicit integrators).
-    body_stage : SystemBodyStage
+    body_stage : BodyStage
         The same terms written into Data's arrays (Moreau's body stage).
     nq, nu, n_c : int
     idle : tuple of bodies
@@ -79,7 +79,7 @@ class Model:
 
     system: object
     equations: Equations
-    body_stage: SystemBodyStage
+    body_stage: BodyStage
     nq: int
     nu: int
     n_c: int
@@ -133,7 +133,7 @@ def compile_model(system, plan=None, theta=0.5, solver=None) -> Model:
             if i not in owners:
                 owners.append(i)
     contours = tuple((k, tuple(owners), qs, us) for k, owners, qs, us in table)
-    return Model(system=system, equations=equations, body_stage=SystemBodyStage(equations),
+    return Model(system=system, equations=equations, body_stage=BodyStage.of_equations(equations),
                  nq=system.nq, nu=system.nu, n_c=system.n_c, idle=equations.idle, active_u=active_u,
                  theta=float(theta), solver=solver, constant_iteration=equations.constant_iteration_matrix,
                  prune=plan is not None, contacts=contacts, set_valued=set_valued,
