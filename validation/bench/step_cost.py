@@ -158,7 +158,10 @@ def run(quick: bool) -> dict:
     return benchmark(**(QUICK if quick else FULL))
 
 
-if __name__ == "__main__":
-    import sys as _sys
+def main(argv=None):
+    """Run the benchmark (command line ``argv``), print the table, write the JSON; return it."""
+    return bench_main(argv, "step_cost", run, __doc__, "two rounds of one run each, 0.02 s of the default scene")
 
-    bench_main(_sys.argv[1:], "step_cost", run, __doc__, "two rounds of one run each, 0.02 s of the default scene")
+
+if __name__ == "__main__":
+    main()
