@@ -383,3 +383,30 @@ def point_jacobian_T(A, T, u_bar, phi, free, f0, out):
     for c in range(3):
         for k in range(n_f):
             out[c, f0 + k] = A[c, 0] * phi[0, k] + A[c, 1] * phi[1, k] + A[c, 2] * phi[2, k]
+
+
+@njit(cache=True)
+def point_masses_mass(u_at, mass, M):
+    """The point masses' blocks m_p 1 (3, 3) of M at rows/columns u_at[p].. (the rest of
+    M untouched)."""
+    for p in range(u_at.shape[0]):
+        for c in range(3):
+            M[u_at[p] + c, u_at[p] + c] = mass[p]
+
+
+@njit(cache=True)
+def point_masses_h(u_at, force, h):
+    """The point masses' h (zero: no velocity-dependent or elastic forces) plus the
+    constant force[p] (3,) [N] (their gravity m g) into h at rows u_at[p].."""
+    for p in range(u_at.shape[0]):
+        for c in range(3):
+            h[u_at[p] + c] = 0.0 + force[p, c]
+
+
+@njit(cache=True)
+def point_masses_increment(q_at, u_at, q, du, out):
+    """out = q + Δu on the point masses' coordinates (q[q_at[p]..] and Δu[u_at[p]..], 3
+    each); ``out`` may be ``q``."""
+    for p in range(q_at.shape[0]):
+        for c in range(3):
+            out[q_at[p] + c] = q[q_at[p] + c] + du[u_at[p] + c]

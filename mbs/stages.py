@@ -42,6 +42,7 @@ from scipy.linalg.lapack import dpotrf, dpotrs
 from contact.laws import Bilateral
 from contact.solver import ContactSet
 
+from . import _stage_kernels as K
 from .step_failure import StepFailure
 
 STAGES = ("midpoint", "bodies", "contours", "detect", "constraints", "impulses", "velocity", "position")
@@ -70,26 +71,19 @@ def contours(model, data, dt):
     if not model.contacts:
         return
     t, q, u, live = data.t_m, data.q_m, data.u, data.live
-    if model.prune:
-        for i, pair in enumerate(model.spheres):
-            if pair is None:
-                continue
-            c1, r1 = pair[0](q, t)
-            c2, r2 = pair[1](q, t)
-            d = np.subtract(c1, c2, out=data.sphere_gap)
-            reach = r1 + r2 + model.contacts[i].margin
-            live[i] = not float(d @ d) > reach * reach
-            if not live[i]:
-                data.closed[i] = False
-                data.stats["pruned_contacts"] += 1
-    for contour, owners, qs, us in model.contours:
-        for i in owners:
-            if live[i]:
-                if qs is None:
-                    contour.update(None, None, t)
-                else:
-                    contour.update(q[qs], u[us], t)
-                break
+    if model.prune and len(model.spheres):
+        if not data.spheres_started:
+            model.spheres.start(q, t, data.sphere_centres, data.sphere_radii)
+            data.spheres_started = True
+        data.stats["pruned_contacts"] += model.spheres.prune(q, t, data.sphere_centres, data.sphere_radii, live,
+                                                             data.closed)
+    for j in range(K.contours_in_use(model.owner_at, model.owners, live, data.contour_idx)):
+        contour, owners, qs, us = model.contours[data.contour_idx[j]]
+        if qs is None:
+            contour.update(None, None, t)
+        else:
+            contour.update(q[qs], u[us], t)
+    data.n_live = K.live_contacts(live, data.live_idx)
 
 
 def detect(model, data, dt):
@@ -99,9 +93,9 @@ def detect(model, data, dt):
     n_closed = 0
     last = data.last
     m = model.n_c
-    for i, c in enumerate(model.contacts):
-        if not data.live[i]:
-            continue
+    for j in range(data.n_live):
+        i = data.live_idx[j]
+        c = model.contacts[i]
         closed = c.locate()
         data.closed[i] = closed
         if closed:
@@ -121,9 +115,9 @@ def detect(model, data, dt):
 def constraints(model, data, dt):
     """Stage 5: single-valued contact forces into h; M̂ factored; u_free; the contact
     problem (W, M̂⁻¹W, G, ξ_free, γ⁻, closing) of the joints and closed contacts."""
-    for i, c in enumerate(model.contacts):
-        if not model.set_valued[i] and data.live[i]:
-            data.force_N[i] = add_penalty_force(c, data.closed[i], data.h)
+    for i in model.single_valued:
+        if data.live[i]:
+            data.force_N[i] = add_penalty_force(model.contacts[i], data.closed[i], data.h)
     factor = iteration_factor(model, data, dt)
     if model.penalty:
         check_penalty(model, data, factor, dt)
