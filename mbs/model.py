@@ -81,6 +81,12 @@ class Model:
         The contacts with a single-valued law (their forces join h).
     m_max : int
         Rows of the largest contact problem: n_c + Σ dims.
+    blocks : (k, 2) int array or None
+        Rows [a, b) of each active body: M̂ is block diagonal with these blocks when no
+        force element has tangents (factored and solved block by block,
+        :mod:`mbs.linalg_kernels`); None: M̂ is factored whole (LAPACK).
+    idle_rows : int array
+        Rows of u of the bodies the plan solves apart (zero in every solve).
     """
 
     system: object
@@ -107,6 +113,8 @@ class Model:
     owners: np.ndarray
     single_valued: tuple
     m_max: int
+    blocks: np.ndarray | None
+    idle_rows: np.ndarray
 
     @property
     def n_act(self) -> int:
@@ -144,14 +152,22 @@ def compile_model(system, plan=None, theta=0.5, solver=None) -> Model:
     contours = tuple((k, tuple(owners), qs, us) for k, owners, qs, us in table)
     owner_at = np.cumsum([0] + [len(owners) for _, owners, _, _ in table]).astype(np.int64)
     owners = np.array([i for _, owners, _, _ in table for i in owners], dtype=np.int64)
-    return Model(system=system, equations=equations, body_stage=BodyStage.of_equations(equations),
+    body_stage = BodyStage.of_equations(equations)
+    blocks = None
+    if body_stage.constant_tangents:
+        blocks = np.array([[b.u_slice.start, b.u_slice.stop] for b in body_stage.active], dtype=np.int64)
+        blocks = blocks.reshape(-1, 2)
+    idle_rows = np.array([i for b in equations.idle for i in range(b.u_slice.start, b.u_slice.stop)],
+                         dtype=np.int64)
+    return Model(system=system, equations=equations, body_stage=body_stage,
                  nq=system.nq, nu=system.nu, n_c=system.n_c, idle=equations.idle, active_u=active_u,
                  theta=float(theta), solver=solver, constant_iteration=equations.constant_iteration_matrix,
                  prune=plan is not None, contacts=contacts, set_valued=set_valued,
                  unilateral=tuple(bool(c.unilateral) for c in contacts), dims=dims, lam_at=lam_at,
                  penalty=penalty, spheres=SphereTable(contacts) if plan is not None else None,
                  contours=contours, owner_at=owner_at, owners=owners,
-                 single_valued=tuple(i for i, sv in enumerate(set_valued) if not sv), m_max=system.n_c + sum(dims))
+                 single_valued=tuple(i for i, sv in enumerate(set_valued) if not sv), m_max=system.n_c + sum(dims),
+                 blocks=blocks, idle_rows=idle_rows)
 
 
 class Data:
@@ -171,7 +187,8 @@ class Data:
         for b in model.idle:
             np.fill_diagonal(self.M[b.u_slice, b.u_slice], 1.0)
         self.K, self.D = np.zeros((nu, nu)), np.zeros((nu, nu))
-        self.factors = []                   # [(step size, Cholesky factor of M̂ (n_act, n_act), Fortran order)]
+        self.factors = []                   # [(step size, Cholesky factor of M̂)]: (nu, nu) blockwise with
+                                            # model.blocks, else (n_act, n_act) Fortran order
         self.factor = None                  # the factor of this step
         self.u_free = np.zeros(nu)
         self.rhs = np.zeros(nu)             # M̂⁻¹ b on all rows

@@ -17,7 +17,8 @@ from mbs import rotations as rot
 from mbs.body_stage import BodyStage
 from mbs.equations import Equations
 from mbs.integrators.generalized_alpha import GeneralizedAlpha
-from mbs.linalg_kernels import cho_solve_into, cholesky_into
+from mbs.linalg_kernels import (block_cho_solve_matrix, block_cho_solve_vector, block_cholesky_into, cho_solve_into,
+                                cholesky_into)
 from preprocess import box, build_body
 from validation.cases.cantilever import MATERIAL
 
@@ -175,6 +176,32 @@ def test_cholesky_and_solves_equal_scipy(n):
     assert np.array_equal(b, x)
     A2 = A.copy()
     assert cholesky_into(A2, A2) == 0 and np.array_equal(A2, L)
+
+
+def test_block_cholesky_and_solves_equal_scipy_on_the_active_rows():
+    """A block-diagonal matrix with rows 5, 6 left out (idle): the block factor and
+    solves equal scipy's on the active rows and give zero on the idle ones."""
+    rng = np.random.default_rng(11)
+    blocks = np.array([[0, 3], [3, 5], [7, 11]], dtype=np.int64)
+    idle = np.array([5, 6], dtype=np.int64)
+    n = 11
+    A = np.zeros((n, n))
+    for a, b in blocks:
+        X = rng.normal(size=(b - a, b - a))
+        A[a:b, a:b] = X @ X.T + (b - a) * np.eye(b - a)
+    A[5:7, 5:7] = np.nan                          # never read
+    L = np.zeros((n, n))
+    assert block_cholesky_into(A, blocks, L) == 0
+    act = np.setdiff1d(np.arange(n), idle)
+    factor = scipy.linalg.cho_factor(A[np.ix_(act, act)])
+    b, B = rng.normal(size=n), rng.normal(size=(n, 3))
+    x, X_ = np.full(n, np.nan), np.full((n, 3), np.nan, order="F")
+    block_cho_solve_vector(L, blocks, idle, b, x)
+    block_cho_solve_matrix(L, blocks, idle, B, X_)
+    assert rel(x[act], scipy.linalg.cho_solve(factor, b[act])) < 1e-12 and not x[idle].any()
+    assert rel(X_[act], scipy.linalg.cho_solve(factor, B[act])) < 1e-12 and not X_[idle].any()
+    A[8, 8] = -1.0
+    assert block_cholesky_into(A, blocks, L) == 8 + 1
 
 
 def test_cholesky_reports_matrices_not_positive_definite():
