@@ -204,6 +204,7 @@ class Data:
         self.closed_idx = np.zeros(n, dtype=np.intp)
         self.n_closed = 0
         self.m = 0
+        self.problem_views = {}             # (nu, m) -> views of the buffers below (Data.problem)
         self.W_buf = np.zeros(nu * m)
         self.MW_buf = np.zeros(nu * m)
         self.W_act_buf = np.zeros(n_act * m)
@@ -231,7 +232,14 @@ class Data:
 
     def problem(self, nu, m):
         """Views (W (nu, m) C order, M̂⁻¹W (nu, m) Fortran order, G (m, m), Λ, γ⁺, ξ_free,
-        γ⁻, closing, offset, work (m,)) of the contact problem with m rows."""
+        γ⁻, closing, offset, work (m,)) of the contact problem with m rows, made once
+        per (nu, m) and kept in ``problem_views``."""
+        views = self.problem_views.get((nu, m))
+        if views is None:
+            views = self.problem_views[(nu, m)] = self._problem(nu, m)
+        return views
+
+    def _problem(self, nu, m):
         return (self.W_buf[:nu * m].reshape(nu, m), self.MW_buf[:nu * m].reshape(m, nu).T,
                 self.G_buf[:m * m].reshape(m, m), self.lam_buf[:m], self.gamma_plus_buf[:m],
                 self.xi_free_buf[:m], self.gamma_pre_buf[:m], self.closing_buf[:m], self.offset_buf[:m],
