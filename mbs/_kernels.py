@@ -451,3 +451,14 @@ def finite_sum(q, u):
     for i in range(u.shape[0]):
         s += u[i]
     return s
+
+
+@njit(cache=True)
+def free_quat_advance(q, u, step, du, out):
+    """Δu = step · u into ``du``, then q ⊕ Δu (:func:`free_quat_increment`) into ``out``
+    (may be ``q``) with its quaternion renormalized (:func:`normalize_quaternion`): a
+    whole position update of one free quaternion body, step [s]."""
+    for i in range(u.shape[0]):
+        du[i] = u[i] * step
+    free_quat_increment(q, du, out)
+    normalize_quaternion(out, 3)
