@@ -127,7 +127,7 @@ def constraints(model, data, dt):
     if m == 0:
         return
     nu, n_c = model.nu, model.n_c
-    W, MW, G, lam, gamma_plus, xi_free, gamma_pre, closing, offset, work = data.problem(nu, m)
+    W, MW, G, lam, gamma_plus, xi_free, gamma_pre, closing, offset = data.problem(nu, m)
     W.fill(0.0)
     closing.fill(0.0)
     offset.fill(0.0)
@@ -145,12 +145,7 @@ def constraints(model, data, dt):
             closing[row] = c.kinematics.g_N / dt
         row += dim
     solve_matrix(model, data, factor, W, MW)
-    np.matmul(W.T, MW, out=G)
-    np.matmul(W.T, data.u_free, out=xi_free)
-    xi_free += offset
-    xi_free += closing
-    np.matmul(W.T, data.u, out=gamma_pre)
-    gamma_pre += offset
+    K.contact_problem_into(W, MW, data.u_free, data.u, offset, closing, G, xi_free, gamma_pre)
 
 
 def impulses(model, data, dt):
@@ -162,7 +157,7 @@ def impulses(model, data, dt):
             data.warm.fill(False)            # nothing closed: no warm start, no resting contact
             data.warm_joints = False
         return
-    W, MW, G, lam, gamma_plus, xi_free, gamma_pre, closing, offset, work = data.problem(model.nu, m)
+    W, MW, G, lam, gamma_plus, xi_free, gamma_pre, closing, offset = data.problem(model.nu, m)
     warm_start(model, data, lam)
     it, residual, converged = model.solver.solve_into(contact_set(model, data), G, xi_free, gamma_pre, lam,
                                                       gamma_plus, data.solver_work[:, :m])
@@ -173,9 +168,7 @@ def impulses(model, data, dt):
     data.stats["solver_iterations"] += it
     last[2] += it
     last[3] = max(last[3], residual)
-    np.subtract(gamma_plus, closing, out=work)
-    work += gamma_pre
-    last[4] += 0.5 * float(lam @ work)
+    last[4] += K.impulse_work(lam, gamma_plus, closing, gamma_pre)
     keep_warm_start(model, data, lam)
 
 
@@ -187,8 +180,7 @@ def velocity(model, data, dt):
         data.u[:] = data.u_free
     else:
         W, MW, G, lam = data.problem(model.nu, m)[:4]
-        np.matmul(MW, lam, out=data.work_u)
-        np.add(data.u_free, data.work_u, out=data.u)
+        K.velocity_into(data.u_free, MW, lam, data.u)
     data.stats["closed_contacts"] += data.n_closed
     if data.n_closed > data.last[0]:
         data.last[0] = data.n_closed
