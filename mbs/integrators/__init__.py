@@ -20,10 +20,10 @@ from .generalized_alpha import GeneralizedAlpha
 from .moreau import AdaptiveMoreauTimeStepping, MoreauTimeStepping
 
 INTEGRATORS = Registry("integrator")
-INTEGRATORS.register("generalized-alpha", GeneralizedAlpha)
-INTEGRATORS.register("rk4", RK4)
 INTEGRATORS.register("moreau", MoreauTimeStepping)
 INTEGRATORS.register("moreau-adaptive", AdaptiveMoreauTimeStepping)
+INTEGRATORS.register("generalized-alpha", GeneralizedAlpha)
+INTEGRATORS.register("rk4", RK4)
 
 
 def integrator_class(name):
