@@ -239,6 +239,7 @@ from contact import LAWS, SOLVERS, RegularizedCoulombFriction
 from mbs import BODIES, INTEGRATORS, JOINTS, LOADS, ROTATIONS, Tabulated
 from mbs.integrators import MoreauTimeStepping
 from mbs.joints import AXIS_KINDS
+from ffrmbs.registry import Registry
 from preprocess.units import UNIT_SYSTEMS
 
 GROUND = "ground"                   # the inertial frame's body name
@@ -261,7 +262,7 @@ class Key:
 
     type: "number" (a finite float [unit] in the bounds low/high, low exclusive when
     ``strict``), "integer" (64 bits, in low..high), "boolean", "string", "choice" (one of
-    ``choices``), "numbers" (an array of ``size`` finite numbers, any length >= 1 if
+    ``choices``: a tuple, or a registry whose names when the file is read are the choices), "numbers" (an array of ``size`` finite numbers, any length >= 1 if
     None, each >= low), "matrix3" (3 rows of 3 numbers [unit]), "table" (a sub-table),
     or "special" (a form read by the builder, described in ``doc``). default: the value
     when the key is absent, or :data:`REQUIRED`.
@@ -273,7 +274,7 @@ class Key:
     low: float | None = None
     strict: bool = False
     high: float | None = None
-    choices: tuple = ()
+    choices: tuple | Registry = ()
     size: int | None = None
     doc: str = ""
 
@@ -292,14 +293,12 @@ def _vector(default=None, unit="", doc=""):
 
 # --- [scene] ------------------------------------------------------------------------------------
 
-INTEGRATOR_NAMES = INTEGRATORS.names()
-
 SCENE = {
     "name": Key("string", None, doc="the file's stem when absent"),
     "description": Key("string", ""),
     "t_end": Key("number", unit="s", low=0.0, strict=True),
     "dt": Key("number", unit="s", low=0.0, strict=True),
-    "integrator": Key("choice", "moreau", choices=INTEGRATOR_NAMES),
+    "integrator": Key("choice", "moreau", choices=INTEGRATORS),
     "n_out": Key("integer", 101, low=2),
     "energies": Key("boolean", True),
     "plan": Key("boolean", True),
@@ -328,7 +327,7 @@ def option_keys(integrator: str) -> dict:
         elif isinstance(default, int):
             keys[name] = Key("integer", low=0)
         elif isinstance(default, str):
-            keys[name] = Key("choice", choices=SOLVERS.names()) if name == "solver" else Key("string")
+            keys[name] = Key("choice", choices=SOLVERS) if name == "solver" else Key("string")
         elif isinstance(default, (tuple, list)):
             keys[name] = Key("numbers", size=len(default))
         else:                       # float or None (an optional number)
@@ -338,9 +337,9 @@ def option_keys(integrator: str) -> dict:
 
 # --- [[body]] -----------------------------------------------------------------------------------
 
-BODY_HEAD = {"name": Key("string"), "kind": Key("choice", choices=BODIES.names())}
+BODY_HEAD = {"name": Key("string"), "kind": Key("choice", choices=BODIES)}
 _FREE_FRAME = {
-    "rotation": Key("choice", "quaternion", choices=ROTATIONS.names()),
+    "rotation": Key("choice", "quaternion", choices=ROTATIONS),
     "position": _vector(unit="m"),
     "orientation": Key("special", None, doc="a rotation matrix: three rows of three numbers"),
     "velocity": _vector(unit="m/s"),
@@ -391,21 +390,21 @@ SPRING = {
     "free_length": Key("number", unit="m", low=0.0),
 }
 JOINT = {
-    "kind": Key("choice", choices=JOINTS.names()),
+    "kind": Key("choice", choices=JOINTS),
     "frame1": Key("table"), "frame2": Key("table"),
     "axis": _vector(REQUIRED, doc=f"[-] in frame1's axes, for {' and '.join(AXIS_KINDS)} joints only"),
 }
 _TIME_FUNCTION = "a constant [x, y, z] or a table {times, values, kind, hold_first}"
 LOAD = {
-    "force": {"kind": Key("choice", choices=LOADS.names()), **FRAME,
+    "force": {"kind": Key("choice", choices=LOADS), **FRAME,
               "force": Key("special", unit="N", doc=_TIME_FUNCTION), "frame_fixed": Key("boolean", False)},
-    "torque": {"kind": Key("choice", choices=LOADS.names()), **FRAME,
+    "torque": {"kind": Key("choice", choices=LOADS), **FRAME,
                "torque": Key("special", unit="N m", doc=_TIME_FUNCTION), "frame_fixed": Key("boolean", False)},
-    "distributed": {"kind": Key("choice", choices=LOADS.names()), "body": FRAME["body"],
+    "distributed": {"kind": Key("choice", choices=LOADS), "body": FRAME["body"],
                     "nodes": Key("special", doc="a node-group name or a list of node indices"),
                     "weights": Key("numbers", None), "force": Key("special", unit="N", doc=_TIME_FUNCTION),
                     "frame_fixed": Key("boolean", True)},
-    "nodal": {"kind": Key("choice", choices=LOADS.names()), "body": FRAME["body"],
+    "nodal": {"kind": Key("choice", choices=LOADS), "body": FRAME["body"],
               "file": Key("string", doc="a force file, relative to the scene file"),
               "blocked": Key("special", None, doc="a node group or a list of nodes"),
               "frame_fixed": Key("boolean", True)},
@@ -422,7 +421,7 @@ TABULATED = {
 CONTACT = {
     "name": Key("string", None, doc='"contact <i>" when absent; unique'),
     "contour1": Key("table"), "contour2": Key("table"),
-    "law": Key("choice", choices=LAWS.names()),
+    "law": Key("choice", choices=LAWS),
     "margin": Key("special", "auto", unit="m", doc='a length >= 0, "auto" or "off"'),
 }
 _KIND = Key("choice", choices=())      # the kind of a contour: checked against CONTOUR1_KINDS or CONTOUR2_KINDS

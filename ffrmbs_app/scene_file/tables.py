@@ -103,7 +103,7 @@ class Table:
         if spec.type == "string":
             return self.string(key, default)
         if spec.type == "choice":
-            return self.choice(key, spec.choices, default)
+            return self.choice(key, tuple(spec.choices), default)
         if spec.type == "numbers":
             return self.numbers(key, spec.size, default, spec.unit, spec.low)
         if spec.type == "matrix3":
