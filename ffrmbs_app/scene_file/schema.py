@@ -382,7 +382,6 @@ FRAME = {
     "at": _vector(REQUIRED, "m"),
     "point": _vector(None, "m"),
 }
-FRAME_KEYS = tuple(FRAME)
 SPRING = {
     "frame1": Key("table"), "frame2": Key("table"),
     "stiffness": Key("number", unit="N/m", low=0.0),
@@ -448,7 +447,6 @@ CONTOUR = {
 }
 CONTOUR1_KINDS = ("point", "sphere")
 CONTOUR2_KINDS = ("2s", "1s", "band", "cylinder", "plane", "sphere")
-FLEXIBLE_CONTOURS = ("2s", "1s", "band", "cylinder")     # on a flexible body's nodes
 LAW_DEFAULTS = {"coulomb": {"e": 0.0}}                   # scene defaults where the law class has none
 
 
