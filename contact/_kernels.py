@@ -183,3 +183,21 @@ def prox_iterate(G, c, r, kinds, offsets, mu, lam, xi, r_work, jacobi, tol, max_
     v_terms = velocities(G, c, lam, xi)
     residual = prox_step(xi, r, kinds, offsets, mu, lam, False)
     return max_iter, residual, residual <= threshold(tol, c_ref, m, v_terms)
+
+
+@njit(cache=True)
+def diagonal_floor(G, tiny, d):
+    """diag(G) into ``d`` (m,) with rows that touch no mass (G_ii <= tiny · max G_jj)
+    replaced by max G_jj, all ones when no G_jj is positive (the diagonal scaling of
+    the prox factors; numpy reference :func:`contact.solver.diagonal_reference`)."""
+    d_max = 0.0
+    for i in range(d.shape[0]):
+        d[i] = G[i, i]
+        if d[i] > d_max:
+            d_max = d[i]
+    if d_max <= 0.0:
+        d[:] = 1.0
+        return
+    for i in range(d.shape[0]):
+        if not d[i] > tiny * d_max:
+            d[i] = d_max

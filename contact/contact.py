@@ -14,7 +14,8 @@
   ``RegularizedCoulombFriction``): a force W_N F_N + W_T F_T added to h.
 
 :class:`CurveConstraint` keeps a point on a curve (bilateral, 2 rows; thesis Sec. 5.3).
-The integrator updates every contour once per step before ``detect``.
+The integrator updates every contour once per step before ``locate``
+(:mod:`mbs.stages`).
 
 Broad phase (:mod:`contact.broad_phase`): ``detect`` first compares the two contours'
 bounding boxes, each grown by ``margin`` [m]; only overlapping pairs reach the search.
@@ -66,7 +67,7 @@ class Contact:
         if self.margin is not None and not self.margin >= 0.0:
             raise ModelError(f"{name}: margin must be >= 0 [m], 'auto' or None, got {margin!r}")
         self.margin = None if self.margin is None else float(self.margin)
-        self._box1, self._box2 = np.zeros((2, 3)), np.zeros((2, 3))
+        self.box1, self.box2 = np.zeros((2, 3)), np.zeros((2, 3))     # broad-phase workspaces
 
     def bodies(self):
         return [c.body for c in self.contours() if c.body is not None]
@@ -79,14 +80,19 @@ class Contact:
         """max(0, −g_N) [m] at the last detection."""
         return max(0.0, -self.kinematics.g_N) if self.closed else 0.0
 
-    def detect(self) -> bool:
-        """Locate the contact on the updated contours; closed when found and g_N <= 0."""
+    def locate(self) -> bool:
+        """Locate the contact on the updated contours: False when the broad phase (the
+        contours' bounding boxes grown by the margin) separates them; else the search,
+        closed when found with g_N <= closing_tol. The kinematics hold the result."""
         k = self.kinematics
-        if self.margin is not None and not boxes_overlap(k.contour1.bounding_box(self._box1),
-                                                         k.contour2.bounding_box(self._box2), self.margin):
-            self.closed = False
+        if self.margin is not None and not boxes_overlap(k.contour1.bounding_box(self.box1),
+                                                         k.contour2.bounding_box(self.box2), self.margin):
             return False
-        self.closed = bool(k.update(velocity=not self.set_valued, jacobians=True)) and k.g_N <= self.closing_tol
+        return bool(k.update(velocity=not self.set_valued, jacobians=True)) and k.g_N <= self.closing_tol
+
+    def detect(self) -> bool:
+        """:meth:`locate`, the result kept in :attr:`closed`."""
+        self.closed = self.locate()
         return self.closed
 
     def jacobian(self, out) -> None:
@@ -143,10 +149,15 @@ class CurveConstraint:
 
     penetration = 0.0
 
-    def detect(self) -> bool:
-        self.closed = bool(self.kinematics.update(velocity=False, jacobians=True))
-        if not self.closed:
+    def locate(self) -> bool:
+        """Locate the point on the curve; ModelError when it left the curve's domain."""
+        if not self.kinematics.update(velocity=False, jacobians=True):
             raise ModelError(f"{self.name}: the point left the curve's domain")
+        return True
+
+    def detect(self) -> bool:
+        """:meth:`locate`, the result kept in :attr:`closed`."""
+        self.closed = self.locate()
         return True
 
     def jacobian(self, out) -> None:

@@ -115,10 +115,11 @@ class ContactSet:
         self.entry_offsets = np.array(entry_offsets, dtype=np.int64)
         self.mu = np.array(mu, dtype=float)
         self.frictional = bool(np.any(self.kinds == kern.COULOMB))
+        self.tangent_at = self.entry_offsets[self.kinds == kern.COULOMB] + 1
 
     def tangent_rows(self):
         """First tangential row (T1) of every Coulomb contact, (n_c,) int."""
-        return self.entry_offsets[self.kinds == kern.COULOMB] + 1
+        return self.tangent_at
 
 
 @dataclass
@@ -208,38 +209,56 @@ class ProxSolver:
             G, xi_free, gamma_pre, lam = _checked(cs, G, xi_free, gamma_pre, lam0)
         else:
             lam = lam0
+        gamma_plus = np.empty(cs.m)
+        it, residual, converged = self.solve_into(cs, G, xi_free, gamma_pre, lam, gamma_plus,
+                                                  np.empty((4, cs.m)))
+        return ContactSolution(lam, gamma_plus, it, residual, converged)
+
+    def solve_into(self, cs, G, xi_free, gamma_pre, lam, gamma_plus, work):
+        """:meth:`solve` on consistent float arrays without validation: Λ in place in
+        ``lam`` (its warm start on entry), γ⁺ = ξ_free + G Λ into ``gamma_plus``,
+        ``work`` (4, m) scratch; returns (iterations, residual [m/s], converged). The
+        Gauss–Seidel method with automatic r allocates nothing."""
         if self.method == "newton" and cs.frictional:
             raise ModelError("ProxSolver: method 'newton' covers unilateral and bilateral "
                              "contacts only; use 'gauss-seidel' with friction")
-        c = xi_free + cs.restitution * gamma_pre
+        c, r, xi, r_work = work[0], work[1], work[2], work[3]
+        np.multiply(cs.restitution, gamma_pre, out=c)
+        np.add(xi_free, c, out=c)
         if not np.any(c):               # Λ = 0 solves every law
-            lam[:] = 0.0
-            return ContactSolution(lam, xi_free.copy(), 0, 0.0, True)
+            lam.fill(0.0)
+            gamma_plus[:] = xi_free
+            return 0, 0.0, True
         if self.method == "newton":
             it, residual, converged = self._newton(cs, G, c, _diagonal(G) ** -1.0, lam)
         else:
-            r = self._prox_factors(cs, G)
+            self._prox_factors(cs, G, r)
             it, residual, converged = kern.prox_iterate(
-                G, c, r, cs.kinds, cs.entry_offsets, cs.mu, lam, np.empty(cs.m),
-                np.empty(cs.m), self.method == "jacobi", self.tol, self.max_iter)
-        return ContactSolution(lam, xi_free + G @ lam, int(it), float(residual),
-                               bool(converged))
+                G, c, r, cs.kinds, cs.entry_offsets, cs.mu, lam, xi, r_work, self.method == "jacobi",
+                self.tol, self.max_iter)
+        np.matmul(G, lam, out=gamma_plus)
+        np.add(xi_free, gamma_plus, out=gamma_plus)
+        return int(it), float(residual), bool(converged)
 
-    def _prox_factors(self, cs, G):
-        """r (m,) [kg] of the prox methods (module docstring)."""
+    def _prox_factors(self, cs, G, r):
+        """r (m,) [kg] of the prox methods (module docstring) into ``r``."""
         if self.r != "auto":
-            return np.full(cs.m, self.r)
-        d = _diagonal(G)
+            r[:] = self.r
+            return
+        kern.diagonal_floor(G, TINY_DIAGONAL, r)
         alpha = self.relaxation
         if self.method == "jacobi":
-            s = np.sqrt(d)
+            s = np.sqrt(r)
             alpha /= np.max(np.sum(np.abs(G) / np.outer(s, s), axis=1))
-        r = alpha / d
-        for t in cs.tangent_rows():
-            a, b, e = G[t, t], G[t, t + 1], G[t + 1, t + 1]
-            lam_max = 0.5 * (a + e) + math.hypot(0.5 * (a - e), b)
-            r[t:t + 2] = alpha / max(lam_max, d[t], d[t + 1])
-        return r
+        if cs.tangent_at.size:
+            d = r.copy()
+            np.divide(alpha, d, out=r)
+            for t in cs.tangent_at:
+                a, b, e = G[t, t], G[t, t + 1], G[t + 1, t + 1]
+                lam_max = 0.5 * (a + e) + math.hypot(0.5 * (a - e), b)
+                r[t:t + 2] = alpha / max(lam_max, d[t], d[t + 1])
+        else:
+            np.divide(alpha, r, out=r)
 
     def _newton(self, cs, G, c, r, lam):
         """Fischer–Burmeister semismooth Newton (module docstring); Λ in place."""
@@ -292,7 +311,8 @@ class ProxSolver:
 
 
 def _diagonal(G):
-    """diag(G) with rows that touch no mass (G_ii ≈ 0) replaced by max G_jj (or 1)."""
+    """diag(G) with rows that touch no mass (G_ii ≈ 0) replaced by max G_jj (or 1)
+    (the numpy reference of :func:`contact._kernels.diagonal_floor`)."""
     d = np.diag(G).copy()
     d_max = float(np.max(d, initial=0.0))
     if d_max <= 0.0:

@@ -1,10 +1,12 @@
 """System: bodies and links assembled into M(q) u̇ = h(q, u, t) + W λ, g(q, t) = 0.
 
 The System owns the flat state arrays: q (nq,) and u (nu,) with q̇ = Y(q) u (thesis
-eq. 3.1a); every body gets its slices when added. It assembles the block-diagonal mass
-matrix, the smooth forces h (bodies' Q_v − K q − D u, gravity, force elements), the
-constraint residuals g, their Jacobian C_q (W = C_qᵀ) and accelerations terms γ,
-and reports energies and momenta. ``simulate`` runs an integrator of
+eq. 3.1a); every body gets its slices when added. Its equations of motion — the
+block-diagonal mass matrix, the smooth forces h (bodies' Q_v − K q − D u, gravity,
+force elements), the constraint residuals g, their Jacobian C_q (W = C_qᵀ) and
+acceleration terms γ, energies — come from :class:`~mbs.equations.Equations` over all
+its bodies; a run compiles the System into a :class:`~mbs.model.Model` and never
+mutates it. ``simulate`` runs an integrator of
 :mod:`mbs.integrators` and returns a :class:`~mbs.result.Result`.
 
 Example::
@@ -20,12 +22,12 @@ from __future__ import annotations
 import logging
 
 import numpy as np
-import scipy.linalg
 
 from ffrmbs.errors import ModelError
 
 from .body import Body, Frame, ground_frame
-from .link import Constraint, ForceElement, add_point_force, body_q
+from .equations import Equations
+from .link import Constraint, ForceElement
 
 
 class System:
@@ -39,9 +41,8 @@ class System:
         self.contacts: list = []  # contact.Contact, contact.CurveConstraint (Moreau time-stepping)
         self.ground = ground_frame()
         self.nq = self.nu = self.n_c = 0
-        self._com = []
-        self._idle = ()     # bodies a planned run solves apart (mbs.plan), left out of the equations
-        self._idle_forces = ()
+        self.com_frames = []     # each body's centre-of-mass frame (gravity)
+        self._equations = None
 
     # --- building -----------------------------------------------------------------------
     def add(self, item):
@@ -54,7 +55,7 @@ class System:
             self.nq += item.nq
             self.nu += item.nu
             self.bodies.append(item)
-            self._com.append(item.com_frame())
+            self.com_frames.append(item.com_frame())
         elif isinstance(item, (ForceElement, Constraint)) or getattr(item, "is_contact", False):
             for body in item.bodies():
                 if body is not None and body not in self.bodies:
@@ -85,28 +86,25 @@ class System:
         u = np.concatenate([b.u_init for b in self.bodies])
         return q, u
 
+    def equations(self):
+        """The :class:`~mbs.equations.Equations` of all bodies and force elements (rebuilt
+        when the System grows)."""
+        key = (len(self.bodies), len(self.forces), len(self.constraints))
+        if self._equations is None or self._equations[0] != key:
+            self._equations = (key, Equations(self))
+        return self._equations[1]
+
     def qdot(self, q, u):
         """q̇ = Y(q) u (thesis eq. 3.1a)."""
-        out = np.empty(self.nq) if not self._idle else np.zeros(self.nq)
-        for b in self._active():
-            out[b.q_slice] = b.qdot(q[b.q_slice], u[b.u_slice])
-        return out
+        return self.equations().qdot(q, u)
 
     def increment(self, q, du):
-        """q ⊕ Δu, exact for rotations (exponential map); idle bodies keep their q
-        (their Δu is zero). One vector sum when no active body has rotation coordinates."""
-        active = self._active()
-        if all(b.additive for b in active):
-            return q + du
-        out = np.empty(self.nq) if not self._idle else q.copy()
-        for b in active:
-            out[b.q_slice] = b.increment(q[b.q_slice], du[b.u_slice])
-        return out
+        """q ⊕ Δu, exact for rotations (exponential map)."""
+        return self.equations().increment(q, du)
 
     def normalize(self, q):
-        for b in self._active():
-            if not b.additive:
-                b.normalize(q[b.q_slice])
+        """Renormalize the orientation coordinates in place."""
+        self.equations().normalize(q)
 
     # --- planned runs -------------------------------------------------------------------
     def plan(self, t_end, tolerance=None, outputs=None):
@@ -118,143 +116,59 @@ class System:
 
         return make_plan(self, t_end, TOLERANCE if tolerance is None else tolerance, outputs)
 
-    def leave_out(self, bodies=(), forces=()):
-        """Leave ``bodies`` and ``forces`` out of M, h, the tangents and the increments
-        (identity mass block, zero force) until the next call; ``leave_out()`` restores
-        all. A planned run leaves out the bodies it solves apart."""
-        self._idle, self._idle_forces = tuple(bodies), tuple(forces)
-        self._active_bodies = [b for b in self.bodies if b not in self._idle]
-        self._active_force_list = [f for f in self.forces if f not in self._idle_forces]
-
-    @property
-    def leaving_out(self) -> tuple:
-        """The bodies :meth:`leave_out` currently leaves out."""
-        return self._idle
-
-    def _active(self):
-        return self._active_bodies if self._idle else self.bodies
-
-    def _active_forces(self):
-        return self._active_force_list if self._idle_forces else self.forces
-
-    def _idle_identity(self, M):
-        for b in self._idle:
-            np.fill_diagonal(M[b.u_slice, b.u_slice], 1.0)
-
-    # --- dynamics -----------------------------------------------------------------------
+    # --- dynamics (:class:`~mbs.equations.Equations` over all bodies) ------------------
     def mass_matrix(self, t, q):
         """Block-diagonal M (nu, nu) [kg, kg m, kg m²]."""
-        M = np.zeros((self.nu, self.nu))
-        for b in self._active():
-            M[b.u_slice, b.u_slice] = b.mass_matrix(q[b.q_slice], t)
-        self._idle_identity(M)
-        return M
+        return self.equations().mass_matrix(t, q)
 
     def h(self, t, q, u):
         """Smooth generalized forces h (nu,): bodies' Q_v − K q − D u, gravity, links."""
-        out = np.empty(self.nu) if not self._idle else np.zeros(self.nu)
-        for b in self._active():
-            out[b.u_slice] = b.h(q[b.q_slice], u[b.u_slice], t)
-        self._add_external(t, q, u, out)
-        return out
+        return self.equations().h(t, q, u)
 
     def mass_and_h(self, t, q, u):
         """(M, h) in one pass over the bodies (what an implicit step needs per iteration)."""
-        M = np.zeros((self.nu, self.nu))
-        out = np.empty(self.nu) if not self._idle else np.zeros(self.nu)
-        for b in self._active():
-            M[b.u_slice, b.u_slice], out[b.u_slice] = b.mass_and_h(q[b.q_slice], u[b.u_slice], t)
-        self._idle_identity(M)
-        self._add_external(t, q, u, out)
-        return M, out
-
-    def _add_external(self, t, q, u, out):
-        """Gravity and force elements into ``out``."""
-        if self.gravity.any():
-            for b, com in zip(self.bodies, self._com):
-                if b not in self._idle:
-                    add_point_force(com, q, t, b.mass * self.gravity, out)
-        for f in self._active_forces():
-            f.add_forces(t, q, u, out)
+        return self.equations().mass_and_h(t, q, u)
 
     @property
     def constant_iteration_matrix(self) -> bool:
         """True when M, the bodies' tangents K and D and the links' (none) do not change:
         every body has a constant mass matrix (point masses, FFR bodies on a prescribed
         frame) and no force element has tangents."""
-        return all(b.constant_mass for b in self._active()) and not any(f.has_tangents for f in self._active_forces())
+        return self.equations().constant_iteration_matrix
 
     def tangents(self, t, q, u):
         """(K_t, D_t) (nu, nu): constant elastic and damping tangents plus link tangents,
         for the iteration matrix of implicit integrators."""
-        K = np.zeros((self.nu, self.nu))
-        D = np.zeros((self.nu, self.nu))
-        for b in self._active():
-            Kb, Db = b.stiffness_tangent(), b.damping_tangent()
-            if Kb is not None:
-                K[b.u_slice, b.u_slice] += Kb
-            if Db is not None:
-                D[b.u_slice, b.u_slice] += Db
-        for f in self._active_forces():
-            f.add_tangents(t, q, u, K, D)
-        return K, D
+        return self.equations().tangents(t, q, u)
 
     def constraint_residual(self, t, q):
         """g(q, t) (n_c,) [m or rad]."""
-        return np.concatenate([c.residual(t, q) for c in self.constraints]) \
-            if self.constraints else np.zeros(0)
+        return self.equations().constraint_residual(t, q)
 
     def constraint_jacobian(self, t, q):
         """C_q (n_c, nu); W = C_qᵀ."""
-        C = np.zeros((self.n_c, self.nu))
-        i = 0
-        for c in self.constraints:
-            c.jacobian(t, q, C[i:i + c.n_c])
-            i += c.n_c
-        return C
+        return self.equations().constraint_jacobian(t, q)
 
     def constraint_velocity_term(self, t, q):
-        return np.concatenate([c.velocity_term(t, q) for c in self.constraints]) \
-            if self.constraints else np.zeros(0)
+        """∂g/∂t (n_c,): ġ = C_q u + ∂g/∂t."""
+        return self.equations().constraint_velocity_term(t, q)
 
     def constraint_bias(self, t, q, u):
         """γ (n_c,) with g̈ = C_q u̇ + γ."""
-        return np.concatenate([c.bias(t, q, u) for c in self.constraints]) \
-            if self.constraints else np.zeros(0)
+        return self.equations().constraint_bias(t, q, u)
 
     def accelerations(self, t, q, u, baumgarte=(0.0, 0.0)):
-        """(u̇, λ) from [[M, −C_qᵀ], [C_q, 0]] (u̇, λ) = (h, −γ − 2a ġ − b² g): the
-        index-1 form, with Baumgarte's stabilization terms a [1/s], b [1/s] if given.
-        Sign convention: reaction forces W λ = C_qᵀ λ enter as M u̇ = h + W λ."""
-        M, h = self.mass_and_h(t, q, u)
-        if not self.n_c:
-            return scipy.linalg.solve(M, h, assume_a="pos", check_finite=False), np.zeros(0)
-        C = self.constraint_jacobian(t, q)
-        a, b = baumgarte
-        rhs_c = -self.constraint_bias(t, q, u)
-        if a or b:
-            g = self.constraint_residual(t, q)
-            gd = C @ u + self.constraint_velocity_term(t, q)
-            rhs_c -= 2 * a * gd + b * b * g
-        n = self.nu
-        K = np.zeros((n + self.n_c, n + self.n_c))
-        K[:n, :n] = M
-        K[:n, n:] = -C.T
-        K[n:, :n] = C
-        sol = np.linalg.solve(K, np.concatenate((h, rhs_c)))
-        return sol[:n], sol[n:]
+        """(u̇, λ) of the index-1 form (:meth:`mbs.equations.Equations.accelerations`)."""
+        return self.equations().accelerations(t, q, u, baumgarte)
 
     # --- energies and momenta ----------------------------------------------------------
     def kinetic_energy(self, t, q, u):
-        return sum(b.kinetic_energy(q[b.q_slice], u[b.u_slice], t) for b in self.bodies)
+        """Σ over bodies of their kinetic energy [J]."""
+        return self.equations().kinetic_energy(t, q, u)
 
     def potential_energy(self, t, q):
         """Elastic energy of the bodies, gravity (−m g·r_com) and links' stored energy [J]."""
-        e = sum(b.elastic_energy(q[b.q_slice]) for b in self.bodies)
-        if self.gravity.any():
-            e -= sum(b.mass * self.gravity @ com.position(body_q(com, q), t)
-                     for b, com in zip(self.bodies, self._com))
-        return e + sum(f.potential_energy(t, q) for f in self.forces)
+        return self.equations().potential_energy(t, q)
 
     def total_energy(self, t, q, u):
         return self.kinetic_energy(t, q, u) + self.potential_energy(t, q)

@@ -4,9 +4,12 @@ streams the samples to a result file and takes checkpoints (:mod:`mbs.result_fil
 :mod:`mbs.checkpoint`), a stop on request (:func:`request_stop`, e.g. from a signal
 handler) and a progress callback.
 
-A run is resumable at every output sample: its whole state — the integrator with its
-System, the sampling plan, the samples so far — is one object graph (the integrator and
-its :class:`RunState`), which :func:`resume` continues bit for bit."""
+A run compiles the System under its plan into a :class:`~mbs.model.Model` and keeps
+everything that changes in a :class:`~mbs.model.Data` (``t``, ``q``, ``u`` of an
+integrator are Data's); the System is never mutated. A run is resumable at every
+output sample: its whole state — the integrator with its model and data, the sampling
+plan, the samples so far — is one object graph (the integrator and its
+:class:`RunState`), which :func:`resume` continues bit for bit."""
 
 from __future__ import annotations
 
@@ -21,7 +24,9 @@ from ffrmbs.errors import ModelError, RunInterrupted, SimulationError
 
 from ..body import Frame
 from ..link import body_q
+from ..model import Data, compile_model
 from ..result import Result
+from ..step_failure import StepFailure
 from ..validity import SpinMonitor
 
 
@@ -51,11 +56,6 @@ def non_finite(t, step, what) -> SimulationError:
     """The error stopping a run whose ``what`` (``"q/u"``, ``"energy"``, a probe's name)
     became NaN or infinite at time ``t`` [s], step ``step``: one wording for every check."""
     return SimulationError(t, step, f"state became non-finite (NaN/inf) in {what}")
-
-
-class StepFailure(Exception):
-    """Raised by an integrator's ``step`` when it cannot complete the step; the driver turns
-    it into a SimulationError with the time and step number."""
 
 
 _stop = [None, 0]   # the reason of a requested stop and how many times it was asked
@@ -106,9 +106,10 @@ class RunState:
 
 class Integrator:
     """Base class: subclasses implement ``start(t, q, u)`` and ``step(h)`` on ``self.t``,
-    ``self.q``, ``self.u`` and count Newton iterations in ``self.iterations``; accepted
-    steps are counted in ``self.steps``. :meth:`advance` takes equal steps; step-size
-    controlled integrators override it."""
+    ``self.q``, ``self.u`` (the run's Data: assigning copies into it) and count Newton
+    iterations in ``self.iterations``; accepted steps are counted in ``self.steps``. The
+    equations of the active bodies are ``self.model.equations``. :meth:`advance` takes
+    equal steps; step-size controlled integrators override it."""
 
     name = "integrator"
 
@@ -118,6 +119,36 @@ class Integrator:
         self.steps = 0
         self.plan = None        # the scene plan of a planned run (mbs.plan), set by run()
         self.state = None       # the RunState of the current run
+        self.model = None       # the compiled Model of the current run
+        self.data = None        # its Data
+
+    @property
+    def t(self) -> float:
+        return self.data.t
+
+    @t.setter
+    def t(self, value):
+        self.data.t = value
+
+    @property
+    def q(self) -> np.ndarray:
+        return self.data.q
+
+    @q.setter
+    def q(self, value):
+        self.data.q[...] = value
+
+    @property
+    def u(self) -> np.ndarray:
+        return self.data.u
+
+    @u.setter
+    def u(self, value):
+        self.data.u[...] = value
+
+    def model_options(self) -> dict:
+        """Options of :func:`mbs.model.compile_model` the integrator fixes (Moreau: θ, solver)."""
+        return {}
 
     def advance(self, end, dt):
         """Step from ``self.t`` to ``end`` [s] in ceil((end − t)/dt) equal steps."""
@@ -150,12 +181,13 @@ class Integrator:
         """Counters the integrator keeps over the run (merged into ``Result.stats``)."""
         return {}
 
-    def contact_force(self, contact, out) -> None:
-        """The force on contact's first contour's body (world, (3,) [N]) at the last step
-        into ``out``: a single-valued law's normal force n F_N; set-valued laws are the
-        time-stepping integrators' (they know the impulses)."""
-        k = contact.kinematics
-        out[:] = k.n * contact.force_N if contact.closed and not contact.set_valued else 0.0
+    def contact_force(self, i, out) -> None:
+        """The force on contact ``i``'s first contour's body (world, (3,) [N]) at the last
+        step into ``out``: a single-valued law's normal force n F_N; set-valued laws are
+        the time-stepping integrators' (they know the impulses)."""
+        contact = self.model.contacts[i]
+        closed = self.data.closed[i] and not contact.set_valued
+        out[:] = contact.kinematics.n * self.data.force_N[i] if closed else 0.0
 
     def start(self, t, q, u):
         raise NotImplementedError
@@ -175,8 +207,8 @@ class Integrator:
         Cholesky factorization 13 times slower (55 ms against 4 ms).
 
         With a ``plan`` (:mod:`mbs.plan`), its modal bodies are solved first at the output
-        times, left out of the integrated equations (their velocities held at zero) and
-        written into the state at each output.
+        times, left out of the integrated equations of the compiled Model (their
+        velocities held at zero) and written into the state at each output.
 
         ``recorder`` (:class:`mbs.result_file.ResultRecorder` or alike): ``begin(self)``
         (``resume(self)`` for a restored run), ``landed(self)`` after each landing (it
@@ -206,6 +238,8 @@ class Integrator:
         cpu0 = time.process_time()
         modal = plan.solve_modal(sys, times, q, u, dt) if plan is not None else {}
         self.plan = plan
+        self.model = compile_model(sys, plan, **self.model_options())
+        self.data = Data(self.model)
         res.plan = "" if plan is None else str(plan)
         res.stats["modal_cpu_s"] = time.process_time() - cpu0
         state = RunState(times, sorted(set(times.tolist()) | set(breaks)), breaks,
@@ -218,13 +252,10 @@ class Integrator:
         return state
 
     def _go(self, recorder, progress, fresh):
-        """The sampling loop from ``self.state.next_landing`` on, BLAS single-threaded, the
-        plan's modal bodies left out meanwhile."""
+        """The sampling loop from ``self.state.next_landing`` on, BLAS single-threaded."""
         with threadpool_limits(limits=1, user_api="blas"):
             st = self.state
             self._cpu0 = time.process_time()
-            if st.modal:
-                self.system.leave_out(st.modal, self.plan.forces)
             try:
                 if fresh:
                     self.start(self.t, self.q, self.u)
@@ -236,8 +267,6 @@ class Integrator:
                 if recorder is not None:
                     recorder.end(self, "interrupted" if isinstance(err, RunInterrupted) else f"failed: {err}")
                 raise
-            finally:
-                self.system.leave_out()
             if recorder is not None:
                 recorder.end(self, "complete")
             return res
@@ -318,14 +347,14 @@ class Integrator:
         if st.energies and not math.isfinite(res.energy["kinetic"][i] + res.energy["potential"][i]):
             raise non_finite(self.t, self.steps, "energy")
         if st.contacts:
-            for c in sys.contacts:
+            for j, c in enumerate(self.model.contacts):
                 rec, k = res.contacts[c.name], c.kinematics
-                rec["active"][i] = c.closed
+                rec["active"][i] = self.data.closed[j]
                 if k.active:
                     rec["gap"][i] = k.g_N
                     rec["point"][i] = k.point2.r
                     rec["normal"][i] = k.n
-                self.contact_force(c, rec["force"][i])
+                self.contact_force(j, rec["force"][i])
 
 
 def resume(integrator, recorder=None, progress=None):

@@ -36,10 +36,10 @@ class RK4(Integrator):
         self.t, self.q, self.u = t, q.copy(), u.copy()
 
     def _acc(self, t, q, u):
-        return self.system.accelerations(t, q, u, self.baumgarte)[0]
+        return self.model.equations.accelerations(t, q, u, self.baumgarte)[0]
 
     def step(self, h):
-        sys, t, q, u = self.system, self.t, self.q, self.u
+        sys, t, q, u = self.model.equations, self.t, self.q, self.u
         k1q, k1u = sys.qdot(q, u), self._acc(t, q, u)
         q2, u2 = q + 0.5 * h * k1q, u + 0.5 * h * k1u
         k2q, k2u = sys.qdot(q2, u2), self._acc(t + 0.5 * h, q2, u2)
@@ -55,7 +55,7 @@ class RK4(Integrator):
             self._project()
 
     def _project(self):
-        sys, t = self.system, self.t
+        sys, t = self.model.equations, self.t
         M = sys.mass_matrix(t, self.q)
         for _ in range(self.projection_iter):
             g = sys.constraint_residual(t, self.q)

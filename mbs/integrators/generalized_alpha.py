@@ -52,11 +52,11 @@ class GeneralizedAlpha(Integrator):
 
     def start(self, t, q, u):
         self.t, self.q, self.u = t, q.copy(), u.copy()
-        self.a, self.lam = self.system.accelerations(t, self.q, self.u)
+        self.a, self.lam = self.model.equations.accelerations(t, self.q, self.u)
         self.abar = self.a.copy()
 
     def step(self, h):
-        sys = self.system
+        sys = self.model.equations
         am, af, gm, bt = self.alpha_m, self.alpha_f, self.gamma, self.beta
         c = (1 - af) / (1 - am)
         t1 = self.t + h

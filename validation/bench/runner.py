@@ -37,6 +37,7 @@ BENCHES = {
     "planned_vs_unplanned": "validation.bench.planner",
     "ffr_evaluation": "validation.bench.ffr_evaluation",
     "contour_evaluation": "validation.bench.contour_evaluation",
+    "step_cost": "validation.bench.step_cost",
 }
 
 

@@ -1,0 +1,203 @@
+"""Model and Data of a run (DESIGN, "Model / data split"; as Pinocchio's Model/Data and
+MuJoCo's mjModel/mjData).
+
+:func:`compile_model` turns a System, after planning, into a frozen :class:`Model`:
+what is fixed for the run — the bodies integrated and those the plan solves apart
+(left out: identity mass block, zero force, zero increment), their equations
+(:class:`~mbs.equations.Equations`) and body stage, whether the iteration matrix
+M̂ = M + θΔt D + θ²Δt² K is constant, the contours to update and the contacts owning
+each, and the contact table (kinds, dimensions, closing tolerances, margins, the
+bounding spheres of prunable pairs, the rows of each contact's impulses). The System
+is never mutated.
+
+:class:`Data` holds everything that changes during a run as preallocated arrays: t, q,
+u, the midpoint state (t_m, q_m), the increment du, h, M, the tangents K, D, M̂ and its
+Cholesky factors (one per step size of a constant M̂), u_free, the contact flags (live,
+closed), penalty normal forces, the closed set, the buffers of W (nu, m), M̂⁻¹W, the
+Delassus matrix G (m, m), ξ_free, γ⁻, the gap-closing term, Λ and γ⁺ for the largest
+possible closed set, the warm starts (Λ of the last step per contact and for the
+joints), counters and the record of the last step. The contours' states and the
+searches' warm starts stay in the contour and contact-kinematics objects (their own
+preallocated arrays), which the contour and detection stages update.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .bounding_spheres import sphere_pair
+from .equations import Equations
+from .system_body_stage import SystemBodyStage
+
+N_FACTORS = 8          # Cholesky factors of a constant M̂ kept for different step sizes (+1)
+
+
+@dataclass(frozen=True)
+class Model:
+    """The frozen description of a run (module docstring).
+
+    Attributes
+    ----------
+    system : System
+    equations : Equations
+        M, h, tangents, constraints over the active bodies (allocating; implicit and
+        explicit integrators).
+    body_stage : SystemBodyStage
+        The same terms written into Data's arrays (Moreau's body stage).
+    nq, nu, n_c : int
+    idle : tuple of bodies
+        Bodies the plan solves apart.
+    active_u : (n_act,) int array or None
+        Rows of u of the active bodies (None: all).
+    theta : float
+        θ of the Moreau–Jean θ-method.
+    solver : ProxSolver or None
+    constant_iteration : bool
+        M, K, D constant (M̂ factored once per step size).
+    prune : bool
+        A planned run: contacts are searched only while their bounding spheres meet.
+    contacts : tuple
+        The System's contacts (set-valued, single-valued and curve constraints).
+    set_valued, unilateral : tuple of bool
+    dims : tuple of int
+        Rows of Λ of each set-valued contact (0 for single-valued).
+    lam_at : tuple of int
+        First entry of each contact's warm start in ``Data.lam_prev``.
+    penalty : tuple of int
+        Single-valued unilateral contacts with law derivatives (their stiffness is
+        checked against the step).
+    spheres : tuple
+        (sphere1, sphere2) of each prunable contact (:mod:`mbs.bounding_spheres`), else None.
+    contours : tuple of (contour, owners, q_slice, u_slice)
+        Every contour of a contact once, the indices of the contacts owning it and its
+        body's slices (None on the ground).
+    m_max : int
+        Rows of the largest contact problem: n_c + Σ dims.
+    """
+
+    system: object
+    equations: Equations
+    body_stage: SystemBodyStage
+    nq: int
+    nu: int
+    n_c: int
+    idle: tuple
+    active_u: np.ndarray | None
+    theta: float
+    solver: object
+    constant_iteration: bool
+    prune: bool
+    contacts: tuple
+    set_valued: tuple
+    unilateral: tuple
+    dims: tuple
+    lam_at: tuple
+    penalty: tuple
+    spheres: tuple
+    contours: tuple
+    m_max: int
+
+    @property
+    def n_act(self) -> int:
+        """Velocities of the active bodies."""
+        return self.nu if self.active_u is None else self.active_u.size
+
+
+def compile_model(system, plan=None, theta=0.5, solver=None) -> Model:
+    """The :class:`Model` of ``system`` for a run under ``plan`` (:class:`mbs.plan.Plan`,
+    or None: every body integrated, every contour updated each step); ``theta`` and
+    ``solver`` the Moreau options (module docstring)."""
+    idle = tuple(bp.body for bp in plan.modal_bodies) if plan is not None else ()
+    equations = Equations(system, idle, plan.forces if plan is not None else ())
+    active_u = None
+    if idle:
+        rows = np.arange(system.nu)
+        active_u = np.setdiff1d(rows, np.concatenate([rows[b.u_slice] for b in idle]))
+    contacts = tuple(system.contacts)
+    set_valued = tuple(bool(c.set_valued) for c in contacts)
+    dims = tuple(int(c.dim) if sv else 0 for c, sv in zip(contacts, set_valued))
+    lam_at = tuple(int(a) for a in np.concatenate(([0], np.cumsum(dims)))[:-1]) if contacts else ()
+    penalty = tuple(i for i, c in enumerate(contacts)
+                    if not c.set_valued and c.unilateral and hasattr(c.law, "derivatives"))
+    seen, table = {}, []
+    for i, c in enumerate(contacts):
+        for contour in c.contours():
+            if id(contour) not in seen:
+                seen[id(contour)] = len(table)
+                body = contour.body
+                table.append([contour, [], None if body is None else body.q_slice,
+                              None if body is None else body.u_slice])
+            owners = table[seen[id(contour)]][1]
+            if i not in owners:
+                owners.append(i)
+    contours = tuple((k, tuple(owners), qs, us) for k, owners, qs, us in table)
+    return Model(system=system, equations=equations, body_stage=SystemBodyStage(equations),
+                 nq=system.nq, nu=system.nu, n_c=system.n_c, idle=equations.idle, active_u=active_u,
+                 theta=float(theta), solver=solver, constant_iteration=equations.constant_iteration_matrix,
+                 prune=plan is not None, contacts=contacts, set_valued=set_valued,
+                 unilateral=tuple(bool(c.unilateral) for c in contacts), dims=dims, lam_at=lam_at,
+                 penalty=penalty, spheres=tuple(sphere_pair(c) if plan is not None else None for c in contacts),
+                 contours=contours, m_max=system.n_c + sum(dims))
+
+
+class Data:
+    """The state and workspaces of a run of ``model`` (module docstring). Arrays of the
+    current contact problem are views of the ``*_buf`` buffers sized for ``m_max``
+    rows (:meth:`problem`)."""
+
+    def __init__(self, model: Model):
+        nq, nu, m, n = model.nq, model.nu, model.m_max, len(model.contacts)
+        n_act = model.n_act
+        self.t = self.t_m = 0.0
+        self.q, self.u = np.zeros(nq), np.zeros(nu)
+        self.q_m = np.zeros(nq)
+        self.du = np.zeros(nu)
+        self.h = np.zeros(nu)
+        self.M = np.zeros((nu, nu))
+        for b in model.idle:
+            np.fill_diagonal(self.M[b.u_slice, b.u_slice], 1.0)
+        self.K, self.D = np.zeros((nu, nu)), np.zeros((nu, nu))
+        self.factors = []                   # [(step size, Cholesky factor of M̂ (n_act, n_act), Fortran order)]
+        self.factor = None                  # the factor of this step
+        self.u_free = np.zeros(nu)
+        self.rhs = np.zeros(nu)             # M̂⁻¹ b on all rows
+        self.rhs_act = np.zeros(n_act)      # ... on the active rows
+        self.w_N = np.zeros(nu)             # a penalty contact's W_N
+        # contacts
+        self.live = np.ones(n, dtype=bool)
+        self.closed = np.zeros(n, dtype=bool)
+        self.force_N = np.zeros(n)
+        self.closed_idx = np.zeros(n, dtype=np.intp)
+        self.n_closed = 0
+        self.m = 0
+        self.W_buf = np.zeros(nu * m)
+        self.MW_buf = np.zeros(nu * m)
+        self.W_act_buf = np.zeros(n_act * m)
+        self.G_buf = np.zeros(m * m)
+        self.lam_buf, self.gamma_plus_buf = np.zeros(m), np.zeros(m)
+        self.xi_free_buf, self.gamma_pre_buf = np.zeros(m), np.zeros(m)
+        self.closing_buf, self.offset_buf, self.work_buf = np.zeros(m), np.zeros(m), np.zeros(m)
+        self.work_u = np.zeros(nu)          # M̂⁻¹ W Λ, then (1 − 2θ)Δt u_k
+        self.u_prev = np.zeros(nu)          # u_k while u_{k+1} is formed
+        self.solver_work = np.zeros((4, m))
+        self.sphere_gap = np.zeros(3)       # centre distance of two bounding spheres
+        self.lam_prev = np.zeros(sum(model.dims))
+        self.warm = np.zeros(n, dtype=bool)         # the contact has Λ of the last step
+        self.lam_joints = np.zeros(model.n_c)
+        self.warm_joints = False
+        self.contact_sets = {}              # ContactSet per closed set (indices)
+        self.solution = None                # (iterations, residual, converged) of the last solve
+        self.h_last = 0.0
+        self.stats = {"closed_contacts": 0, "solver_iterations": 0, "max_penetration": 0.0, "pruned_contacts": 0}
+        self.last = [0, 0.0, 0, 0.0, 0.0]   # this accepted step: most closed contacts, penetration,
+                                            # solver iterations, residual; impulse work
+
+    def problem(self, nu, m):
+        """Views (W (nu, m) C order, M̂⁻¹W (nu, m) Fortran order, G (m, m), Λ, γ⁺, ξ_free,
+        γ⁻, closing, offset, work (m,)) of the contact problem with m rows."""
+        return (self.W_buf[:nu * m].reshape(nu, m), self.MW_buf[:nu * m].reshape(m, nu).T,
+                self.G_buf[:m * m].reshape(m, m), self.lam_buf[:m], self.gamma_plus_buf[:m],
+                self.xi_free_buf[:m], self.gamma_pre_buf[:m], self.closing_buf[:m], self.offset_buf[:m],
+                self.work_buf[:m])

@@ -1,0 +1,370 @@
+"""The eight stages of one Moreau step (DESIGN, "the data flow of one Moreau step";
+thesis eq. 3.1, 4.1; the θ-method of Moreau–Jean, Acary & Brogliato 2008, Sec. 10.1).
+
+Each stage is a function ``stage(model, data, dt)`` of a :class:`~mbs.model.Model` and
+its :class:`~mbs.model.Data` that reads the arrays the previous stages wrote:
+
+1. :func:`midpoint`: t_θ = t_k + θΔt, q_θ = q_k ⊕ θΔt u_k (θ = ½: the thesis's midpoint
+   q_m), orientations renormalized → ``t_m``, ``q_m``;
+2. :func:`bodies`: h (and M unless M̂ is constant) at (t_θ, q_θ, u_k) → ``h``, ``M``;
+3. :func:`contours`: in a planned run the contacts whose contours' bounding spheres
+   come within the margin (the others open, counted as pruned) → ``live``; every
+   contour of a live contact updated at (t_θ, q_θ, u_k), each once;
+4. :func:`detect`: the live contacts located (broad phase by bounding boxes, search,
+   g_N, frame, point Jacobians); a unilateral contact is closed where
+   g_N(q_θ) <= its ``closing_tol`` → ``closed``, the closed set-valued contacts in
+   ``closed_idx``, the largest penetration;
+5. :func:`constraints`: the contact laws at the located contacts — single-valued
+   (penalty) forces into h; M̂ = M + θΔt D + θ²Δt² K factored (once per step size when
+   constant) and a penalty contact's stiffness checked against the step;
+   u_free = u_k + M̂⁻¹ h Δt; for joints and closed set-valued contacts W (nu, m),
+   M̂⁻¹W, G = Wᵀ M̂⁻¹ W, ξ_free = Wᵀ u_free + ∂g/∂t + closing, γ⁻ = Wᵀ u_k + ∂g/∂t
+   (closing = g_N/Δt for a resting contact still apart within closing_tol);
+6. :func:`impulses`: Λ of the laws on velocity level (:meth:`ProxSolver.solve_into`,
+   warm-started with the last step's Λ of contacts closed again), the impulses' work
+   Λᵀ(γ⁺ + γ⁻)/2, the warm starts kept;
+7. :func:`velocity`: u_{k+1} = u_free + M̂⁻¹ W Λ;
+8. :func:`position`: q_{k+1} = q_θ ⊕ Δt (θ u_{k+1} + (1 − 2θ) u_k), renormalized;
+   t_{k+1} = t_k + Δt.
+
+Why the θ-method, the gap-closing term and the explicit penalty check:
+:mod:`mbs.integrators.moreau`. A stage that cannot complete the step raises
+:class:`~mbs.integrators.driver.StepFailure`. With the Gauss–Seidel solver and bodies
+the body stage writes in place (point masses, FFR bodies on a fixed frame), a steady
+step allocates no numpy array.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.linalg.lapack import dpotrf, dpotrs
+
+from contact.laws import Bilateral
+from contact.solver import ContactSet
+
+from .step_failure import StepFailure
+
+STAGES = ("midpoint", "bodies", "contours", "detect", "constraints", "impulses", "velocity", "position")
+
+
+def midpoint(model, data, dt):
+    """Stage 1: t_m = t + θΔt, q_m = q ⊕ θΔt u, renormalized."""
+    th_dt = model.theta * dt
+    data.t_m = data.t + th_dt
+    np.multiply(data.u, th_dt, out=data.du)
+    model.body_stage.increment(data.q, data.du, data.q_m)
+    model.body_stage.normalize(data.q_m)
+
+
+def bodies(model, data, dt):
+    """Stage 2: h (and M when M̂ is not constant) at (t_m, q_m, u)."""
+    if model.constant_iteration:
+        model.body_stage.h_only(data.t_m, data.q_m, data.u, data.h)
+    else:
+        model.body_stage.mass_and_h(data.t_m, data.q_m, data.u, data.M, data.h)
+
+
+def contours(model, data, dt):
+    """Stage 3: the live contacts (planned runs: bounding spheres within the margin) and
+    their contours updated at (t_m, q_m, u)."""
+    if not model.contacts:
+        return
+    t, q, u, live = data.t_m, data.q_m, data.u, data.live
+    if model.prune:
+        for i, pair in enumerate(model.spheres):
+            if pair is None:
+                continue
+            c1, r1 = pair[0](q, t)
+            c2, r2 = pair[1](q, t)
+            d = np.subtract(c1, c2, out=data.sphere_gap)
+            reach = r1 + r2 + model.contacts[i].margin
+            live[i] = not float(d @ d) > reach * reach
+            if not live[i]:
+                data.closed[i] = False
+                data.stats["pruned_contacts"] += 1
+    for contour, owners, qs, us in model.contours:
+        for i in owners:
+            if live[i]:
+                if qs is None:
+                    contour.update(None, None, t)
+                else:
+                    contour.update(q[qs], u[us], t)
+                break
+
+
+def detect(model, data, dt):
+    """Stage 4: locate the live contacts; closed flags, the closed set-valued contacts
+    (``closed_idx``, ``n_closed``, ``m`` rows with the joints) and the largest
+    penetration max(0, −g_N) [m]."""
+    n_closed = 0
+    last = data.last
+    m = model.n_c
+    for i, c in enumerate(model.contacts):
+        if not data.live[i]:
+            continue
+        closed = c.locate()
+        data.closed[i] = closed
+        if closed:
+            if model.set_valued[i]:
+                data.closed_idx[n_closed] = i
+                n_closed += 1
+                m += model.dims[i]
+            if model.unilateral[i]:
+                pen = -c.kinematics.g_N
+                if pen > last[1]:
+                    last[1] = pen
+    data.n_closed, data.m = n_closed, m
+    if model.contacts and last[1] > data.stats["max_penetration"]:
+        data.stats["max_penetration"] = last[1]
+
+
+def constraints(model, data, dt):
+    """Stage 5: single-valued contact forces into h; M̂ factored; u_free; the contact
+    problem (W, M̂⁻¹W, G, ξ_free, γ⁻, closing) of the joints and closed contacts."""
+    for i, c in enumerate(model.contacts):
+        if not model.set_valued[i] and data.live[i]:
+            data.force_N[i] = add_penalty_force(c, data.closed[i], data.h)
+    factor = iteration_factor(model, data, dt)
+    if model.penalty:
+        check_penalty(model, data, factor, dt)
+    np.multiply(data.h, dt, out=data.u_free)
+    solve(model, data, factor, data.u_free)
+    np.add(data.u, data.u_free, out=data.u_free)
+    m = data.m
+    if m == 0:
+        return
+    nu, n_c = model.nu, model.n_c
+    W, MW, G, lam, gamma_plus, xi_free, gamma_pre, closing, offset, work = data.problem(nu, m)
+    W.fill(0.0)
+    closing.fill(0.0)
+    offset.fill(0.0)
+    eq = model.equations
+    if n_c:
+        W[:, :n_c] = eq.constraint_jacobian(data.t_m, data.q_m).T
+        offset[:n_c] = eq.constraint_velocity_term(data.t_m, data.q_m)
+    row = n_c
+    for j in range(data.n_closed):
+        i = data.closed_idx[j]
+        c = model.contacts[i]
+        dim = model.dims[i]
+        c.jacobian(W[:, row:row + dim])
+        if model.unilateral[i] and c.kinematics.g_N > 0.0 and data.warm[i]:   # resting within closing_tol
+            closing[row] = c.kinematics.g_N / dt
+        row += dim
+    solve_matrix(model, data, factor, W, MW)
+    np.matmul(W.T, MW, out=G)
+    np.matmul(W.T, data.u_free, out=xi_free)
+    xi_free += offset
+    xi_free += closing
+    np.matmul(W.T, data.u, out=gamma_pre)
+    gamma_pre += offset
+
+
+def impulses(model, data, dt):
+    """Stage 6: Λ of the contact problem (warm-started), the solver's counters, the
+    impulses' work, the warm starts of the next step."""
+    m = data.m
+    if m == 0:
+        if data.warm_joints or data.warm.any():
+            data.warm.fill(False)            # nothing closed: no warm start, no resting contact
+            data.warm_joints = False
+        return
+    W, MW, G, lam, gamma_plus, xi_free, gamma_pre, closing, offset, work = data.problem(model.nu, m)
+    warm_start(model, data, lam)
+    it, residual, converged = model.solver.solve_into(contact_set(model, data), G, xi_free, gamma_pre, lam,
+                                                      gamma_plus, data.solver_work[:, :m])
+    if not converged:
+        raise StepFailure(f"contact problem not solved: residual {residual:.3g} m/s after "
+                          f"{it} iterations ({data.n_closed} closed contacts)")
+    last = data.last
+    data.stats["solver_iterations"] += it
+    last[2] += it
+    last[3] = max(last[3], residual)
+    np.subtract(gamma_plus, closing, out=work)
+    work += gamma_pre
+    last[4] += 0.5 * float(lam @ work)
+    keep_warm_start(model, data, lam)
+
+
+def velocity(model, data, dt):
+    """Stage 7: u_{k+1} = u_free + M̂⁻¹ W Λ (u_k kept in ``u_prev``)."""
+    data.u_prev[:] = data.u
+    m = data.m
+    if m == 0:
+        data.u[:] = data.u_free
+    else:
+        W, MW, G, lam = data.problem(model.nu, m)[:4]
+        np.matmul(MW, lam, out=data.work_u)
+        np.add(data.u_free, data.work_u, out=data.u)
+    data.stats["closed_contacts"] += data.n_closed
+    if data.n_closed > data.last[0]:
+        data.last[0] = data.n_closed
+
+
+def position(model, data, dt):
+    """Stage 8: q_{k+1} = q_m ⊕ Δt (θ u_{k+1} + (1 − 2θ) u_k), renormalized; t += Δt."""
+    th = model.theta
+    np.multiply(data.u, th * dt, out=data.du)
+    if th != 0.5:
+        np.multiply(data.u_prev, (1.0 - 2.0 * th) * dt, out=data.work_u)
+        data.du += data.work_u
+    model.body_stage.increment(data.q_m, data.du, data.q)
+    model.body_stage.normalize(data.q)
+    data.t += dt
+    data.h_last = dt
+
+
+def step(model, data, dt):
+    """One Moreau step: the eight stages in order."""
+    midpoint(model, data, dt)
+    bodies(model, data, dt)
+    contours(model, data, dt)
+    detect(model, data, dt)
+    constraints(model, data, dt)
+    impulses(model, data, dt)
+    velocity(model, data, dt)
+    position(model, data, dt)
+
+
+# --- pieces of the stages -------------------------------------------------------------
+def add_penalty_force(contact, closed, h) -> float:
+    """A single-valued law at its located contact: h += W_N F_N (+ W_T F_T) body block by
+    body block; returns F_N [N] (0 when open)."""
+    k = contact.kinematics
+    force_N = float(contact.law.force(k.g_N, k.gd_N)) if closed else 0.0
+    if force_N == 0.0:
+        return 0.0
+    F_T = contact.friction.force(k.gd_T, force_N) if contact.friction is not None else None
+    for s, w_N, w_T in k.local_blocks():
+        h[s] += force_N * w_N
+        if F_T is not None:
+            h[s] += w_T @ F_T
+    return force_N
+
+
+def iteration_factor(model, data, dt):
+    """The Cholesky factor of M̂ = M + θΔt D + θ²Δt² K at (t_m, q_m) on the active rows
+    (Fortran order); for a constant M̂ the factor of this step size, computed once (steps
+    landing on output times differ by rounding: within 1e-12 Δt they share it)."""
+    if model.constant_iteration:
+        for step_size, factor in data.factors:
+            if abs(step_size - dt) <= 1e-12 * dt:
+                return factor
+        if len(data.factors) > 8:            # step-size control: keep the latest few
+            data.factors.clear()
+        data.M[...] = model.equations.mass_matrix(data.t_m, data.q_m)
+        factor = _factor(model, data, dt, np.empty((model.n_act, model.n_act), order="F"))
+        data.factors.append((dt, factor))
+        return factor
+    if data.factor is None:
+        data.factor = np.empty((model.n_act, model.n_act), order="F")
+    return _factor(model, data, dt, data.factor)
+
+
+def _factor(model, data, dt, out):
+    """Cholesky factor of M̂ (tangents at q_m) into ``out`` (n_act, n_act), Fortran order."""
+    th = model.theta
+    K, D, M = data.K, data.D, data.M
+    model.body_stage.tangents(data.t_m, data.q_m, data.u, K, D)
+    np.multiply(D, th * dt, out=D)
+    np.add(M, D, out=D)
+    np.multiply(K, th * th * dt * dt, out=K)
+    np.add(D, K, out=D)                     # M̂ = M + θΔt D + θ²Δt² K
+    if model.active_u is None:
+        out[...] = D
+    else:
+        act = model.active_u
+        out[...] = D[np.ix_(act, act)]
+    factor, info = dpotrf(out, lower=True, overwrite_a=True)
+    if info != 0:
+        raise StepFailure(f"M + θΔt D + θΔt² K is not positive definite (LAPACK dpotrf info {info})")
+    if factor is not out:
+        out[...] = factor
+    return out
+
+
+def solve(model, data, factor, b):
+    """b ← M̂⁻¹ b in place (nu,); on the active rows only when the plan left bodies out
+    (zero on theirs: their blocks of M̂ are decoupled from the rest)."""
+    if model.active_u is None:
+        dpotrs(factor, b, lower=True, overwrite_b=True)
+        return
+    act, x = model.active_u, data.rhs_act
+    np.take(b, act, out=x)
+    dpotrs(factor, x, lower=True, overwrite_b=True)
+    b.fill(0.0)
+    b[act] = x
+
+
+def solve_matrix(model, data, factor, W, MW):
+    """M̂⁻¹ W (nu, m) into MW (Fortran order without left-out bodies, else C order)."""
+    if model.active_u is None:
+        MW[...] = W
+        dpotrs(factor, MW, lower=True, overwrite_b=True)
+        return
+    act = model.active_u
+    x = dpotrs(factor, W[act], lower=True)[0]
+    MW.fill(0.0)
+    MW[act] = x
+
+
+def check_penalty(model, data, factor, dt):
+    """Stop when a closed single-valued contact is too stiff for its explicit force:
+    ω Δt = Δt √(k w_Nᵀ M̂⁻¹ w_N) > 2, k = −∂F_N/∂g_N at the contact point."""
+    for i in model.penalty:
+        c = model.contacts[i]
+        if not (data.closed[i] and data.force_N[i] > 0.0 and data.live[i]):
+            continue
+        k = c.kinematics
+        stiffness = -float(c.law.derivatives(k.g_N, k.gd_N)[0])
+        w = k.W_N(data.w_N)
+        data.rhs[:] = w
+        solve(model, data, factor, data.rhs)
+        s2 = stiffness * dt * dt * float(w @ data.rhs)
+        if s2 > 4.0:
+            raise StepFailure(f"penalty contact {c.name!r} too stiff for the step: ω Δt = {s2 ** 0.5:.3g} > 2 "
+                              f"(k = {stiffness:.3g} N/m); take Δt < {2.0 * dt / s2 ** 0.5:.3g} s or a "
+                              "set-valued law")
+
+
+def contact_set(model, data):
+    """The ContactSet of the joints and the closed contacts, built once per closed set."""
+    key = tuple(data.closed_idx[:data.n_closed].tolist()) if data.n_closed != 1 else data.closed_idx[0].item()
+    cs = data.contact_sets.get(key)
+    if cs is None:
+        laws = [Bilateral(model.n_c)] if model.n_c else []
+        laws += [model.contacts[i].law for i in data.closed_idx[:data.n_closed]]
+        cs = data.contact_sets[key] = ContactSet(laws)
+    return cs
+
+
+def warm_start(model, data, lam):
+    """Λ of the last step for the joints and the contacts closed again, else zero."""
+    lam.fill(0.0)
+    n_c = model.n_c
+    if n_c and data.warm_joints:
+        lam[:n_c] = data.lam_joints
+    row = n_c
+    for j in range(data.n_closed):
+        i = data.closed_idx[j]
+        dim = model.dims[i]
+        if data.warm[i]:
+            at = model.lam_at[i]
+            lam[row:row + dim] = data.lam_prev[at:at + dim]
+        row += dim
+
+
+def keep_warm_start(model, data, lam):
+    """This step's Λ becomes the warm start of the next: the joints' and the closed
+    contacts' (the others lose theirs)."""
+    n_c = model.n_c
+    data.lam_joints[:] = lam[:n_c]
+    data.warm_joints = True
+    data.warm.fill(False)
+    row = n_c
+    for j in range(data.n_closed):
+        i = data.closed_idx[j]
+        dim, at = model.dims[i], model.lam_at[i]
+        data.lam_prev[at:at + dim] = lam[row:row + dim]
+        data.warm[i] = True
+        row += dim

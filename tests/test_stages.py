@@ -1,0 +1,92 @@
+"""The Moreau step as stages over Model/Data (mbs.model, mbs.stages): no numpy array is
+allocated in a steady step, the in-place kernels agree with their numpy references,
+and a planned run leaves the System as it was."""
+
+import numpy as np
+
+from contact import _kernels as kern
+from contact.solver import ProxSolver, _diagonal
+from mbs import stages
+from mbs.model import Data, compile_model
+
+from numpy_allocations import NumpyAllocations
+
+SCALAR_BYTES = 8          # a 0-d float64 (or bool) of a Python scalar in a ufunc or a reduction's result
+SCALARS_PER_STEP = 16     # bound of those per step (see test_a_steady_step_allocates_no_numpy_array)
+
+
+def _default_scene():
+    from ffrmbs_app.scenes import point_mass_beam as pmb
+
+    scene = pmb.build("A", modes=20)
+    system = scene.system
+    model = compile_model(system, system.plan(0.1), theta=0.5, solver=ProxSolver("gauss-seidel", tol=1e-10,
+                                                                                   max_iter=2000))
+    data = Data(model)
+    data.q[:], data.u[:] = system.initial_state()
+    return model, data
+
+
+def test_a_steady_step_allocates_no_numpy_array():
+    """The default scene (setup A, 20 modes, Δt = 1e-5 s): 200 steps with the contact
+    open (from 5 ms, it closes at 10 ms) and 200 with it closed throughout, after
+    warm-up steps that compile the kernels and build the factor of M̂ and the contact
+    set. No allocation larger than one scalar; the scalar ones are the 0-d arrays numpy
+    makes of a Python float passed to a ufunc (θΔt, Δt) and of the result of a
+    reduction (d·d of the bounding spheres, the bounding-sphere radius, np.any of the
+    solver's c, Λ·(γ⁺ + γ⁻)), at most SCALARS_PER_STEP per step."""
+    model, data = _default_scene()
+    dt = 1e-5
+    phases = {}
+    while data.t < 0.04 and len(phases) < 2:
+        before = data.stats["closed_contacts"]
+        with NumpyAllocations() as count:
+            for _ in range(200):
+                stages.step(model, data, dt)
+        closed = data.stats["closed_contacts"] - before
+        if data.t > 0.005 and closed in (0, 200):
+            phases.setdefault(closed, count.sizes)
+    assert set(phases) == {0, 200}
+    for closed, sizes in phases.items():
+        assert all(s <= SCALAR_BYTES for s in sizes), (closed, sorted(set(sizes)))
+        assert len(sizes) <= SCALARS_PER_STEP * 200, (closed, len(sizes))
+
+
+def test_the_diagonal_floor_kernel_is_its_numpy_reference():
+    rng = np.random.default_rng(3)
+    for G in (rng.random((4, 4)), np.diag([1.0, 0.0, 1e-20, 2.0]), np.zeros((3, 3)), -np.eye(2)):
+        d = np.empty(G.shape[0])
+        kern.diagonal_floor(np.ascontiguousarray(G), 1e-14, d)
+        np.testing.assert_array_equal(d, _diagonal(G))
+
+
+def test_step_is_the_eight_stages_in_order():
+    assert stages.STAGES == ("midpoint", "bodies", "contours", "detect", "constraints", "impulses", "velocity",
+                             "position")
+    model, data = _default_scene()
+    other = Data(model)
+    other.q[:], other.u[:] = data.q, data.u
+    for _ in range(3):
+        stages.step(model, data, 1e-5)
+        for name in stages.STAGES:
+            getattr(stages, name)(model, other, 1e-5)
+    np.testing.assert_array_equal(data.q, other.q)
+    np.testing.assert_array_equal(data.u, other.u)
+
+
+def test_a_planned_run_leaves_the_system_as_it_was():
+    """The plan's modal bodies are left out of the compiled model, not of the System."""
+    from mbs import FlexibleBodyFFR, PointMass, PrescribedFrameMotion, System
+    from ffrmbs_app.scenes import point_mass_beam as pmb
+
+    system = System()
+    beam = system.add(FlexibleBodyFFR(pmb.default_beam_data(), modes=5, frame=PrescribedFrameMotion.fixed()))
+    mass = system.add(PointMass(1.0, velocity=(1.0, 0.0, 0.0)))
+    plan = system.plan(0.01)
+    model = compile_model(system, plan)
+    assert model.idle == (beam,) and model.equations.active == (mass,)
+    assert list(model.active_u) == list(range(beam.nu, beam.nu + 3))
+    assert system.equations().active == (beam, mass) and not hasattr(system, "leave_out")
+    res = system.simulate(0.01, 1e-3, integrator="rk4")
+    assert system.equations().idle == () and res.stats["steps"] == 10
+    np.testing.assert_allclose(res.q[-1, beam.nu], 0.01, rtol=1e-12)

@@ -1,0 +1,162 @@
+"""Benchmark: the cost of one step, this checkout against a baseline commit and Exudyn,
+side by side in one run.
+
+Cases (each the wall time of ``System.simulate`` divided by its steps; output sampling
+and planning included, compilation excluded — every case runs once untimed first):
+
+- ``default``: the default scene (setup A of :mod:`ffrmbs_app.scenes.point_mass_beam`,
+  20 clamped modes, 2s contour, Moreau θ = ½, Δt = 1e-5 s, 0.1 s, 101 samples);
+- ``far pairs N``: the same with N more point masses flying away from the beam, each in
+  a contact with its surface that never closes (per-step cost flat in far-apart pairs);
+- ``free moreau`` / ``free gen-alpha``: the report's free-flying beam (the
+  ``ffr_free_flight`` case, Exudyn's free-flight comparison), 10 free-free modes, full
+  FFR equations (plan off), h = 1e-3 s, 1 s; Exudyn's ``ObjectFFRFreducedOrder`` with
+  the same matrices, generalized-α ρ∞ = 0.9, h = 1e-3 s, timed in this process.
+
+The baseline (default :data:`BASELINE`, the main of before the Model/Data split) is
+exported with ``git archive`` into a temporary directory; this checkout and the baseline
+each run :mod:`validation.bench.step_worker` in their own process, alternately,
+``rounds`` times; the table gives medians over all timed runs and the ratio baseline /
+this checkout. Each case also reports a result figure (v_y(T) or |r_A(T)|) from both, so
+that a speed-up that changed the answer shows. Without git or the baseline commit, the
+baseline columns say why they are empty.
+
+Run::
+
+    python3 -m validation.bench --only step_cost [--quick]
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from validation.bench.common import bench_main, machine
+
+ROOT = Path(__file__).resolve().parents[2]
+WORKER = Path(__file__).with_name("step_worker.py")
+BASELINE = "f934873"          # main after issue 18, before the Model/Data split (issue 19)
+T_END, DT = 0.1, 1e-5         # [s], the default scene
+FREE_DT, FREE_MODES = 1e-3, 10
+FAR_PAIRS = (8, 32)
+TARGETS_US = {"default": 12.0, "free moreau": 30.0, "free gen-alpha": 50.0}   # issue 19
+FLAT_TOL = 0.10               # far pairs: per-step cost within 10 % of the default scene's
+FULL = {"rounds": 3, "repeats": 3, "t_end": T_END}
+QUICK = {"rounds": 2, "repeats": 1, "t_end": 0.02}
+
+
+def cases(t_end) -> list[dict]:
+    default = {"kind": "default", "t_end": t_end, "dt": DT}
+    return ([{"name": "default", **default}]
+            + [{"name": f"far pairs {n}", **default, "far_pairs": n} for n in FAR_PAIRS]
+            + [{"name": "free moreau", "kind": "free", "integrator": "moreau", "dt": FREE_DT, "modes": FREE_MODES},
+               {"name": "free gen-alpha", "kind": "free", "integrator": "generalized-alpha", "dt": FREE_DT,
+                "modes": FREE_MODES}])
+
+
+def export_baseline(rev, into) -> str | None:
+    """Export commit ``rev`` of this repository into ``into``; None, or why it could not."""
+    try:
+        archive = subprocess.run(["git", "-C", str(ROOT), "archive", "--format=tar", rev],
+                                 capture_output=True, check=False)
+    except OSError as exc:
+        return f"git not available ({exc.strerror})"
+    if archive.returncode:
+        return f"commit {rev} not found ({archive.stderr.decode(errors='replace').strip()})"
+    subprocess.run(["tar", "-x", "-C", str(into)], input=archive.stdout, check=True)
+    return None
+
+
+def run_worker(checkout, spec) -> dict:
+    """The worker's measurements with ``checkout`` first on the path."""
+    env = {**os.environ, "PYTHONPATH": str(checkout)}
+    out = subprocess.run([sys.executable, str(WORKER), json.dumps(spec)], env=env, capture_output=True,
+                         text=True, check=False)
+    if out.returncode:
+        raise RuntimeError(f"step worker in {checkout} failed:\n{out.stderr[-3000:]}")
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def exudyn_us_per_step(repeats) -> float | None:
+    """Median µs per step of Exudyn's free flight (10 modes, h = 1e-3 s), or None."""
+    from validation.peers import exudyn_ffr
+
+    if not exudyn_ffr.available():
+        return None
+    from preprocess import box, build_body
+    from validation.cases import ffr_free_flight as ff
+    from validation.cases.cantilever import MATERIAL, REPORT_MESH_SIZE
+
+    mesh = box(1.0, 1.0, 5.0, REPORT_MESH_SIZE, order=2)
+    data = build_body(mesh, MATERIAL, FREE_MODES, clamp=None)
+    weights, probe = ff.face_weights(mesh), ff.node_a(mesh)
+    ff._exudyn_run(data, weights, FREE_MODES, FREE_DT, probe)            # warm-up
+    cpu = [ff._exudyn_run(data, weights, FREE_MODES, FREE_DT, probe)[2] for _ in range(repeats)]
+    return 1e6 * float(np.median(cpu)) / round(ff.T_END / FREE_DT)
+
+
+def benchmark(rounds, repeats, t_end, baseline=BASELINE, log=print) -> dict:
+    spec = {"cases": cases(t_end), "repeats": repeats}
+    walls = {"this": {}, "baseline": {}}
+    checks = {"this": {}, "baseline": {}}
+    steps = {}
+    with tempfile.TemporaryDirectory(prefix="ffrmbs-baseline-") as tmp:
+        why_not = export_baseline(baseline, tmp)
+        checkouts = {"this": ROOT} if why_not else {"this": ROOT, "baseline": Path(tmp)}
+        for k in range(rounds):
+            for who, checkout in checkouts.items():
+                start = time.perf_counter()
+                for name, m in run_worker(checkout, spec).items():
+                    walls[who].setdefault(name, []).extend(m["walls"])
+                    checks[who][name] = m["check"]
+                    steps[name] = m["steps"]
+                log(f"round {k + 1}/{rounds}: {who} in {time.perf_counter() - start:.1f} s")
+    exudyn = exudyn_us_per_step(max(3, repeats))
+    rows = []
+    for case in spec["cases"]:
+        name = case["name"]
+        us = {who: 1e6 * float(np.median(w[name])) / steps[name] for who, w in walls.items() if name in w}
+        rows.append({"case": name, "steps": steps[name], "us_this": us["this"], "us_baseline": us.get("baseline"),
+                     "ratio": us["baseline"] / us["this"] if "baseline" in us else None,
+                     "check_this": checks["this"][name], "check_baseline": checks["baseline"].get(name),
+                     "runs": len(walls["this"][name])})
+    by = {r["case"]: r for r in rows}
+    if exudyn is not None:
+        for name in ("free moreau", "free gen-alpha"):
+            by[name]["exudyn_us"] = exudyn
+            by[name]["exudyn_ratio"] = exudyn / by[name]["us_this"]
+    table = ["| case | steps | baseline µs/step | this µs/step | baseline / this | Exudyn µs/step | "
+             "Exudyn / this | result (this) | result (baseline) |", "|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        fmt = lambda v, f: "—" if v is None else format(v, f)  # noqa: E731
+        table.append(f"| {r['case']} | {r['steps']} | {fmt(r['us_baseline'], '.1f')} | {r['us_this']:.1f} | "
+                     f"{fmt(r['ratio'], '.2f')} | {fmt(r.get('exudyn_us'), '.1f')} | "
+                     f"{fmt(r.get('exudyn_ratio'), '.2f')} | {r['check_this']:.9g} | "
+                     f"{fmt(r['check_baseline'], '.9g')} |")
+    verdicts = []
+    for name, target in TARGETS_US.items():
+        us = by[name]["us_this"]
+        verdicts.append(f"target ({name} ≤ {target:g} µs per step): {us:.1f} µs — {'met' if us <= target else 'NOT met'}")
+    worst = max(abs(by[f"far pairs {n}"]["us_this"] / by["default"]["us_this"] - 1.0) for n in FAR_PAIRS)
+    verdicts.append(f"target (per-step cost flat within {FLAT_TOL:.0%} up to {FAR_PAIRS[-1]} far-apart pairs): "
+                    f"largest deviation {worst:.1%} — {'met' if worst <= FLAT_TOL else 'NOT met'}")
+    header = (f"Per-step cost, median of {rounds} rounds x {repeats} runs, this checkout and baseline {baseline} "
+              f"alternately in separate processes" + (f"; baseline: {why_not}" if why_not else "")
+              + ("" if exudyn is not None else "; Exudyn: not installed (pip install '.[peers]')"))
+    return {"benchmark": "step_cost", "machine": machine(), "baseline": baseline, "rows": rows,
+            "table": header + "\n\n" + "\n".join(table), "verdicts": verdicts}
+
+
+def run(quick: bool) -> dict:
+    return benchmark(**(QUICK if quick else FULL))
+
+
+if __name__ == "__main__":
+    bench_main("step_cost", run)
