@@ -55,6 +55,37 @@ class Body:
     def normalize(self, q) -> None:
         """Project q onto its constraint manifold in place (unit quaternions)."""
 
+    # in-place versions for the step (mbs.body_stage): q, u, M, h, out are the body's
+    # blocks of the caller's arrays; ``work`` is what :meth:`workspace` returned. These
+    # generic versions copy from the allocating methods; bodies override them with kernels.
+    def workspace(self):
+        """Scratch arrays of the in-place methods (None when they need none)."""
+        return None
+
+    def mass_and_h_into(self, q, u, t, M, h, work=None) -> None:
+        """Write M (nu, nu) and h (nu,) at (q, u, t) into ``M`` and ``h``."""
+        M[...], h[...] = self.mass_and_h(q, u, t)
+
+    def h_into(self, q, u, t, h, work=None) -> None:
+        """Write h (nu,) at (q, u, t) into ``h``."""
+        h[...] = self.h(q, u, t)
+
+    def increment_into(self, q, du, out) -> None:
+        """Write q ⊕ Δu into ``out`` (nq,); ``out`` may be ``q``."""
+        out[...] = self.increment(q, du)
+
+    def add_point_load_into(self, q, frame, times, values, t, body_axes, h, work=None) -> None:
+        """h += J_Tᵀ F (thesis eq. 2.76) for the force F [N] of the step table (``times``
+        (n_t,) [s], ``values`` (n_t, 3)) holding at t (none before times[0]) at
+        ``frame``'s point; F in the frame's axes (inertial force A F) when ``body_axes``."""
+        r = int(np.searchsorted(times, t, side="right")) - 1
+        if r < 0:
+            return
+        F = values[r]
+        if body_axes:
+            F = frame.orientation(q, t) @ F
+        h += frame.J_T(q, t).T @ F
+
     def kinetic_energy(self, q, u, t=0.0) -> float:
         return 0.5 * u @ self.mass_matrix(q, t) @ u
 

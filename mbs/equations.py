@@ -9,7 +9,7 @@ gets an identity mass block, zero force and a zero increment: its rows decouple 
 velocities stay zero. ``System`` uses one over all its bodies; a compiled
 :class:`~mbs.model.Model` holds one over the active set, so planning never mutates the
 System. Every method returns new arrays (the implicit and explicit integrators' route);
-the in-place body stage of Moreau's step is :mod:`mbs.system_body_stage`.
+the in-place body stage of a step is :mod:`mbs.body_stage`.
 """
 
 from __future__ import annotations

@@ -21,7 +21,7 @@ from ffrmbs.errors import ModelError
 from preprocess import BodyData, read_body
 
 from .body import Frame
-from ._kernels import ffr_mass_and_qv
+from ._kernels import elastic_h_into, ffr_free_mass_and_h, ffr_mass_and_qv, ffr_prescribed_mass_and_h
 from .floating_frame import FloatingFrameBody
 from .shape_integrals import ShapeIntegrals
 
@@ -140,6 +140,39 @@ class FlexibleBodyFFR(FloatingFrameBody):
                         np.asarray(qdot_f, dtype=float), si.mass, si.I1, si.S_bar, si.I_kl, si.I_bar,
                         si.S_kl, si.M_ff, si.S_skew, M, Q)
         return M, Q
+
+    def mass_and_h_into(self, q, u, t, M, h, work=None):
+        """M and h (module docstring of :mod:`mbs.floating_frame`) by the kernels of
+        :mod:`mbs._kernels`, allocation-free: a frame at rest copies the constant m_ff and
+        takes h = −K q_f − D q̇_f; a free quaternion frame and a moving prescribed frame
+        contract the shape integrals (a Cardan frame takes the generic path)."""
+        if self.frame_at_rest:
+            if self._M_rest is None:
+                self.mass_matrix(q, t)
+            M[...] = self._M_rest
+            elastic_h_into(self.K_ff, self.D_ff, self.damped, q, u, h)
+            return
+        if work is None:
+            work = self.workspace()
+        si = self.integrals
+        if self.free_quaternion:
+            ffr_free_mass_and_h(q, u, si.mass, si.I1, si.S_bar, si.I_kl, si.I_bar, si.S_kl, si.M_ff, si.S_skew,
+                                self.K_ff, self.D_ff, self.damped, work[0], work[1], M, h)
+        elif self.motion is not None:
+            a_R = self.motion.translation(t)[2]
+            A, w, wd = self.motion.rotation(t)
+            ffr_prescribed_mass_and_h(np.asarray(A, dtype=float), np.asarray(w, dtype=float),
+                                      np.asarray(a_R, dtype=float), np.asarray(wd, dtype=float), q, u, si.mass,
+                                      si.I1, si.S_bar, si.I_kl, si.I_bar, si.S_kl, si.M_ff, si.S_skew, self.K_ff,
+                                      self.D_ff, self.damped, work[1], work[2], work[3], M, h)
+        else:
+            super().mass_and_h_into(q, u, t, M, h, work)
+
+    def h_into(self, q, u, t, h, work=None):
+        if self.frame_at_rest:      # Q_v = 0 with the frame at rest (eq. 4.2)
+            elastic_h_into(self.K_ff, self.D_ff, self.damped, q, u, h)
+        else:
+            super().h_into(q, u, t, h, work)
 
     def _elastic(self, q_f, qdot_f):
         return self.K_ff @ q_f + self.D_ff @ qdot_f if self.damped else self.K_ff @ q_f

@@ -33,7 +33,7 @@ import numpy as np
 
 from ffrmbs.errors import ModelError
 
-from ._kernels import point_jacobian_T
+from ._kernels import add_free_point_force, free_quat_increment, normalize_quaternion, point_jacobian_T
 from .body import Body, Frame
 from .parametrization import parametrization
 
@@ -322,8 +322,44 @@ class FloatingFrameBody(Body):
         return out
 
     def normalize(self, q):
-        if self.param is not None:
+        if self.free_quaternion:
+            normalize_quaternion(q, 3)
+        elif self.param is not None:
             self.param.normalize(q[self._r])
+
+    @property
+    def free_quaternion(self) -> bool:
+        """True for a free frame with the quaternion parametrization: the layout of the
+        numba kernels (q = (R, p, q_f), u = (Ṙ, ω̄, q̇_f))."""
+        return self.param is not None and self.param.name == "quaternion"
+
+    def increment_into(self, q, du, out):
+        if self.motion is not None:
+            np.add(q, du, out=out)
+        elif self.free_quaternion:
+            free_quat_increment(q, du, out)
+        else:
+            super().increment_into(q, du, out)
+
+    def workspace(self):
+        """(A (3, 3), G (3, 3, n_f), M̄ (6+n_f, 6+n_f), Q̄ (6+n_f,), M (nu, nu)): scratch of
+        the kernels (orientation, shape-integral contraction, full-coordinate terms of a
+        prescribed frame, the mass block :meth:`h_into` does not return)."""
+        n = 6 + self.n_modes
+        return (np.empty((3, 3)), np.empty((3, 3, self.n_modes)), np.empty((n, n)), np.empty(n),
+                np.empty((self.nu, self.nu)))
+
+    def h_into(self, q, u, t, h, work=None):
+        if work is None:
+            work = self.workspace()
+        self.mass_and_h_into(q, u, t, work[4], h, work)
+
+    def add_point_load_into(self, q, frame, times, values, t, body_axes, h, work=None):
+        if not self.free_quaternion:
+            super().add_point_load_into(q, frame, times, values, t, body_axes, h, work)
+            return
+        add_free_point_force(q, frame.u0, frame.phi, times, values, t, body_axes,
+                             np.empty((3, 3)) if work is None else work[0], h)
 
     # --- frames -----------------------------------------------------------------------
     def frame_at(self, position, orientation=None, name=None) -> Frame:

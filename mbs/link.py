@@ -66,6 +66,14 @@ class ForceElement:
         just before each and restart there (``System.simulate``)."""
         return ()
 
+    def point_load(self):
+        """The element as one point force given by a step table, or None (the default):
+        ``(frame, times (n_t,) [s], values (n_t, 3) [N], body_axes)`` with the force
+        values[r] from times[r] on (none before times[0]; −inf for "always"), in the
+        frame's axes when ``body_axes``. The body stage (:mod:`mbs.body_stage`) then adds
+        it through :meth:`mbs.body.Body.add_point_load_into`, allocation-free."""
+        return None
+
     def add_tangents(self, t, q, u, K, D) -> None:
         """Optionally add −∂Q/∂q (in velocity-increment coordinates) and −∂Q/∂u into the
         global K, D (nu, nu) for implicit integrators; the default adds nothing."""

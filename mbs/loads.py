@@ -140,6 +140,23 @@ def _step_table(value):
     return np.zeros(1), np.array(value, dtype=float).reshape(1, 3)
 
 
+def _point_table(value):
+    """(times (n_t,), values (n_t, 3)) with the force values[r] for times[r] <= t <
+    times[r+1] and none before times[0], equal to ``value`` at every t: a constant holds
+    from −inf, a step :class:`Tabulated` as it is (its first row from −inf when
+    ``hold_first``); None for a callable or a linear table."""
+    if isinstance(value, Tabulated):
+        if value.kind != "step" or value.value_shape != (3,):
+            return None
+        times = value.times.copy()
+        if value.hold_first:
+            times[0] = -np.inf
+        return times, value.values
+    if callable(value):
+        return None
+    return np.array([-np.inf]), np.array(value, dtype=float).reshape(1, 3)
+
+
 def _vector_function(value, what):
     """A callable t -> (3,) array from a constant (3,), a callable or a :class:`Tabulated`."""
     if isinstance(value, Tabulated):
@@ -184,6 +201,7 @@ class Force(ForceElement):
         self.frame = frame
         self.force = _vector_function(force, type(self).__name__)
         self._table = _step_table(force)
+        self._point_table = _point_table(force)
         self.frame_fixed = bool(frame_fixed)
         self._nodes = None if getattr(frame, "node_index", None) is None else (np.array([frame.node_index]),
                                                                               np.ones(1))
@@ -203,6 +221,11 @@ class Force(ForceElement):
 
     def breakpoints(self):
         return _jumps(self.force)
+
+    def point_load(self):
+        """(frame, times, values, frame_fixed) of a constant force or a step
+        :class:`Tabulated` (see :meth:`mbs.link.ForceElement.point_load`), else None."""
+        return None if self._point_table is None else (self.frame, *self._point_table, self.frame_fixed)
 
     def step_loads(self):
         """The load as nodal step loads (:class:`mbs.modal.StepLoads`, report eq. 9) for the

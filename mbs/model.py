@@ -13,7 +13,7 @@ is never mutated.
 :class:`Data` holds everything that changes during a run as preallocated arrays: t, q,
 u, the midpoint state (t_m, q_m), the increment du, h, M, the tangents K, D, M̂ and its
 Cholesky factors (one per step size of a constant M̂), u_free, the contact flags (live,
-closed), penalty normal forces, the closed set, the buffers of W (nu, m), M̂⁻¹W, the
+closed), penalty normal forces, the bounding spheres of a planned run, the closed set, the buffers of W (nu, m), M̂⁻¹W, the
 Delassus matrix G (m, m), ξ_free, γ⁻, the gap-closing term, Λ and γ⁺ for the largest
 possible closed set, the warm starts (Λ of the last step per contact and for the
 joints), counters and the record of the last step. The contours' states and the
@@ -27,9 +27,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .bounding_spheres import sphere_pair
+from .bounding_spheres import SphereTable
 from .equations import Equations
-from .system_body_stage import SystemBodyStage
+from .body_stage import BodyStage
 
 N_FACTORS = 8          # Cholesky factors of a constant M̂ kept for different step sizes (+1)
 
@@ -44,7 +44,7 @@ class Model:
     equations : Equations
         M, h, tangents, constraints over the active bodies (allocating; implicit and
         explicit integrators).
-    body_stage : SystemBodyStage
+    body_stage : BodyStage
         The same terms written into Data's arrays (Moreau's body stage).
     nq, nu, n_c : int
     idle : tuple of bodies
@@ -68,18 +68,30 @@ class Model:
     penalty : tuple of int
         Single-valued unilateral contacts with law derivatives (their stiffness is
         checked against the step).
-    spheres : tuple
-        (sphere1, sphere2) of each prunable contact (:mod:`mbs.bounding_spheres`), else None.
+    spheres : SphereTable or None
+        The bounding spheres of the prunable contacts of a planned run
+        (:class:`mbs.bounding_spheres.SphereTable`), None without a plan.
     contours : tuple of (contour, owners, q_slice, u_slice)
         Every contour of a contact once, the indices of the contacts owning it and its
         body's slices (None on the ground).
+    owner_at, owners : int arrays
+        The owners of contour k as flat arrays: owners[owner_at[k]:owner_at[k + 1]]
+        (:func:`mbs._stage_kernels.contours_in_use`).
+    single_valued : tuple of int
+        The contacts with a single-valued law (their forces join h).
     m_max : int
         Rows of the largest contact problem: n_c + Σ dims.
+    blocks : (k, 2) int array or None
+        Rows [a, b) of each active body: M̂ is block diagonal with these blocks when no
+        force element has tangents (factored and solved block by block,
+        :mod:`mbs.linalg_kernels`); None: M̂ is factored whole (LAPACK).
+    idle_rows : int array
+        Rows of u of the bodies the plan solves apart (zero in every solve).
     """
 
     system: object
     equations: Equations
-    body_stage: SystemBodyStage
+    body_stage: BodyStage
     nq: int
     nu: int
     n_c: int
@@ -95,9 +107,14 @@ class Model:
     dims: tuple
     lam_at: tuple
     penalty: tuple
-    spheres: tuple
+    spheres: SphereTable | None
     contours: tuple
+    owner_at: np.ndarray
+    owners: np.ndarray
+    single_valued: tuple
     m_max: int
+    blocks: np.ndarray | None
+    idle_rows: np.ndarray
 
     @property
     def n_act(self) -> int:
@@ -133,13 +150,24 @@ def compile_model(system, plan=None, theta=0.5, solver=None) -> Model:
             if i not in owners:
                 owners.append(i)
     contours = tuple((k, tuple(owners), qs, us) for k, owners, qs, us in table)
-    return Model(system=system, equations=equations, body_stage=SystemBodyStage(equations),
+    owner_at = np.cumsum([0] + [len(owners) for _, owners, _, _ in table]).astype(np.int64)
+    owners = np.array([i for _, owners, _, _ in table for i in owners], dtype=np.int64)
+    body_stage = BodyStage.of_equations(equations)
+    blocks = None
+    if body_stage.constant_tangents:
+        blocks = np.array([[b.u_slice.start, b.u_slice.stop] for b in body_stage.active], dtype=np.int64)
+        blocks = blocks.reshape(-1, 2)
+    idle_rows = np.array([i for b in equations.idle for i in range(b.u_slice.start, b.u_slice.stop)],
+                         dtype=np.int64)
+    return Model(system=system, equations=equations, body_stage=body_stage,
                  nq=system.nq, nu=system.nu, n_c=system.n_c, idle=equations.idle, active_u=active_u,
                  theta=float(theta), solver=solver, constant_iteration=equations.constant_iteration_matrix,
                  prune=plan is not None, contacts=contacts, set_valued=set_valued,
                  unilateral=tuple(bool(c.unilateral) for c in contacts), dims=dims, lam_at=lam_at,
-                 penalty=penalty, spheres=tuple(sphere_pair(c) if plan is not None else None for c in contacts),
-                 contours=contours, m_max=system.n_c + sum(dims))
+                 penalty=penalty, spheres=SphereTable(contacts) if plan is not None else None,
+                 contours=contours, owner_at=owner_at, owners=owners,
+                 single_valued=tuple(i for i, sv in enumerate(set_valued) if not sv), m_max=system.n_c + sum(dims),
+                 blocks=blocks, idle_rows=idle_rows)
 
 
 class Data:
@@ -159,7 +187,8 @@ class Data:
         for b in model.idle:
             np.fill_diagonal(self.M[b.u_slice, b.u_slice], 1.0)
         self.K, self.D = np.zeros((nu, nu)), np.zeros((nu, nu))
-        self.factors = []                   # [(step size, Cholesky factor of M̂ (n_act, n_act), Fortran order)]
+        self.factors = []                   # [(step size, Cholesky factor of M̂)]: (nu, nu) blockwise with
+                                            # model.blocks, else (n_act, n_act) Fortran order
         self.factor = None                  # the factor of this step
         self.u_free = np.zeros(nu)
         self.rhs = np.zeros(nu)             # M̂⁻¹ b on all rows
@@ -167,11 +196,15 @@ class Data:
         self.w_N = np.zeros(nu)             # a penalty contact's W_N
         # contacts
         self.live = np.ones(n, dtype=bool)
+        self.live_idx = np.zeros(n, dtype=np.intp)             # the live contacts, n_live of them
+        self.n_live = 0
+        self.contour_idx = np.zeros(len(model.contours), dtype=np.intp)   # contours of live contacts
         self.closed = np.zeros(n, dtype=bool)
         self.force_N = np.zeros(n)
         self.closed_idx = np.zeros(n, dtype=np.intp)
         self.n_closed = 0
         self.m = 0
+        self.problem_views = {}             # (nu, m) -> views of the buffers below (Data.problem)
         self.W_buf = np.zeros(nu * m)
         self.MW_buf = np.zeros(nu * m)
         self.W_act_buf = np.zeros(n_act * m)
@@ -182,7 +215,10 @@ class Data:
         self.work_u = np.zeros(nu)          # M̂⁻¹ W Λ, then (1 − 2θ)Δt u_k
         self.u_prev = np.zeros(nu)          # u_k while u_{k+1} is formed
         self.solver_work = np.zeros((4, m))
-        self.sphere_gap = np.zeros(3)       # centre distance of two bounding spheres
+        n_s = 0 if model.spheres is None else len(model.spheres.spheres)
+        self.sphere_centres = np.zeros((n_s, 3))    # bounding spheres of the prunable contacts [m]
+        self.sphere_radii = np.zeros(n_s)
+        self.spheres_started = False                # the constant centres written
         self.lam_prev = np.zeros(sum(model.dims))
         self.warm = np.zeros(n, dtype=bool)         # the contact has Λ of the last step
         self.lam_joints = np.zeros(model.n_c)
@@ -196,7 +232,14 @@ class Data:
 
     def problem(self, nu, m):
         """Views (W (nu, m) C order, M̂⁻¹W (nu, m) Fortran order, G (m, m), Λ, γ⁺, ξ_free,
-        γ⁻, closing, offset, work (m,)) of the contact problem with m rows."""
+        γ⁻, closing, offset, work (m,)) of the contact problem with m rows, made once
+        per (nu, m) and kept in ``problem_views``."""
+        views = self.problem_views.get((nu, m))
+        if views is None:
+            views = self.problem_views[(nu, m)] = self._problem(nu, m)
+        return views
+
+    def _problem(self, nu, m):
         return (self.W_buf[:nu * m].reshape(nu, m), self.MW_buf[:nu * m].reshape(m, nu).T,
                 self.G_buf[:m * m].reshape(m, m), self.lam_buf[:m], self.gamma_plus_buf[:m],
                 self.xi_free_buf[:m], self.gamma_pre_buf[:m], self.closing_buf[:m], self.offset_buf[:m],

@@ -17,6 +17,7 @@ import numpy as np
 
 from ffrmbs.errors import ModelError
 
+from ._kernels import rigid_free_mass_and_h
 from .body import Body, Frame
 from .floating_frame import FloatingFrameBody
 from .rotations import skew
@@ -48,6 +49,15 @@ class RigidBody(FloatingFrameBody):
         Q = np.concatenate((-self.mass * A @ np.cross(w, np.cross(w, self.com)),
                             -np.cross(w, self.inertia_origin @ w)))
         return M, Q
+
+    def mass_and_h_into(self, q, u, t, M, h, work=None):
+        """M̄ and Q̄_v (module docstring) by :func:`mbs._kernels.rigid_free_mass_and_h` on a
+        quaternion frame; a Cardan frame takes the generic path."""
+        if self.free_quaternion:
+            rigid_free_mass_and_h(q, u, self.mass, self.com, self.inertia_origin,
+                                  np.empty((3, 3)) if work is None else work[0], M, h)
+        else:
+            super().mass_and_h_into(q, u, t, M, h, work)
 
     def com_frame(self) -> Frame:
         return self.frame_at(self.com, name="centre of mass")
@@ -81,6 +91,24 @@ class PointMass(Body):
 
     def increment(self, q, du):
         return q + du
+
+    def mass_and_h_into(self, q, u, t, M, h, work=None):
+        M.fill(0.0)
+        for i in range(3):
+            M[i, i] = self.mass
+        h.fill(0.0)
+
+    def h_into(self, q, u, t, h, work=None):
+        h.fill(0.0)
+
+    def increment_into(self, q, du, out):
+        np.add(q, du, out=out)
+
+    def add_point_load_into(self, q, frame, times, values, t, body_axes, h, work=None):
+        """h += F: J_T = 1 and the point mass's axes are the inertial ones."""
+        r = int(np.searchsorted(times, t, side="right")) - 1
+        if r >= 0:
+            h += values[r]
 
     def kinetic_energy(self, q, u, t=0.0):
         return 0.5 * self.mass * u @ u

@@ -42,6 +42,8 @@ from scipy.linalg.lapack import dpotrf, dpotrs
 from contact.laws import Bilateral
 from contact.solver import ContactSet
 
+from . import _stage_kernels as K
+from .linalg_kernels import block_cho_solve_matrix, block_cho_solve_vector, block_cholesky_into
 from .step_failure import StepFailure
 
 STAGES = ("midpoint", "bodies", "contours", "detect", "constraints", "impulses", "velocity", "position")
@@ -70,26 +72,19 @@ def contours(model, data, dt):
     if not model.contacts:
         return
     t, q, u, live = data.t_m, data.q_m, data.u, data.live
-    if model.prune:
-        for i, pair in enumerate(model.spheres):
-            if pair is None:
-                continue
-            c1, r1 = pair[0](q, t)
-            c2, r2 = pair[1](q, t)
-            d = np.subtract(c1, c2, out=data.sphere_gap)
-            reach = r1 + r2 + model.contacts[i].margin
-            live[i] = not float(d @ d) > reach * reach
-            if not live[i]:
-                data.closed[i] = False
-                data.stats["pruned_contacts"] += 1
-    for contour, owners, qs, us in model.contours:
-        for i in owners:
-            if live[i]:
-                if qs is None:
-                    contour.update(None, None, t)
-                else:
-                    contour.update(q[qs], u[us], t)
-                break
+    if model.prune and len(model.spheres):
+        if not data.spheres_started:
+            model.spheres.start(q, t, data.sphere_centres, data.sphere_radii)
+            data.spheres_started = True
+        data.stats["pruned_contacts"] += model.spheres.prune(q, t, data.sphere_centres, data.sphere_radii, live,
+                                                             data.closed)
+    for j in range(K.contours_in_use(model.owner_at, model.owners, live, data.contour_idx)):
+        contour, owners, qs, us = model.contours[data.contour_idx[j]]
+        if qs is None:
+            contour.update(None, None, t)
+        else:
+            contour.update(q[qs], u[us], t)
+    data.n_live = K.live_contacts(live, data.live_idx)
 
 
 def detect(model, data, dt):
@@ -99,9 +94,9 @@ def detect(model, data, dt):
     n_closed = 0
     last = data.last
     m = model.n_c
-    for i, c in enumerate(model.contacts):
-        if not data.live[i]:
-            continue
+    for j in range(data.n_live):
+        i = data.live_idx[j]
+        c = model.contacts[i]
         closed = c.locate()
         data.closed[i] = closed
         if closed:
@@ -121,9 +116,9 @@ def detect(model, data, dt):
 def constraints(model, data, dt):
     """Stage 5: single-valued contact forces into h; M̂ factored; u_free; the contact
     problem (W, M̂⁻¹W, G, ξ_free, γ⁻, closing) of the joints and closed contacts."""
-    for i, c in enumerate(model.contacts):
-        if not model.set_valued[i] and data.live[i]:
-            data.force_N[i] = add_penalty_force(c, data.closed[i], data.h)
+    for i in model.single_valued:
+        if data.live[i]:
+            data.force_N[i] = add_penalty_force(model.contacts[i], data.closed[i], data.h)
     factor = iteration_factor(model, data, dt)
     if model.penalty:
         check_penalty(model, data, factor, dt)
@@ -253,16 +248,26 @@ def iteration_factor(model, data, dt):
         if len(data.factors) > 8:            # step-size control: keep the latest few
             data.factors.clear()
         data.M[...] = model.equations.mass_matrix(data.t_m, data.q_m)
-        factor = _factor(model, data, dt, np.empty((model.n_act, model.n_act), order="F"))
+        factor = _factor(model, data, dt, _factor_array(model))
         data.factors.append((dt, factor))
         return factor
     if data.factor is None:
-        data.factor = np.empty((model.n_act, model.n_act), order="F")
+        data.factor = _factor_array(model)
     return _factor(model, data, dt, data.factor)
 
 
+def _factor_array(model):
+    """Storage of a factor of M̂: (nu, nu) for the block factor, else (n_act, n_act)
+    Fortran order (LAPACK)."""
+    if model.blocks is not None:
+        return np.zeros((model.nu, model.nu))
+    return np.empty((model.n_act, model.n_act), order="F")
+
+
 def _factor(model, data, dt, out):
-    """Cholesky factor of M̂ (tangents at q_m) into ``out`` (n_act, n_act), Fortran order."""
+    """Cholesky factor of M̂ (tangents at q_m) into ``out``: block by block over the
+    active bodies (:func:`~mbs.linalg_kernels.block_cholesky_into`) when M̂ is block
+    diagonal (``model.blocks``), else LAPACK's on the active rows."""
     th = model.theta
     K, D, M = data.K, data.D, data.M
     model.body_stage.tangents(data.t_m, data.q_m, data.u, K, D)
@@ -270,6 +275,11 @@ def _factor(model, data, dt, out):
     np.add(M, D, out=D)
     np.multiply(K, th * th * dt * dt, out=K)
     np.add(D, K, out=D)                     # M̂ = M + θΔt D + θ²Δt² K
+    if model.blocks is not None:
+        info = block_cholesky_into(D, model.blocks, out)
+        if info != 0:
+            raise StepFailure(f"M + θΔt D + θΔt² K is not positive definite (pivot of row {info - 1})")
+        return out
     if model.active_u is None:
         out[...] = D
     else:
@@ -286,6 +296,9 @@ def _factor(model, data, dt, out):
 def solve(model, data, factor, b):
     """b ← M̂⁻¹ b in place (nu,); on the active rows only when the plan left bodies out
     (zero on theirs: their blocks of M̂ are decoupled from the rest)."""
+    if model.blocks is not None:
+        block_cho_solve_vector(factor, model.blocks, model.idle_rows, b, b)
+        return
     if model.active_u is None:
         dpotrs(factor, b, lower=True, overwrite_b=True)
         return
@@ -298,6 +311,9 @@ def solve(model, data, factor, b):
 
 def solve_matrix(model, data, factor, W, MW):
     """M̂⁻¹ W (nu, m) into MW (Fortran order without left-out bodies, else C order)."""
+    if model.blocks is not None:
+        block_cho_solve_matrix(factor, model.blocks, model.idle_rows, W, MW)
+        return
     if model.active_u is None:
         MW[...] = W
         dpotrs(factor, MW, lower=True, overwrite_b=True)

@@ -146,6 +146,13 @@ class Integrator:
     def u(self, value):
         self.data.u[...] = value
 
+    def compile(self, plan=None) -> None:
+        """Compile the System under ``plan`` (None: every body integrated) into the run's
+        :class:`~mbs.model.Model` and a new :class:`~mbs.model.Data` (before ``start``)."""
+        self.plan = plan
+        self.model = compile_model(self.system, plan, **self.model_options())
+        self.data = Data(self.model)
+
     def model_options(self) -> dict:
         """Options of :func:`mbs.model.compile_model` the integrator fixes (Moreau: θ, solver)."""
         return {}
@@ -237,9 +244,7 @@ class Integrator:
         sys.normalize(q)
         cpu0 = time.process_time()
         modal = plan.solve_modal(sys, times, q, u, dt) if plan is not None else {}
-        self.plan = plan
-        self.model = compile_model(sys, plan, **self.model_options())
-        self.data = Data(self.model)
+        self.compile(plan)
         res.plan = "" if plan is None else str(plan)
         res.stats["modal_cpu_s"] = time.process_time() - cpu0
         state = RunState(times, sorted(set(times.tolist()) | set(breaks)), breaks,

@@ -13,6 +13,14 @@ c = (1 − α_f)/(1 − α_m), and the constraint rows scaled by 1/(β h² c). K
 constant elastic, damping and link tangents; the gyroscopic tangents are left out
 (a quasi-Newton method), which only slows convergence for fast rotation.
 
+Each iteration is allocation-free: M and h come from the body stage
+(:class:`mbs.body_stage.BodyStage`) into a preallocated workspace, the vector algebra
+and the Cholesky solve of S from numba kernels (:mod:`mbs.integrators._kernels`,
+:mod:`mbs.linalg_kernels`). S is read from its upper triangle (it is symmetric unless a
+force element's tangent is not); where it is not positive definite the step solves it
+with LAPACK's symmetric indefinite solver instead. With constraints the KKT system is
+solved densely by LAPACK.
+
 ρ∞ ∈ [0, 1] is the spectral radius at h ω → ∞: α_m = (2ρ∞ − 1)/(ρ∞ + 1),
 α_f = ρ∞/(ρ∞ + 1), γ = ½ − α_m + α_f, β = ¼ (γ + ½)²; second-order accurate,
 unconditionally stable for linear problems.
@@ -25,7 +33,20 @@ import scipy.linalg
 
 from ffrmbs.errors import ModelError
 
+from ..body_stage import BodyStage
+from ._kernels import combine_into, ga_base, ga_newton_update, ga_predict
 from .driver import Integrator, StepFailure
+
+
+class _Workspace:
+    """The arrays of one step: iterate, predictions, M, h, tangents, factor."""
+
+    def __init__(self, nq, nu):
+        self.a1, self.abar1, self.u1, self.dq = (np.zeros(nu) for _ in range(4))
+        self.base_u, self.base_dq, self.h1, self.res, self.da = (np.zeros(nu) for _ in range(5))
+        self.q1 = np.zeros(nq)
+        self.M, self.K, self.D, self.stiff, self.L = (np.zeros((nu, nu)) for _ in range(5))
+        self.stiff_h = None     # the step size ``stiff`` was built for (constant tangents)
 
 
 class GeneralizedAlpha(Integrator):
@@ -51,51 +72,80 @@ class GeneralizedAlpha(Integrator):
         return {"rho_inf": self.rho_inf, "tol": self.tol}
 
     def start(self, t, q, u):
+        sys = self.model.equations
         self.t, self.q, self.u = t, q.copy(), u.copy()
-        self.a, self.lam = self.model.equations.accelerations(t, self.q, self.u)
+        self.a, self.lam = sys.accelerations(t, self.q, self.u)
         self.abar = self.a.copy()
+        self.bodies = self.model.body_stage
+        self.work = _Workspace(sys.nq, sys.nu)
+
+    def _stiffness(self, t1, h, c):
+        """stiff = βh²c K + γhc D (nu, nu) with the tangents at (t1, q_n, u_n); built once
+        per step size when they are constant."""
+        w, bodies = self.work, self.bodies
+        if bodies.constant_tangents and w.stiff_h == h:
+            return w.stiff
+        bodies.tangents(t1, self.q, self.u, w.K, w.D)
+        combine_into(w.K, self.beta * h * h * c, w.D, self.gamma * h * c, w.stiff)
+        w.stiff_h = h
+        return w.stiff
 
     def step(self, h):
-        sys = self.model.equations
+        sys, bodies, w = self.model.equations, self.bodies, self.work
         am, af, gm, bt = self.alpha_m, self.alpha_f, self.gamma, self.beta
         c = (1 - af) / (1 - am)
         t1 = self.t + h
-        K, D = sys.tangents(t1, self.q, self.u)
-        stiff = bt * h * h * c * K + gm * h * c * D
-        a1, lam = self.a.copy(), self.lam.copy()
+        stiff = self._stiffness(t1, h, c)
+        a1 = w.a1
+        a1[:] = self.a
+        lam = self.lam.copy() if sys.n_c else self.lam
         nu, nc = sys.nu, sys.n_c
-        base_u = self.u + h * (1 - gm) * self.abar
-        base_dq = h * self.u + h * h * (0.5 - bt) * self.abar
+        hg, hhb = h * gm, h * h * bt
+        ga_base(self.u, self.abar, h * (1 - gm), h, h * h * (0.5 - bt), w.base_u, w.base_dq)
         for it in range(1, self.max_iter + 1):
-            abar1 = (af * self.a + (1 - af) * a1 - am * self.abar) / (1 - am)
-            u1 = base_u + h * gm * abar1
-            q1 = sys.increment(self.q, base_dq + h * h * bt * abar1)
-            M, h1 = sys.mass_and_h(t1, q1, u1)
-            res = M @ a1 - h1
-            S = M + stiff
+            ga_predict(self.a, a1, self.abar, w.base_u, w.base_dq, af, am, hg, hhb, w.abar1, w.u1, w.dq)
+            bodies.increment(self.q, w.dq, w.q1)
+            bodies.mass_and_h(t1, w.q1, w.u1, w.M, w.h1)
             if nc:
-                C = sys.constraint_jacobian(t1, q1)
-                res -= C.T @ lam
-                g = sys.constraint_residual(t1, q1)
-                KKT = np.zeros((nu + nc, nu + nc))
-                KKT[:nu, :nu] = S
-                KKT[:nu, nu:] = -C.T
-                KKT[nu:, :nu] = C
-                d = np.linalg.solve(KKT, -np.concatenate((res, g / (bt * h * h * c))))
-                da, lam = d[:nu], lam + d[nu:]
+                da, lam = self._constrained_correction(t1, w, stiff, lam, bt * h * h * c)
+                a1 += da
+                err, scale, finite = np.abs(da).max(), np.abs(a1).max(), bool(np.all(np.isfinite(a1)))
             else:
-                da = scipy.linalg.solve(S, -res, assume_a="sym", check_finite=False)
-            a1 += da
+                info, err, scale, finite = ga_newton_update(w.M, stiff, a1, w.h1, w.L, w.res, w.da)
+                if info:        # S not positive definite: the symmetric indefinite solver
+                    da = scipy.linalg.solve(w.M + stiff, w.h1 - w.M @ a1, assume_a="sym", check_finite=False)
+                    a1 += da
+                    err, scale, finite = np.abs(da).max(), np.abs(a1).max(), bool(np.all(np.isfinite(a1)))
             self.iterations += 1
-            if not np.all(np.isfinite(a1)):
+            if not finite:
                 break
-            if np.abs(da).max() <= self.tol * (np.abs(a1).max() + 1e-300):
+            if err <= self.tol * (scale + 1e-300):
                 break
         else:
             raise StepFailure(f"generalized-α Newton did not converge in {self.max_iter} iterations "
-                              f"(last correction {np.abs(da).max():.3g}); reduce dt")
-        abar1 = (af * self.a + (1 - af) * a1 - am * self.abar) / (1 - am)
-        self.u = base_u + h * gm * abar1
-        self.q = sys.increment(self.q, base_dq + h * h * bt * abar1)
-        sys.normalize(self.q)
-        self.a, self.abar, self.lam, self.t = a1, abar1, lam, t1
+                              f"(last correction {err:.3g}); reduce dt")
+        ga_predict(self.a, a1, self.abar, w.base_u, w.base_dq, af, am, hg, hhb, w.abar1, w.u1, w.dq)
+        bodies.increment(self.q, w.dq, w.q1)
+        bodies.normalize(w.q1)
+        # the new state: q and u copied into the run's Data, the accelerations' buffers swapped
+        self.q = w.q1
+        self.u = w.u1
+        self.a, w.a1 = a1, self.a
+        self.abar, w.abar1 = w.abar1, self.abar
+        self.lam, self.t = lam, t1
+
+    def _constrained_correction(self, t1, w, stiff, lam, scale):
+        """(Δu̇, λ) of one Newton correction of the KKT system with the constraint rows
+        scaled by 1/``scale`` = 1/(βh²c) (LAPACK, allocating)."""
+        sys = self.model.equations
+        nu, nc = sys.nu, sys.n_c
+        res = w.M @ w.a1 - w.h1
+        C = sys.constraint_jacobian(t1, w.q1)
+        res -= C.T @ lam
+        g = sys.constraint_residual(t1, w.q1)
+        KKT = np.zeros((nu + nc, nu + nc))
+        KKT[:nu, :nu] = w.M + stiff
+        KKT[:nu, nu:] = -C.T
+        KKT[nu:, :nu] = C
+        d = np.linalg.solve(KKT, -np.concatenate((res, g / scale)))
+        return d[:nu], lam + d[nu:]

@@ -1,0 +1,218 @@
+"""The body stage of a step (DESIGN.md, stage 2): M, h, the tangents and the position
+update of all integrated bodies, written into arrays the caller owns.
+
+For each active body, at (t, q, u):
+
+    M = blockdiag(M_b(q_b, t))                                  (nu, nu)
+    h = Σ_b h_b(q_b, u_b, t) + Σ_b J_T,com,bᵀ m_b g + Σ_e Q_e    (nu,)
+
+with h_b = Q_v − K q_f − D q̇_f of each body (thesis eq. 2.77–2.79, 2.36), gravity at
+each body's centre of mass and the force elements' generalized forces Q = J_Tᵀ F
+(thesis eq. 2.76). A body left out (a planned run solves it apart, :mod:`mbs.plan`)
+gets the identity as its mass block, zero force and a position that does not move.
+The tangents are K = blockdiag(−∂h_b/∂q) + the force elements' and D likewise (for the
+iteration matrices of the implicit schemes).
+
+Point masses (M = m 1, h = 0 but for gravity, q ⊕ Δu = q + Δu) are done all at once
+by the kernels :func:`mbs._kernels.point_masses_mass`, :func:`~mbs._kernels.point_masses_h`
+and :func:`~mbs._kernels.point_masses_increment` over their index arrays, their gravity
+m g included, so that many of them cost one call. Every other body contributes through
+its in-place methods (``mass_and_h_into``, ``h_into``,
+``increment_into``, ``add_point_load_into`` of :class:`mbs.body.Body`): numba kernels
+for FFR bodies (free quaternion, prescribed and fixed frames), rigid bodies and point
+masses, a copy from the allocating methods for the rest. Gravity and force elements
+that are a point force given by a step table (:meth:`mbs.link.ForceElement.point_load`:
+``Force``, ``DistributedForce`` with constant or step loads) go through the bodies'
+kernels too; other force elements add their forces with their own ``add_forces``.
+The results equal :meth:`mbs.system.System.mass_and_h` (the numpy reference) to
+rounding.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ffrmbs.errors import ModelError
+
+from . import _kernels as K
+from .rigid_body import PointMass
+
+GRAVITY_TABLE = np.array([-np.inf])     # gravity acts at every time: one table row from −inf
+
+
+class BodyStage:
+    """The body stage of ``bodies`` (module docstring).
+
+    Parameters
+    ----------
+    bodies : sequence of Body
+        All bodies of the system, in order, with their slices (``q_slice``, ``u_slice``)
+        of the global q and u.
+    gravity : (3,) [m/s²]
+    forces : sequence of ForceElement
+        The force elements acting (those of a planned run's left-out bodies excluded).
+    active : None or sequence
+        The bodies integrated: None (all), one bool per body, or indices into ``bodies``.
+    nu : int or None
+        Length of the global u (default: the bodies' velocities summed).
+    """
+
+    def __init__(self, bodies, gravity, forces, active=None, nu=None):
+        self.bodies = list(bodies)
+        self.nu = sum(b.nu for b in self.bodies) if nu is None else int(nu)
+        flags = _active_flags(self.bodies, active)
+        self.active = [b for b, on in zip(self.bodies, flags) if on]
+        self.idle = [b for b, on in zip(self.bodies, flags) if not on]
+        if any(b.u_slice is None for b in self.bodies):
+            raise ModelError("BodyStage: every body needs its slices (add it to a System first)")
+        self._one = len(self.bodies) == 1 and len(self.active) == 1 and self.active[0].nu == self.nu
+        points = [] if self._one else [b for b in self.active if type(b) is PointMass]
+        self._items = [(b, b.q_slice, b.u_slice, b.workspace()) for b in self.active if b not in points]
+        self._work = {id(b): w for b, _, _, w in self._items}
+        self._work.update((id(b), b.workspace()) for b in points)
+        self.gravity = np.asarray(gravity, dtype=float).reshape(3)
+        self._point_q = np.array([b.q_slice.start for b in points], dtype=np.int64)
+        self._point_u = np.array([b.u_slice.start for b in points], dtype=np.int64)
+        self._point_mass = np.array([b.mass for b in points], dtype=float)
+        self._point_force = np.zeros((len(points), 3))      # their gravity m g [N]
+        self.forces = list(forces)
+        self._loads = []            # ("point", body, q_slice, u_slice, frame, times, values, body_axes, work)
+        if self.gravity.any():      # or ("element", force element)
+            self._point_force[:] = np.multiply.outer(self._point_mass, self.gravity)
+            for b, qs, us, work in self._items:
+                F = (b.mass * self.gravity).reshape(1, 3)
+                self._loads.append(("point", b, qs, us, b.com_frame(), GRAVITY_TABLE, F, False, work))
+        for f in self.forces:
+            load = f.point_load()
+            if load is not None and load[0].body is not None and load[0].body in self.active:
+                frame, times, values, body_axes = load
+                b = frame.body
+                self._loads.append(("point", b, b.q_slice, b.u_slice, frame, times, values, body_axes,
+                                    self._work[id(b)]))
+            else:
+                self._loads.append(("element", f))
+        self._force_tangents = [f for f in self.forces if f.has_tangents]
+        self.K0 = np.zeros((self.nu, self.nu))      # the bodies' constant tangents
+        self.D0 = np.zeros((self.nu, self.nu))
+        for b in self.active:
+            Kb, Db = b.stiffness_tangent(), b.damping_tangent()
+            if Kb is not None:
+                self.K0[b.u_slice, b.u_slice] += Kb
+            if Db is not None:
+                self.D0[b.u_slice, b.u_slice] += Db
+        self.additive = all(b.additive for b in self.active)
+        self._rotating = [(b, b.q_slice) for b in self.active if not b.additive]
+
+    @classmethod
+    def of_equations(cls, equations) -> "BodyStage":
+        """The body stage of an :class:`~mbs.equations.Equations`: its active bodies and
+        force elements (a planned run's left-out ones excluded)."""
+        return cls(equations.bodies, equations.gravity, equations.forces,
+                   [b not in equations.idle for b in equations.bodies], equations.nu)
+
+    @property
+    def constant_tangents(self) -> bool:
+        """True when K and D do not change (no active force element has tangents)."""
+        return not self._force_tangents
+
+    @property
+    def constant_iteration_matrix(self) -> bool:
+        """True when M, K and D do not change: every active body has a constant mass
+        matrix and no force element has tangents."""
+        return all(b.constant_mass for b in self.active) and self.constant_tangents
+
+    # --- the stage --------------------------------------------------------------------
+    def mass_and_h(self, t, q, u, M, h) -> None:
+        """Write M (nu, nu) and h (nu,) at (t [s], q, u) into ``M`` and ``h`` (module
+        docstring); M is written whole, h whole."""
+        if self._one:
+            b, _, _, work = self._items[0]
+            b.mass_and_h_into(q, u, t, M, h, work)
+        else:
+            M.fill(0.0)
+            if self.idle:
+                h.fill(0.0)
+                for b in self.idle:
+                    for i in range(b.u_slice.start, b.u_slice.stop):
+                        M[i, i] = 1.0
+            for b, qs, us, work in self._items:
+                b.mass_and_h_into(q[qs], u[us], t, M[us, us], h[us], work)
+            if self._point_u.size:
+                K.point_masses_mass(self._point_u, self._point_mass, M)
+                K.point_masses_h(self._point_u, self._point_force, h)
+        if self._loads:
+            self._add_loads(t, q, u, h)
+
+    def h_only(self, t, q, u, h) -> None:
+        """Write h (nu,) at (t [s], q, u) into ``h`` (for a constant M)."""
+        if self._one:
+            b, _, _, work = self._items[0]
+            b.h_into(q, u, t, h, work)
+        else:
+            if self.idle:
+                h.fill(0.0)
+            for b, qs, us, work in self._items:
+                b.h_into(q[qs], u[us], t, h[us], work)
+            if self._point_u.size:
+                K.point_masses_h(self._point_u, self._point_force, h)
+        if self._loads:
+            self._add_loads(t, q, u, h)
+
+    def _add_loads(self, t, q, u, h):
+        """Gravity and force elements into h, in the System's order."""
+        for load in self._loads:
+            if load[0] == "point":
+                _, b, qs, us, frame, times, values, body_axes, work = load
+                if self._one:
+                    b.add_point_load_into(q, frame, times, values, t, body_axes, h, work)
+                else:
+                    b.add_point_load_into(q[qs], frame, times, values, t, body_axes, h[us], work)
+            else:
+                load[1].add_forces(t, q, u, h)
+
+    def tangents(self, t, q, u, K, D) -> None:
+        """Write the tangents K = −∂h/∂q (in velocity-increment coordinates) and
+        D = −∂h/∂u (nu, nu) into ``K`` and ``D``: the bodies' constant elastic and damping
+        tangents plus the force elements' (springs)."""
+        K[...] = self.K0
+        D[...] = self.D0
+        for f in self._force_tangents:
+            f.add_tangents(t, q, u, K, D)
+
+    def increment(self, q, du, out) -> None:
+        """Write q ⊕ Δu (exact for rotations, exponential map) into ``out`` (nq,), which
+        may be ``q``; left-out bodies keep their q."""
+        if self.additive:
+            np.add(q, du, out=out)
+            return
+        if self._one:
+            self.active[0].increment_into(q, du, out)
+            return
+        if out is not q:
+            for b in self.idle:
+                out[b.q_slice] = q[b.q_slice]
+        for b, qs, us, _ in self._items:
+            b.increment_into(q[qs], du[us], out[qs])
+        if self._point_u.size:
+            K.point_masses_increment(self._point_q, self._point_u, q, du, out)
+
+    def normalize(self, q) -> None:
+        """Project q onto its constraint manifold in place (unit quaternions)."""
+        if self._one and self._rotating:
+            self._rotating[0][0].normalize(q)
+            return
+        for b, qs in self._rotating:
+            b.normalize(q[qs])
+
+
+def _active_flags(bodies, active) -> list:
+    """One bool per body from None, bools or indices."""
+    if active is None:
+        return [True] * len(bodies)
+    active = list(active)
+    if len(active) == len(bodies) and all(isinstance(a, (bool, np.bool_)) for a in active):
+        return [bool(a) for a in active]
+    chosen = {int(i) for i in active}
+    if any(not 0 <= i < len(bodies) for i in chosen):
+        raise ModelError(f"BodyStage: active body indices {sorted(chosen)} outside 0..{len(bodies) - 1}")
+    return [i in chosen for i in range(len(bodies))]

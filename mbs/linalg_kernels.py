@@ -1,0 +1,119 @@
+"""Dense symmetric positive definite solves in numba, allocation-free: the Cholesky factor
+A = L Lᵀ written into a caller-owned L, and the two triangular solves (Golub & Van Loan,
+Matrix Computations, Alg. 4.2.1 and 3.1.1/3.1.2), also block by block for a
+block-diagonal matrix (the Moreau iteration matrix when no force element couples the
+bodies: one block per body, so that its cost is Σ n_b², not n²). The iteration matrices of the
+integrators (M + θΔt D + θ²Δt² K; M + βh²c K + γhc D) are small, dense and SPD: these
+kernels solve them without a LAPACK call's Python overhead. Reference: scipy.linalg
+``cho_factor`` / ``cho_solve`` (tests).
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+
+@njit(cache=True)
+def cholesky_into(A, L):
+    """Lower Cholesky factor of the symmetric (n, n) ``A`` (only its lower triangle is
+    read) into ``L`` (n, n; the strict upper triangle is set to zero). Returns 0, or
+    j + 1 when the leading (j+1) × (j+1) minor is not positive definite to working
+    precision: its pivot a_jj − Σ_k l_jk² is at most n ε a_jj (like LAPACK's ``info``,
+    with a rounding-level margin, so a matrix singular but for rounding is reported,
+    not factored); L is then incomplete. ``L`` may be ``A``."""
+    n = A.shape[0]
+    tol = n * 2.220446049250313e-16
+    for j in range(n):
+        s = A[j, j]
+        floor = tol * abs(s)
+        for k in range(j):
+            s -= L[j, k] * L[j, k]
+        if not s > floor:
+            return j + 1
+        d = math.sqrt(s)
+        L[j, j] = d
+        for i in range(j + 1, n):
+            s = A[i, j]
+            for k in range(j):
+                s -= L[i, k] * L[j, k]
+            L[i, j] = s / d
+    for i in range(n):
+        for j in range(i + 1, n):
+            L[i, j] = 0.0
+    return 0
+
+
+@njit(cache=True)
+def cho_solve_vector(L, b, x):
+    """x = (L Lᵀ)⁻¹ b for b, x (n,); ``x`` may be ``b``."""
+    n = L.shape[0]
+    for i in range(n):
+        s = b[i]
+        for k in range(i):
+            s -= L[i, k] * x[k]
+        x[i] = s / L[i, i]
+    for i in range(n - 1, -1, -1):
+        s = x[i]
+        for k in range(i + 1, n):
+            s -= L[k, i] * x[k]
+        x[i] = s / L[i, i]
+
+
+@njit(cache=True)
+def cho_solve_matrix(L, B, X):
+    """X = (L Lᵀ)⁻¹ B for B, X (n, m), column by column; ``X`` may be ``B``."""
+    n = L.shape[0]
+    for c in range(B.shape[1]):
+        for i in range(n):
+            s = B[i, c]
+            for k in range(i):
+                s -= L[i, k] * X[k, c]
+            X[i, c] = s / L[i, i]
+        for i in range(n - 1, -1, -1):
+            s = X[i, c]
+            for k in range(i + 1, n):
+                s -= L[k, i] * X[k, c]
+            X[i, c] = s / L[i, i]
+
+
+def cho_solve_into(L, b, x):
+    """x = (L Lᵀ)⁻¹ b for a vector (n,) or a matrix (n, m) right-hand side ``b`` (``x``
+    of the same shape, may be ``b``); L from :func:`cholesky_into`."""
+    if b.ndim == 1:
+        cho_solve_vector(L, b, x)
+    else:
+        cho_solve_matrix(L, b, x)
+
+
+@njit(cache=True)
+def block_cholesky_into(A, blocks, L):
+    """:func:`cholesky_into` of each diagonal block A[a:b, a:b] of (n, n) ``A`` into the
+    same block of ``L``, (a, b) the rows of ``blocks`` (k, 2); the rest of L is not
+    read by the block solves. Returns 0, or the first row a + j + 1 whose pivot fails."""
+    for k in range(blocks.shape[0]):
+        a, b = blocks[k, 0], blocks[k, 1]
+        info = cholesky_into(A[a:b, a:b], L[a:b, a:b])
+        if info:
+            return a + info
+    return 0
+
+
+@njit(cache=True)
+def block_cho_solve_vector(L, blocks, idle, b, x):
+    """x = A⁻¹ b block by block (L from :func:`block_cholesky_into`), zero on the rows
+    ``idle`` outside every block; b, x (n,), ``x`` may be ``b``."""
+    for k in range(blocks.shape[0]):
+        lo, hi = blocks[k, 0], blocks[k, 1]
+        cho_solve_vector(L[lo:hi, lo:hi], b[lo:hi], x[lo:hi])
+    for i in idle:
+        x[i] = 0.0
+
+
+@njit(cache=True)
+def block_cho_solve_matrix(L, blocks, idle, B, X):
+    """X = A⁻¹ B column by column (:func:`block_cho_solve_vector`); B, X (n, m), ``X``
+    may be ``B``."""
+    for c in range(B.shape[1]):
+        block_cho_solve_vector(L, blocks, idle, B[:, c], X[:, c])
