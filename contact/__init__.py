@@ -15,7 +15,7 @@ Public API::
 """
 
 from .broad_phase import BroadPhase, overlapping
-from .contact import Contact, CurveConstraint, connect
+from .contact import Contact, ContactElement, CurveConstraint, connect
 from .kinematics import (ContactKinematics, ContactKinematicsPointContour1s, ContactKinematicsPointContour2s,
                          ContactKinematicsPointPlane, ContactKinematicsSphereContour1s,
                          ContactKinematicsSphereContour2s, ContactKinematicsSpherePlane,
@@ -26,7 +26,7 @@ from .registry import BILATERAL_KINEMATICS, LAWS, PAIR_KINEMATICS, SOLVERS, make
 from .search import Contact1sSearch, Contact2sSearch
 from .solver import ContactSolution, ProxSolver
 
-__all__ = ["BILATERAL_KINEMATICS", "Bilateral", "BroadPhase", "Contact", "Contact1sSearch", "Contact2sSearch", "ContactKinematics",
+__all__ = ["BILATERAL_KINEMATICS", "Bilateral", "BroadPhase", "Contact", "Contact1sSearch", "Contact2sSearch", "ContactElement", "ContactKinematics",
            "ContactKinematicsPointContour1s", "ContactKinematicsPointContour2s", "ContactKinematicsPointPlane",
            "ContactKinematicsSphereContour1s", "ContactKinematicsSphereContour2s", "ContactKinematicsSpherePlane",
            "ContactKinematicsSphereSphere", "ContactSolution", "CurveConstraint", "LAWS",

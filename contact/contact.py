@@ -41,11 +41,28 @@ from .laws import Bilateral, RegularizedCoulombFriction, UnilateralCoulombContac
 SET_VALUED = (UnilateralNewtonImpact, UnilateralCoulombContact)
 
 
-class Contact:
+class ContactElement:
+    """What a System takes as a contact (the Moreau stages use nothing else): ``name``,
+    ``kinematics``, ``law``; ``set_valued`` (rows in the contact problem) and
+    ``unilateral``; ``dim`` (rows of Λ when set-valued); ``bodies()`` and ``contours()``;
+    ``locate()`` (True when closed, after the contours were updated); ``jacobian(out)``
+    (W (nu, dim) of a closed set-valued contact); ``penetration`` [m]."""
+
+    set_valued: bool
+    unilateral: bool
+    dim: int
+
+    def bodies(self):
+        return [c.body for c in self.contours() if c.body is not None]
+
+    def contours(self):
+        return [self.kinematics.contour1, self.kinematics.contour2]
+
+
+class Contact(ContactElement):
     """A unilateral contact: ``kinematics`` and a ``law`` (see module docstring);
     ``friction`` only with a single-valued normal law."""
 
-    is_contact = True
     unilateral = True
 
     def __init__(self, kinematics: ContactKinematics, law, friction=None, name="contact", margin="auto",
@@ -68,12 +85,6 @@ class Contact:
             raise ModelError(f"{name}: margin must be >= 0 [m], 'auto' or None, got {margin!r}")
         self.margin = None if self.margin is None else float(self.margin)
         self.box1, self.box2 = np.zeros((2, 3)), np.zeros((2, 3))     # broad-phase workspaces
-
-    def bodies(self):
-        return [c.body for c in self.contours() if c.body is not None]
-
-    def contours(self):
-        return [self.kinematics.contour1, self.kinematics.contour2]
 
     @property
     def penetration(self) -> float:
@@ -127,10 +138,9 @@ def _auto_margin(contour) -> float:
     return 0.1 * float(edges.max()) if edges.size else 0.0
 
 
-class CurveConstraint:
+class CurveConstraint(ContactElement):
     """A point kept on a curve (bilateral, γ⁺ = 0 on the two normal-plane directions)."""
 
-    is_contact = True
     set_valued = True
     unilateral = False
     dim = 2
@@ -140,12 +150,6 @@ class CurveConstraint:
             raise ModelError(f"{name}: needs PointOnCurveConstraint kinematics")
         self.kinematics, self.law, self.name = kinematics, Bilateral(2), name
         self.closed = False
-
-    def bodies(self):
-        return [c.body for c in self.contours() if c.body is not None]
-
-    def contours(self):
-        return [self.kinematics.contour1, self.kinematics.contour2]
 
     penetration = 0.0
 

@@ -255,3 +255,21 @@ def test_an_unregistered_law_is_not_known_to_scene_files(tmp_path):
     path.write_text(SCENE)
     with pytest.raises(InputFileError, match="'law' must be one of 'impact', 'coulomb', 'penalty', 'bilateral', got"):
         read_scene(path)
+
+
+def test_system_takes_contacts_by_their_base_class_not_by_a_flag():
+    """A System recognises a contact element by ContactElement (Contact and
+    CurveConstraint derive from it); an object merely flagged ``is_contact`` is refused."""
+    from contact import Contact, ContactElement, CurveConstraint
+    from mbs import System
+
+    assert issubclass(Contact, ContactElement) and issubclass(CurveConstraint, ContactElement)
+
+    class Flagged:
+        is_contact = True
+
+        def bodies(self):
+            return []
+
+    with pytest.raises(ModelError, match="cannot add"):
+        System().add(Flagged())
