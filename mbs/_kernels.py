@@ -403,6 +403,51 @@ def point_masses_h(u_at, force, h):
             h[u_at[p] + c] = 0.0 + force[p, c]
 
 
+LEFT_OUT, CONSTANT_FORCE, ELASTIC, ELASTIC_DAMPED = 0, 1, 2, 3     # kinds of linear_bodies_h's rows
+
+
+@njit(cache=True)
+def linear_bodies_h(rows, KD, force, q, u, h):
+    """h (nu,) of bodies whose forces are linear in (q, u) with constant coefficients,
+    block by block over ``rows`` (k, 3) = (first row, end row, kind) of q = u (additive
+    bodies):
+
+    - ``LEFT_OUT`` (0): h = 0 (a body a planned run solves apart);
+    - ``CONSTANT_FORCE`` (1): h = 0 + force (a point mass: its gravity m g [N]);
+    - ``ELASTIC`` (2): h = −K q_f (a FFR body on a frame at rest, thesis eq. 2.36);
+    - ``ELASTIC_DAMPED`` (3): h = −(K q_f + D q̇_f),
+
+    with K = KD[0], D = KD[1] (nu, nu), read on each block's diagonal block, force (nu,).
+    The sums run in the order of :func:`elastic_h_into` and :func:`point_masses_h` (the
+    references the tests compare), so the result is the same to the bit."""
+    for k in range(rows.shape[0]):
+        a, b, kind = rows[k, 0], rows[k, 1], rows[k, 2]
+        if kind == 0:
+            for i in range(a, b):
+                h[i] = 0.0
+        elif kind == 1:
+            for i in range(a, b):
+                h[i] = 0.0 + force[i]
+        else:
+            for i in range(a, b):
+                acc = 0.0
+                for j in range(a, b):
+                    acc += KD[0, i, j] * q[j]
+                if kind == 3:
+                    for j in range(a, b):
+                        acc += KD[1, i, j] * u[j]
+                h[i] = -acc
+
+
+@njit(cache=True)
+def additive_advance(q, u, step, out):
+    """out = q + step · u (n,) [step: s], q and u of the same length (bodies whose
+    q ⊕ Δu = q + Δu: point masses, FFR bodies on a prescribed frame); ``out`` may be
+    ``q``. Numpy reference: ``np.add(q, np.multiply(u, step))``, the same roundings."""
+    for i in range(q.shape[0]):
+        out[i] = q[i] + u[i] * step
+
+
 @njit(cache=True)
 def point_masses_increment(q_at, u_at, q, du, out):
     """out = q + Δu on the point masses' coordinates (q[q_at[p]..] and Δu[u_at[p]..], 3

@@ -10,6 +10,8 @@ from __future__ import annotations
 
 from numba import njit
 
+from .linalg_kernels import block_cho_solve_vector
+
 
 @njit(cache=True)
 def contours_in_use(owner_at, owners, live, out):
@@ -77,3 +79,24 @@ def impulse_work(lam, gamma_plus, closing, gamma_pre):
     for i in range(lam.shape[0]):
         s += lam[i] * ((gamma_plus[i] - closing[i]) + gamma_pre[i])
     return 0.5 * s
+
+
+@njit(cache=True)
+def free_velocity(L, blocks, idle, h, dt, u, u_free):
+    """u_free = u_k + M̂⁻¹ h Δt (nu,) [m/s] (stage 5) with M̂'s block factor ``L``
+    (:func:`mbs.linalg_kernels.block_cholesky_into` over ``blocks``, zero on the rows
+    ``idle``), h [N], Δt [s]. Numpy reference: ``u + cho_solve(L, h * dt)`` with the same
+    roundings (h Δt, the solve in place, the sum)."""
+    for i in range(h.shape[0]):
+        u_free[i] = h[i] * dt
+    block_cho_solve_vector(L, blocks, idle, u_free, u_free)
+    for i in range(u.shape[0]):
+        u_free[i] = u[i] + u_free[i]
+
+
+@njit(cache=True)
+def free_velocity_update(u, u_free, u_prev):
+    """Stage 7 with nothing closed: u_prev = u_k, u = u_free (nu,) [m/s]."""
+    for i in range(u.shape[0]):
+        u_prev[i] = u[i]
+        u[i] = u_free[i]

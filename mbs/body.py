@@ -105,6 +105,12 @@ class Body:
         """Constant −∂h/∂u (nu, nu), or None."""
         return None
 
+    def linear_forces(self):
+        """(K, D) when h = −K q − D u with constant K (nu, nu) and D (nu, nu) or None
+        (undamped) and q ⊕ Δu = q + Δu — the body stage then evaluates h of all such
+        bodies in one kernel (:func:`mbs._kernels.linear_bodies_h`) — else None."""
+        return None
+
     def com_frame(self) -> "Frame":
         """The centre of mass as a frame: gravity acts there with the whole mass."""
         raise NotImplementedError

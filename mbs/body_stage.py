@@ -103,6 +103,38 @@ class BodyStage:
         self.additive = all(b.additive for b in self.active)
         self._rotating = [(b, b.q_slice) for b in self.active if not b.additive]
         self._one_free = self._one and bool(getattr(self.active[0], "free_quaternion", False))
+        self._flat = self.additive and sum(b.nq for b in self.bodies) == self.nu     # q and u row for row
+        self.linear_rows, self.linear_KD, self.linear_force = self._linear_table()
+        self.linear = self.linear_rows is not None
+
+    def _linear_table(self):
+        """The rows (k, 3) (first row, end row, kind), coefficients KD (2, nu, nu) and
+        constant forces (nu,) of :func:`mbs._kernels.linear_bodies_h` when every body's h
+        is linear with constant coefficients — point masses, bodies whose
+        :meth:`~mbs.body.Body.linear_forces` says so, left-out bodies (h = 0) — and no
+        load is added in a step; else (None, None, None)."""
+        if not self._flat or self._loads:
+            return None, None, None
+        points = {id(b): k for k, b in enumerate(self.bodies) if type(b) is PointMass}
+        rows, KD, force = [], np.zeros((2, self.nu, self.nu)), np.zeros(self.nu)
+        active = {id(b) for b in self.active}
+        for b in self.bodies:
+            a, e = b.u_slice.start, b.u_slice.stop
+            if id(b) not in active:
+                rows.append((a, e, K.LEFT_OUT))
+                continue
+            if id(b) in points and not self._one:
+                force[a:e] = b.mass * self.gravity
+                rows.append((a, e, K.CONSTANT_FORCE))
+                continue
+            linear = b.linear_forces()
+            if linear is None:
+                return None, None, None
+            KD[0, a:e, a:e] = linear[0]
+            if linear[1] is not None:
+                KD[1, a:e, a:e] = linear[1]
+            rows.append((a, e, K.ELASTIC if linear[1] is None else K.ELASTIC_DAMPED))
+        return np.array(rows, dtype=np.int64).reshape(-1, 3), KD, force
 
     @classmethod
     def of_equations(cls, equations) -> "BodyStage":
@@ -145,7 +177,11 @@ class BodyStage:
             self._add_loads(t, q, u, h)
 
     def h_only(self, t, q, u, h) -> None:
-        """Write h (nu,) at (t [s], q, u) into ``h`` (for a constant M)."""
+        """Write h (nu,) at (t [s], q, u) into ``h`` (for a constant M); one kernel when
+        every body's h is linear (:func:`mbs._kernels.linear_bodies_h`)."""
+        if self.linear:
+            K.linear_bodies_h(self.linear_rows, self.linear_KD, self.linear_force, q, u, h)
+            return
         if self._one:
             b, _, _, work = self._items[0]
             b.h_into(q, u, t, h, work)
@@ -198,9 +234,13 @@ class BodyStage:
             K.point_masses_increment(self._point_q, self._point_u, q, du, out)
 
     def advance(self, q, u, step, du, out) -> None:
-        """Δu = step · u [step: s] into ``du`` and q ⊕ Δu, renormalized, into ``out``
-        (:meth:`increment`, :meth:`normalize`; one kernel for a lone free quaternion body,
-        :func:`mbs._kernels.free_quat_advance`)."""
+        """q ⊕ step · u [step: s], renormalized, into ``out`` (:meth:`increment`,
+        :meth:`normalize`), ``du`` (nu,) scratch; one kernel when q ⊕ Δu = q + Δu for
+        every body (:func:`mbs._kernels.additive_advance`) and for a lone free quaternion
+        body (:func:`mbs._kernels.free_quat_advance`)."""
+        if self._flat:
+            K.additive_advance(q, u, step, out)
+            return
         if self._one_free:
             K.free_quat_advance(q, u, step, du, out)
             return

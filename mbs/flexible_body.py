@@ -174,6 +174,13 @@ class FlexibleBodyFFR(FloatingFrameBody):
         else:
             super().h_into(q, u, t, h, work)
 
+    def linear_forces(self):
+        """On a frame at rest h = −K_ff q_f − D_ff q̇_f (thesis eq. 2.36; Q_v = 0, eq. 4.2)
+        with q = q_f: (K_ff, D_ff, or None when undamped); else None."""
+        if not self.frame_at_rest:
+            return None
+        return self.K_ff, (self.D_ff if self.damped else None)
+
     def _elastic(self, q_f, qdot_f):
         return self.K_ff @ q_f + self.D_ff @ qdot_f if self.damped else self.K_ff @ q_f
 

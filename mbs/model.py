@@ -189,7 +189,8 @@ class Data:
         self.K, self.D = np.zeros((nu, nu)), np.zeros((nu, nu))
         self.factors = []                   # [(step size, Cholesky factor of M̂)]: (nu, nu) blockwise with
                                             # model.blocks, else (n_act, n_act) Fortran order
-        self.factor = None                  # the factor of this step
+        self.factor = None                  # the factor of this step (of the last, for a constant M̂)
+        self.factor_dt = np.nan             # the step size [s] of ``factor`` for a constant M̂
         self.u_free = np.zeros(nu)
         self.rhs = np.zeros(nu)             # M̂⁻¹ b on all rows
         self.rhs_act = np.zeros(n_act)      # ... on the active rows
@@ -222,7 +223,8 @@ class Data:
         self.lam_prev = np.zeros(sum(model.dims))
         self.warm = np.zeros(n, dtype=bool)         # the contact has Λ of the last step
         self.lam_joints = np.zeros(model.n_c)
-        self.warm_joints = False
+        self.warm_joints = False                    # the last step solved a contact problem (then
+                                                    # the joints have Λ of it); False: no warm[i]
         self.contact_sets = {}              # ContactSet per closed set (indices)
         self.solution = None                # (iterations, residual, converged) of the last solve
         self.h_last = 0.0

@@ -120,9 +120,12 @@ def constraints(model, data, dt):
     factor = iteration_factor(model, data, dt)
     if model.penalty:
         check_penalty(model, data, factor, dt)
-    np.multiply(data.h, dt, out=data.u_free)
-    solve(model, data, factor, data.u_free)
-    np.add(data.u, data.u_free, out=data.u_free)
+    if model.blocks is not None:
+        K.free_velocity(factor, model.blocks, model.idle_rows, data.h, dt, data.u, data.u_free)
+    else:
+        np.multiply(data.h, dt, out=data.u_free)
+        solve(model, data, factor, data.u_free)
+        np.add(data.u, data.u_free, out=data.u_free)
     m = data.m
     if m == 0:
         return
@@ -153,7 +156,7 @@ def impulses(model, data, dt):
     impulses' work, the warm starts of the next step."""
     m = data.m
     if m == 0:
-        if data.warm_joints or data.warm.any():
+        if data.warm_joints:                 # a problem was solved last step (Data: warm ⊆ warm_joints)
             data.warm.fill(False)            # nothing closed: no warm start, no resting contact
             data.warm_joints = False
         return
@@ -174,16 +177,18 @@ def impulses(model, data, dt):
 
 def velocity(model, data, dt):
     """Stage 7: u_{k+1} = u_free + M̂⁻¹ W Λ (u_k kept in ``u_prev``)."""
-    data.u_prev[:] = data.u
     m = data.m
     if m == 0:
-        data.u[:] = data.u_free
+        K.free_velocity_update(data.u, data.u_free, data.u_prev)
     else:
+        data.u_prev[:] = data.u
         W, MW, G, lam = data.problem(model.nu, m)[:4]
         K.velocity_into(data.u_free, MW, lam, data.u)
-    data.stats["closed_contacts"] += data.n_closed
-    if data.n_closed > data.last[0]:
-        data.last[0] = data.n_closed
+    n_closed = data.n_closed
+    if n_closed:
+        data.stats["closed_contacts"] += n_closed
+        if n_closed > data.last[0]:
+            data.last[0] = n_closed
 
 
 def position(model, data, dt):
@@ -234,14 +239,18 @@ def iteration_factor(model, data, dt):
     (Fortran order); for a constant M̂ the factor of this step size, computed once (steps
     landing on output times differ by rounding: within 1e-12 Δt they share it)."""
     if model.constant_iteration:
+        if dt == data.factor_dt:             # the last step's size (``data.factor`` its factor)
+            return data.factor
         for step_size, factor in data.factors:
             if abs(step_size - dt) <= 1e-12 * dt:
+                data.factor_dt, data.factor = dt, factor
                 return factor
         if len(data.factors) > 8:            # step-size control: keep the latest few
             data.factors.clear()
         data.M[...] = model.equations.mass_matrix(data.t_m, data.q_m)
         factor = _factor(model, data, dt, _factor_array(model))
         data.factors.append((dt, factor))
+        data.factor_dt, data.factor = dt, factor
         return factor
     if data.factor is None:
         data.factor = _factor_array(model)

@@ -220,6 +220,75 @@ def test_block_cholesky_and_solves_equal_scipy_on_the_active_rows():
     assert block_cholesky_into(A, blocks, L) == 8 + 1
 
 
+def test_linear_bodies_kernel_equals_elastic_and_point_mass_kernels_and_numpy():
+    """linear_bodies_h over a damped and an undamped elastic block, a point mass with a
+    constant force and a left-out block: bit for bit the kernels it replaces
+    (elastic_h_into, point_masses_h), and −(K q + D u) / f / 0 in numpy to rounding."""
+    rng = np.random.default_rng(8)
+    nu = 4 + 3 + 5 + 2
+    rows = np.array([[0, 4, kern.ELASTIC_DAMPED], [4, 7, kern.CONSTANT_FORCE], [7, 12, kern.ELASTIC],
+                     [12, 14, kern.LEFT_OUT]], dtype=np.int64)
+    KD = np.full((2, nu, nu), np.nan)             # only the diagonal blocks of the elastic rows are read
+    KD[:, 0:4, 0:4] = rng.normal(size=(2, 4, 4))
+    KD[0, 7:12, 7:12] = rng.normal(size=(5, 5))
+    force = np.full(nu, np.nan)
+    force[4:7] = rng.normal(size=3)
+    q, u = rng.normal(size=nu), rng.normal(size=nu)
+    h = np.full(nu, np.nan)
+    kern.linear_bodies_h(rows, KD, force, q, u, h)
+    ref = np.full(nu, np.nan)
+    kern.elastic_h_into(KD[0, 0:4, 0:4], KD[1, 0:4, 0:4], True, q[0:4], u[0:4], ref[0:4])
+    kern.elastic_h_into(KD[0, 7:12, 7:12], KD[1, 7:12, 7:12], False, q[7:12], u[7:12], ref[7:12])
+    kern.point_masses_h(np.array([4], dtype=np.int64), force[4:7].reshape(1, 3), ref)
+    ref[12:] = 0.0
+    np.testing.assert_array_equal(h, ref)
+    assert rel(h[0:4], -(KD[0, 0:4, 0:4] @ q[0:4] + KD[1, 0:4, 0:4] @ u[0:4])) < 1e-14
+    assert rel(h[7:12], -KD[0, 7:12, 7:12] @ q[7:12]) < 1e-14
+    np.testing.assert_array_equal(h[4:7], force[4:7])
+
+
+def test_additive_advance_equals_numpy_bit_for_bit():
+    rng = np.random.default_rng(9)
+    q, u, out = rng.normal(size=23), rng.normal(size=23), np.empty(23)
+    kern.additive_advance(q, u, 0.37e-5, out)
+    np.testing.assert_array_equal(out, np.add(q, np.multiply(u, 0.37e-5)))
+    kern.additive_advance(q, u, 0.37e-5, q)                 # in place
+    np.testing.assert_array_equal(q, out)
+
+
+def test_linear_body_stage_equals_system_assembly_with_left_out_bodies(data):
+    """The one-kernel body stage (a frame-fixed FFR body, point masses, a left-out body)
+    is taken and gives the System's h and increment; with gravity or a load on the FFR
+    body it is not taken (loads are added per step)."""
+    for leave_out in (False, True):
+        system = System()
+        beam = system.add(FlexibleBodyFFR(data, N_F, frame=PrescribedFrameMotion.fixed()))
+        system.add(PointMass(0.5, velocity=(0.0, -0.2, 0.0)))
+        other = system.add(PointMass(2.0, velocity=(1.0, 0.0, 0.0)))
+        q, u = system.initial_state()
+        q[beam.q_slice] = np.arange(N_F) * 1e-3
+        u[:] = np.linspace(-1.0, 1.0, system.nu)
+        if leave_out:
+            u[other.u_slice] = 0.0                  # a left-out body's velocity is held at zero
+        eq = Equations(system, [other], []) if leave_out else Equations(system, [], [])
+        stage = BodyStage.of_equations(eq)
+        assert stage.linear
+        h = np.full(system.nu, np.nan)
+        stage.h_only(0.0, q, u, h)
+        assert rel(h, eq.h(0.0, q, u)) < 1e-12
+        out = np.full(system.nq, np.nan)
+        stage.advance(q, u, 1e-3, np.empty(system.nu), out)
+        assert rel(out, eq.increment(q, 1e-3 * u)) < 1e-15
+    system = System(gravity=(0.0, -9.81, 0.0))
+    system.add(FlexibleBodyFFR(data, N_F, frame=PrescribedFrameMotion.fixed()))
+    system.add(PointMass(0.5))
+    assert not BodyStage.of_equations(system.equations()).linear
+    system = System()
+    beam = system.add(FlexibleBodyFFR(data, N_F, frame=PrescribedFrameMotion.fixed()))
+    system.add(Force(beam.node(0), (1.0, 0.0, 0.0)))
+    assert not BodyStage.of_equations(system.equations()).linear
+
+
 def test_block_iteration_factor_equals_numpy_sum_and_scipy_factor():
     """M̂ = (M + a D0) + b K0 equals the numpy sum bit for bit; its block factor scipy's."""
     rng = np.random.default_rng(5)

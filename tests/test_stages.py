@@ -114,3 +114,35 @@ def test_contact_problem_velocity_and_work_kernels_equal_numpy():
         np.testing.assert_allclose(out, u_free + MW @ lam, rtol=1e-13, atol=1e-13)
         ref = 0.5 * lam @ (gamma_plus - closing + gamma_pre)
         assert abs(SK.impulse_work(lam, gamma_plus, closing, gamma_pre) - ref) <= 1e-13 * max(1.0, abs(ref))
+
+
+def test_free_velocity_kernels_equal_numpy_and_scipy():
+    """u_free = u + M̂⁻¹ h Δt by the block kernel against scipy's Cholesky solve on the
+    active rows (zero increment on a left-out row), and stage 7's open update."""
+    import scipy.linalg
+
+    from mbs import _stage_kernels as SK
+    from mbs.linalg_kernels import block_cholesky_into
+
+    rng = np.random.default_rng(4)
+    blocks = np.array([[0, 4], [4, 7]], dtype=np.int64)
+    idle = np.array([7], dtype=np.int64)
+    n = 8
+    A = np.eye(n)
+    for a, b in blocks:
+        X = rng.normal(size=(b - a, b - a))
+        A[a:b, a:b] = X @ X.T + (b - a) * np.eye(b - a)
+    L = np.zeros((n, n))
+    assert block_cholesky_into(A, blocks, L) == 0
+    h, u, dt = rng.normal(size=n), rng.normal(size=n), 1e-3
+    u_free = np.full(n, np.nan)
+    SK.free_velocity(L, blocks, idle, h, dt, u, u_free)
+    ref = u.copy()
+    ref[:7] += scipy.linalg.cho_solve(scipy.linalg.cho_factor(A[:7, :7]), h[:7] * dt)
+    np.testing.assert_allclose(u_free, ref, rtol=1e-13, atol=1e-15)
+    assert u_free[7] == u[7]
+    u_prev = np.full(n, np.nan)
+    u_new = u.copy()
+    SK.free_velocity_update(u_new, u_free, u_prev)
+    np.testing.assert_array_equal(u_prev, u)
+    np.testing.assert_array_equal(u_new, u_free)

@@ -152,15 +152,18 @@ class Integrator:
         """Step from ``self.t`` to ``end`` [s] in ceil((end − t)/dt) equal steps."""
         gap = end - self.t
         k = math.ceil(gap / dt - 1e-9) if gap > 1e-14 * max(1.0, abs(end)) else 0
+        h = gap / k if k else 0.0
+        step, accepted = self.step, self.accepted
         for _ in range(k):
-            self.step(gap / k)
-            self.accepted(gap / k)
+            step(h)
+            accepted(h)
 
     def accepted(self, h):
         """Book an accepted step of size ``h``; a NaN or infinite state stops the run, so
         does a requested stop (:func:`request_stop`)."""
         self.steps += 1
-        if not math.isfinite(finite_sum(self.q, self.u)):       # a NaN or inf anywhere propagates
+        data = self.data
+        if not math.isfinite(finite_sum(data.q, data.u)):       # a NaN or inf anywhere propagates
             raise non_finite(self.t, self.steps, "q/u")
         if _stop[1] > 1:
             raise RunInterrupted(self.t, self.steps, _stop[0])
