@@ -100,3 +100,39 @@ def free_velocity_update(u, u_free, u_prev):
     for i in range(u.shape[0]):
         u_prev[i] = u[i]
         u[i] = u_free[i]
+
+
+@njit(cache=True)
+def warm_start_into(lam_rows, closed_idx, n_closed, warm, lam_prev, n_c, lam):
+    """Λ (m,) of stage 6 from the last step's: the block of each of the first ``n_closed``
+    contacts of ``closed_idx`` (rows n_c.. in order, contact i's block at
+    lam_prev[lam_rows[i, 0]:][:lam_rows[i, 1]]) when ``warm[i]``, else zero; the joints'
+    rows [0, n_c) zero (the caller copies theirs). Python reference:
+    :func:`mbs.stages.warm_start`'s loop."""
+    for r in range(lam.shape[0]):
+        lam[r] = 0.0
+    row = n_c
+    for j in range(n_closed):
+        i = closed_idx[j]
+        at, dim = lam_rows[i, 0], lam_rows[i, 1]
+        if warm[i]:
+            for k in range(dim):
+                lam[row + k] = lam_prev[at + k]
+        row += dim
+
+
+@njit(cache=True)
+def keep_warm_start_into(lam_rows, closed_idx, n_closed, lam, n_c, warm, lam_prev):
+    """The closed contacts' blocks of Λ (rows n_c.. in order) into ``lam_prev`` and
+    ``warm[i]`` True for them, False for every other contact (the inverse of
+    :func:`warm_start_into`)."""
+    for i in range(warm.shape[0]):
+        warm[i] = False
+    row = n_c
+    for j in range(n_closed):
+        i = closed_idx[j]
+        at, dim = lam_rows[i, 0], lam_rows[i, 1]
+        for k in range(dim):
+            lam_prev[at + k] = lam[row + k]
+        warm[i] = True
+        row += dim

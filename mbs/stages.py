@@ -359,32 +359,19 @@ def contact_set(model, data):
 
 
 def warm_start(model, data, lam):
-    """Λ of the last step for the joints and the contacts closed again, else zero."""
-    lam.fill(0.0)
+    """Λ of the last step for the joints and the contacts closed again, else zero
+    (:func:`mbs._stage_kernels.warm_start_into`)."""
     n_c = model.n_c
+    K.warm_start_into(model.lam_rows, data.closed_idx, data.n_closed, data.warm, data.lam_prev, n_c, lam)
     if n_c and data.warm_joints:
         lam[:n_c] = data.lam_joints
-    row = n_c
-    for j in range(data.n_closed):
-        i = data.closed_idx[j]
-        dim = model.dims[i]
-        if data.warm[i]:
-            at = model.lam_at[i]
-            lam[row:row + dim] = data.lam_prev[at:at + dim]
-        row += dim
 
 
 def keep_warm_start(model, data, lam):
     """This step's Λ becomes the warm start of the next: the joints' and the closed
-    contacts' (the others lose theirs)."""
+    contacts' (the others lose theirs; :func:`mbs._stage_kernels.keep_warm_start_into`)."""
     n_c = model.n_c
-    data.lam_joints[:] = lam[:n_c]
+    if n_c:
+        data.lam_joints[:] = lam[:n_c]
     data.warm_joints = True
-    data.warm.fill(False)
-    row = n_c
-    for j in range(data.n_closed):
-        i = data.closed_idx[j]
-        dim, at = model.dims[i], model.lam_at[i]
-        data.lam_prev[at:at + dim] = lam[row:row + dim]
-        data.warm[i] = True
-        row += dim
+    K.keep_warm_start_into(model.lam_rows, data.closed_idx, data.n_closed, lam, n_c, data.warm, data.lam_prev)

@@ -146,3 +146,39 @@ def test_free_velocity_kernels_equal_numpy_and_scipy():
     SK.free_velocity_update(u_new, u_free, u_prev)
     np.testing.assert_array_equal(u_prev, u)
     np.testing.assert_array_equal(u_new, u_free)
+
+
+def test_warm_start_kernels_equal_the_loops_over_the_closed_contacts():
+    """warm_start_into / keep_warm_start_into against the Python loops over the closed
+    contacts (blocks of dims 1, 3, 2, 1 at lam_at in lam_prev; two joint rows first)."""
+    from mbs import _stage_kernels as SK
+
+    rng = np.random.default_rng(6)
+    dims = [1, 3, 2, 1]
+    lam_at = [0, 1, 4, 6]
+    lam_rows = np.array([lam_at, dims], dtype=np.int64).T.copy()
+    n_c = 2
+    closed_idx = np.array([1, 2, 3, 0], dtype=np.intp)
+    n_closed = 3                                  # contacts 1, 2, 3
+    warm = np.array([True, True, False, True])
+    lam_prev = rng.normal(size=7)
+    m = n_c + 3 + 2 + 1
+    lam = np.full(m, np.nan)
+    SK.warm_start_into(lam_rows, closed_idx, n_closed, warm, lam_prev, n_c, lam)
+    ref = np.zeros(m)
+    row = n_c
+    for i in closed_idx[:n_closed]:
+        if warm[i]:
+            ref[row:row + dims[i]] = lam_prev[lam_at[i]:lam_at[i] + dims[i]]
+        row += dims[i]
+    np.testing.assert_array_equal(lam, ref)
+    new = rng.normal(size=m)
+    prev_ref, warm_ref = lam_prev.copy(), np.zeros(4, dtype=bool)
+    row = n_c
+    for i in closed_idx[:n_closed]:
+        prev_ref[lam_at[i]:lam_at[i] + dims[i]] = new[row:row + dims[i]]
+        warm_ref[i] = True
+        row += dims[i]
+    SK.keep_warm_start_into(lam_rows, closed_idx, n_closed, new, n_c, warm, lam_prev)
+    np.testing.assert_array_equal(lam_prev, prev_ref)
+    np.testing.assert_array_equal(warm, warm_ref)
