@@ -96,7 +96,7 @@ class NeutralContour(Contour):
         self.q_f, self.qdot_f = s[K.Q_AT:K.Q_AT + n_f], s[K.Q_AT + n_f:]
         self.T = None
         self._has_u = False
-        self._fields_current = self._velocity_current = False
+        self._fields_stamp = self._velocity_stamp = -1.0   # the state stamps the products were synced at
 
     def _alloc_kernel_data(self, n_f):
         """The kernels' arrays (P_ū0, P_Φ, state, span cache), the constants of the O(n_f)
@@ -161,17 +161,18 @@ class NeutralContour(Contour):
     @property
     def velocity_field(self) -> NeutralNurbsVelocity:
         """The ṙ product, its control points at the state of the last update (if it had u)."""
-        if self._has_u and not self._velocity_current:
+        if self._has_u and self._velocity_stamp != self._state[K.STAMP_AT]:
             self._velocity_field.update(self.v, self.A, self.w, self.local_position, self.qdot_f)
-            self._velocity_current = True
+            self._velocity_stamp = self._state[K.STAMP_AT]
         return self._velocity_field
 
     def _sync_fields(self):
-        """P_ū = P_ū0 + P_Φ q_f and P_r = R + A P_ū over all control points, once per update."""
-        if not self._fields_current:
+        """P_ū = P_ū0 + P_Φ q_f and P_r = R + A P_ū over all control points, once per
+        update (per stamp of the state: whoever writes the state stamps it)."""
+        if self._fields_stamp != self._state[K.STAMP_AT]:
             self._local_position.update(self.q_f)
             self._position_field.update(self.R, self.A, self._local_position)
-            self._fields_current = True
+            self._fields_stamp = self._state[K.STAMP_AT]
 
     def _require_velocity(self):
         if not self._has_u:
@@ -187,7 +188,6 @@ class NeutralContour(Contour):
         self._has_u = u is not None
         if self._has_u:
             K.store_velocity(self._state, v, w, body.elastic_velocities(u))
-        self._fields_current = self._velocity_current = False
 
     def evaluate(self, point, eta, xi=0.0, velocity=False, jacobians=False):
         """Fields at (η, ξ) (see :meth:`Contour.evaluate`); J_T = [1, −A ũ T, A Φ] and
