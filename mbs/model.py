@@ -29,6 +29,7 @@ import numpy as np
 
 from .bounding_spheres import SphereTable
 from .equations import Equations
+from .fused_detection import fused_detection
 from .body_stage import BodyStage
 
 N_FACTORS = 8          # Cholesky factors of a constant M̂ kept for different step sizes (+1)
@@ -71,12 +72,16 @@ class Model:
     spheres : SphereTable or None
         The bounding spheres of the prunable contacts of a planned run
         (:class:`mbs.bounding_spheres.SphereTable`), None without a plan.
+    fused : tuple
+        Per contact its fused detection (:func:`mbs.fused_detection.fused_detection`:
+        contour update and detection in one compiled call) or None (the Python path).
     contours : tuple of (contour, owners, q_slice, u_slice)
         Every contour of a contact once, the indices of the contacts owning it and its
         body's slices (None on the ground).
     owner_at, owners : int arrays
-        The owners of contour k as flat arrays: owners[owner_at[k]:owner_at[k + 1]]
-        (:func:`mbs._stage_kernels.contours_in_use`).
+        The owners of contour k without a fused detection, as flat arrays:
+        owners[owner_at[k]:owner_at[k + 1]] (:func:`mbs._stage_kernels.contours_in_use`;
+        a contour whose owners all have one is updated by them, in the detection stage).
     single_valued : tuple of int
         The contacts with a single-valued law (their forces join h).
     m_max : int
@@ -108,6 +113,7 @@ class Model:
     lam_at: tuple
     penalty: tuple
     spheres: SphereTable | None
+    fused: tuple
     contours: tuple
     owner_at: np.ndarray
     owners: np.ndarray
@@ -138,6 +144,7 @@ def compile_model(system, plan=None, theta=0.5, solver=None) -> Model:
     lam_at = tuple(int(a) for a in np.concatenate(([0], np.cumsum(dims)))[:-1]) if contacts else ()
     penalty = tuple(i for i, c in enumerate(contacts)
                     if not c.set_valued and c.unilateral and hasattr(c.law, "derivatives"))
+    fused = tuple(fused_detection(c) for c in contacts)
     seen, table = {}, []
     for i, c in enumerate(contacts):
         for contour in c.contours():
@@ -147,7 +154,7 @@ def compile_model(system, plan=None, theta=0.5, solver=None) -> Model:
                 table.append([contour, [], None if body is None else body.q_slice,
                               None if body is None else body.u_slice])
             owners = table[seen[id(contour)]][1]
-            if i not in owners:
+            if i not in owners and fused[i] is None:
                 owners.append(i)
     contours = tuple((k, tuple(owners), qs, us) for k, owners, qs, us in table)
     owner_at = np.cumsum([0] + [len(owners) for _, owners, _, _ in table]).astype(np.int64)
@@ -164,7 +171,7 @@ def compile_model(system, plan=None, theta=0.5, solver=None) -> Model:
                  theta=float(theta), solver=solver, constant_iteration=equations.constant_iteration_matrix,
                  prune=plan is not None, contacts=contacts, set_valued=set_valued,
                  unilateral=tuple(bool(c.unilateral) for c in contacts), dims=dims, lam_at=lam_at,
-                 penalty=penalty, spheres=SphereTable(contacts) if plan is not None else None,
+                 penalty=penalty, spheres=SphereTable(contacts) if plan is not None else None, fused=fused,
                  contours=contours, owner_at=owner_at, owners=owners,
                  single_valued=tuple(i for i, sv in enumerate(set_valued) if not sv), m_max=system.n_c + sum(dims),
                  blocks=blocks, idle_rows=idle_rows)

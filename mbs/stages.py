@@ -9,9 +9,11 @@ its :class:`~mbs.model.Data` that reads the arrays the previous stages wrote:
 2. :func:`bodies`: h (and M unless M̂ is constant) at (t_θ, q_θ, u_k) → ``h``, ``M``;
 3. :func:`contours`: in a planned run the contacts whose contours' bounding spheres
    come within the margin (the others open, counted as pruned) → ``live``; every
-   contour of a live contact updated at (t_θ, q_θ, u_k), each once;
+   contour of a live contact updated at (t_θ, q_θ, u_k), each once — but those of
+   contacts with a fused detection (``model.fused``), which stage 4 updates;
 4. :func:`detect`: the live contacts located (broad phase by bounding boxes, search,
-   g_N, frame, point Jacobians); a unilateral contact is closed where
+   g_N, frame, point Jacobians; a fused detection, :mod:`mbs.fused_detection`, updates
+   its contours and does all this in one compiled call); a unilateral contact is closed where
    g_N(q_θ) <= its ``closing_tol`` → ``closed``, the closed set-valued contacts in
    ``closed_idx``, the largest penetration;
 5. :func:`constraints`: the contact laws at the located contacts — single-valued
@@ -68,7 +70,7 @@ def bodies(model, data, dt):
 
 def contours(model, data, dt):
     """Stage 3: the live contacts (planned runs: bounding spheres within the margin) and
-    their contours updated at (t_m, q_m, u)."""
+    their contours updated at (t_m, q_m, u) (but those of fused detections)."""
     if not model.contacts:
         return
     t, q, u, live = data.t_m, data.q_m, data.u, data.live
@@ -94,10 +96,12 @@ def detect(model, data, dt):
     n_closed = 0
     last = data.last
     m = model.n_c
+    fused = model.fused
     for j in range(data.n_live):
         i = data.live_idx[j]
         c = model.contacts[i]
-        closed = c.locate()
+        f = fused[i]
+        closed = c.locate() if f is None else f.locate(data.q_m, data.u, data.t_m)
         data.closed[i] = closed
         if closed:
             if model.set_valued[i]:

@@ -1,0 +1,179 @@
+"""numba kernel of a fused detection (:mod:`mbs.fused_detection`): the contour stage
+and the detection stage of one contact in one call, composed of the kernels of the
+contours (:mod:`contours.neutral._kernels`), the contact search and kinematics
+(:mod:`contact._detection_kernels`) and the bodies (:func:`mbs._kernels.point_jacobian_T`).
+
+:func:`point_on_neutral_2s` serves a point on a point mass against a neutral 2s contour
+of a body on a frame fixed in space (a :class:`~contact.kinematics.ContactKinematicsPointContour2s`
+with its compiled :class:`~contact.search.Contact2sSearch`). Its reference is the
+Python path it replaces — ``contour.update`` of both contours, then
+:meth:`contact.Contact.locate` (bounding boxes, ``search.solve`` warm-started,
+``contour.evaluate``, :func:`~contact._detection_kernels.normal_gap`,
+:func:`~contact._detection_kernels.frame_rates_jacobians`) — which
+``tests/test_fused_detection.py`` compares it against.
+
+The kernel takes each object's arrays as the one vector their views share
+(:attr:`contours.base.ContourPoint.buffer`, :attr:`contact.kinematics.ContactKinematics.buffer`,
+the frame contour's ``state``, the neutral contour's state and span cache), the
+constants of the pair as one int table ``itab`` and one float table ``ftab`` (layouts
+below, written by :class:`mbs.fused_detection.PointOnNeutral2s`) and a work vector.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from contact._detection_kernels import boxes_overlap, frame_rates_jacobians, newton_2s, normal_gap
+from contact.search import LAST_ITERATIONS, NEWTON_ITERATIONS, NEWTON_SOLVES
+from contours import rigid
+from contours.base import DERIVS_AT, FRAME_AT, J_AT, V_AT
+from contours.neutral._kernels import A_AT, R_AT, STAMP_AT, W_AT, bounding_box, evaluate_2s, store_state, \
+    store_velocity
+from contours.neutral._kernels import V_AT as STATE_V_AT
+
+from ._kernels import point_jacobian_T
+
+APART, LOCATED, FALLBACK = 0, 1, 2          # outcomes of a fused detection
+
+# itab: the point's rows of q and u, the body's q_f and q̇_f rows, n_f, nu of the two
+# bodies, velocity wanted (0/1), broad phase on (0/1), Newton iterations, the neutral
+# contour's ints (6: p, n_ctrl, closed per direction), the knot vectors' lengths, the
+# offsets of the kinematics buffer (contact.kinematics.buffer_layout, 8)
+QP, UP, QF, UF, NF, NU1, NU2, VELOCITY, BOX, MAX_ITER = range(10)
+GEOM_AT, KNOTS_E_N, KNOTS_X_N, KIN_AT = 10, 16, 17, 18
+ITAB_SIZE = KIN_AT + 8
+# ftab: margin [m], tol2 [m²] (NaN until the search knows its length scale), the largest
+# Newton steps in η and ξ, the normal's sign, the point frame's offset ū0 (3) [m], the
+# domain (4), then the knots in η and ξ, the undeformed control points' box (lo (3),
+# hi (3)) [m] and the bound of P_Φ (3, n_f) [m] (contours.neutral._kernels.bounding_box)
+MARGIN, TOL2, MAX_STEP_E, MAX_STEP_X, SIGN = range(5)
+OFFSET_AT, FLOATS_AT, KNOTS_AT = 5, 8, 12
+
+
+@njit(cache=True)
+def work_size(p_max, n_f):
+    """Length of the work vector: basis tables (2, 3, p_max + 1), ū rows (6, 3), r rows
+    (6, 3), g (3,), Φ rows (6, 3 n_f), two boxes (2, 3)."""
+    return 6 * (p_max + 1) + 18 + 18 + 3 + 18 * n_f + 12
+
+
+@njit(cache=True)
+def point_on_neutral_2s(q, u, itab, ftab, ctrl0, phi, state, span, frame1, point1, point2, kin, start, counts,
+                        work):
+    """Stages 3 and 4 for one contact (module docstring) at the global (q, u) [m, m/s]:
+
+    1. the contours' states: the point r = q_P + ū0, ṙ = u_P into ``frame1`` (the
+       frame contour's state); q_f, q̇_f and a new stamp into the neutral contour's
+       ``state`` (:func:`~contours.neutral._kernels.store_state`, ``store_velocity``;
+       R, A, v, ω̄ of the frame at rest stay);
+    2. broad phase (with ``itab[BOX]``): the point's box and the contour's
+       (:func:`~contours.neutral._kernels.bounding_box`) grown by the margin
+       (:func:`~contact._detection_kernels.boxes_overlap`) — apart: APART;
+    3. the point C1 into ``point1`` (r; frame, J_T = 1, J_R = 0 of a point-mass frame;
+       ṙ with ``itab[VELOCITY]``);
+    4. Newton on eq. 3.31–3.32 from the warm start ``start`` (η, ξ)
+       (:func:`~contact._detection_kernels.newton_2s`), the search's ``counts`` and
+       ``start`` updated — no warm start, no tolerance yet or no root: FALLBACK (the
+       caller runs the Python path, which searches the coarse grid);
+    5. C2 into ``point2``: r and its derivatives, the frame (eq. 3.23–3.29), ṙ (eq. 2.32)
+       with ``itab[VELOCITY]`` (:func:`~contours.neutral._kernels.evaluate_2s`),
+       J_T = A Φ (eq. 2.70 on a prescribed frame, :func:`mbs._kernels.point_jacobian_T`),
+       J_R = 0;
+    6. g_N (eq. 3.4) and n, T, ġ_T, w_N1, w_N2, w_T1, w_T2 (eq. 3.8) into ``kin``.
+
+    Returns (outcome, g_N [m], ġ_N [m/s] (NaN without velocity), η, ξ).
+    """
+    nan = np.nan
+    n_f, nu1, nu2 = itab[NF], itab[NU1], itab[NU2]
+    velocity = itab[VELOCITY] != 0
+    ints = itab[GEOM_AT:GEOM_AT + 6]
+    floats = ftab[FLOATS_AT:FLOATS_AT + 4]
+    o = KNOTS_AT
+    knots_e = ftab[o:o + itab[KNOTS_E_N]]
+    o += itab[KNOTS_E_N]
+    knots_x = ftab[o:o + itab[KNOTS_X_N]]
+    o += itab[KNOTS_X_N]
+    lo0, hi0 = ftab[o:o + 3], ftab[o + 3:o + 6]
+    phi_bound = ftab[o + 6:o + 6 + 3 * n_f].reshape(3, n_f)
+    pm = max(ints[0], ints[3]) + 1
+    B = work[:6 * pm].reshape(2, 3, pm)
+    o = 6 * pm
+    local = work[o:o + 18].reshape(6, 3)
+    D = work[o + 18:o + 36].reshape(6, 3)
+    g = work[o + 36:o + 39]
+    o += 39
+    phi_rows = work[o:o + 18 * n_f].reshape(6, 3 * n_f)
+    o += 18 * n_f
+    box1, box2 = work[o:o + 6].reshape(2, 3), work[o + 6:o + 12].reshape(2, 3)
+
+    # 1. the contours' states
+    qp, up, qf, uf = itab[QP], itab[UP], itab[QF], itab[UF]
+    for c in range(3):
+        frame1[rigid.R_AT + c] = q[qp + c] + ftab[OFFSET_AT + c]
+        frame1[rigid.V_AT + c] = u[up + c]
+    A = state[A_AT:A_AT + 9].reshape(3, 3)
+    store_state(state, state[R_AT:R_AT + 3], A, q[qf:qf + n_f])
+    store_velocity(state, state[STATE_V_AT:STATE_V_AT + 3], state[W_AT:W_AT + 3], u[uf:uf + n_f])
+
+    # 2. broad phase
+    r1 = frame1[rigid.R_AT:rigid.R_AT + 3]
+    if itab[BOX] != 0:
+        for c in range(3):
+            box1[0, c] = r1[c]
+            box1[1, c] = r1[c]
+        bounding_box(lo0, hi0, phi_bound, state, box2)
+        if not boxes_overlap(box1, box2, ftab[MARGIN]):
+            return APART, nan, nan, nan, nan
+
+    # 3. the point C1
+    for k in range(FRAME_AT - DERIVS_AT):
+        point1[DERIVS_AT + k] = 0.0
+    for c in range(3):
+        point1[DERIVS_AT + c] = r1[c]
+    for k in range(9):
+        point1[FRAME_AT + k] = frame1[rigid.A_AT + k]
+    for k in range(6 * nu1):
+        point1[J_AT + k] = frame1[rigid.J_AT + k]
+    if velocity:
+        for c in range(3):
+            point1[V_AT + c] = frame1[rigid.V_AT + c]
+    centre = point1[DERIVS_AT:DERIVS_AT + 3]
+
+    # 4. warm-started Newton
+    if np.isnan(start[0]) or np.isnan(ftab[TOL2]):
+        return FALLBACK, nan, nan, nan, nan
+    found, eta, xi, gg, k, steps = newton_2s(centre, start[0], start[1], knots_e, knots_x, ints, floats, ctrl0, phi,
+                                             state, span, ftab[MAX_STEP_E], ftab[MAX_STEP_X], ftab[TOL2],
+                                             itab[MAX_ITER], B, local, D, g)
+    if not found:
+        return FALLBACK, nan, nan, nan, nan
+    counts[NEWTON_SOLVES] += 1
+    counts[NEWTON_ITERATIONS] += steps
+    counts[LAST_ITERATIONS] = k
+    start[0], start[1] = eta, xi
+
+    # 5. the point C2
+    D2 = point2[DERIVS_AT:FRAME_AT].reshape(6, 3)
+    F2 = point2[FRAME_AT:V_AT].reshape(3, 3)
+    v2 = point2[V_AT:J_AT]
+    J2 = point2[J_AT:J_AT + 3 * nu2].reshape(3, nu2)
+    evaluate_2s(eta, xi, knots_e, knots_x, ints, floats, ctrl0, phi, state, span, ftab[SIGN], True, velocity, B,
+                local, phi_rows, D2, F2, v2)
+    point_jacobian_T(A, A, local[0], phi_rows[0].reshape(3, n_f), False, 0, J2)   # prescribed frame: A Φ
+    for k in range(3 * nu2):
+        point2[J_AT + 3 * nu2 + k] = 0.0
+
+    # 6. gap, frame, relative velocity, Jacobian pieces
+    g_N = normal_gap(F2, centre, D2, 0.0)
+    ko = KIN_AT
+    n = kin[itab[ko]:itab[ko + 1]]
+    T = kin[itab[ko + 1]:itab[ko + 2]].reshape(3, 2)
+    gd_T = kin[itab[ko + 2]:itab[ko + 3]]
+    w_N1, w_N2 = kin[itab[ko + 3]:itab[ko + 4]], kin[itab[ko + 4]:itab[ko + 5]]
+    w_T1 = kin[itab[ko + 5]:itab[ko + 6]].reshape(nu1, 2)
+    w_T2 = kin[itab[ko + 6]:itab[ko + 7]].reshape(nu2, 2)
+    J1 = point1[J_AT:J_AT + 3 * nu1].reshape(3, nu1)
+    gd_N = frame_rates_jacobians(F2, point1[V_AT:J_AT], v2, J1, J2, velocity, True, n, T, gd_T, w_N1, w_N2, w_T1,
+                                 w_T2)
+    return LOCATED, g_N, gd_N if velocity else nan, eta, xi
