@@ -28,9 +28,7 @@ from contact._detection_kernels import boxes_overlap, frame_rates_jacobians, new
 from contact.search import LAST_ITERATIONS, NEWTON_ITERATIONS, NEWTON_SOLVES
 from contours import rigid
 from contours.base import DERIVS_AT, FRAME_AT, J_AT, V_AT
-from contours.neutral._kernels import A_AT, R_AT, STAMP_AT, W_AT, bounding_box, evaluate_2s, store_state, \
-    store_velocity
-from contours.neutral._kernels import V_AT as STATE_V_AT
+from contours.neutral._kernels import A_AT, Q_AT, STAMP_AT, bounding_box, contract_surface, frame_2s, point_velocity
 
 from ._kernels import point_jacobian_T
 
@@ -51,11 +49,15 @@ MARGIN, TOL2, MAX_STEP_E, MAX_STEP_X, SIGN = range(5)
 OFFSET_AT, FLOATS_AT, KNOTS_AT = 5, 8, 12
 
 
-@njit(cache=True)
-def work_size(p_max, n_f):
-    """Length of the work vector: basis tables (2, 3, p_max + 1), ū rows (6, 3), r rows
-    (6, 3), g (3,), Φ rows (6, 3 n_f), two boxes (2, 3)."""
-    return 6 * (p_max + 1) + 18 + 18 + 3 + 18 * n_f + 12
+MAX_DEGREE = 7
+# the work vector: basis tables (2, 3, p_max + 1), ū rows (6, 3), r rows (6, 3), g (3,), then
+# from WORK_AT the Φ rows (6, 3 n_f) and two boxes (2, 3)
+WORK_AT = 6 * (MAX_DEGREE + 1) + 39
+
+
+def work_size(n_f):
+    """Length of the work vector of a contour with n_f modes (degrees up to 7)."""
+    return WORK_AT + 18 * n_f + 12
 
 
 @njit(cache=True)
@@ -65,7 +67,7 @@ def point_on_neutral_2s(q, u, itab, ftab, ctrl0, phi, state, span, frame1, point
 
     1. the contours' states: the point r = q_P + ū0, ṙ = u_P into ``frame1`` (the
        frame contour's state); q_f, q̇_f and a new stamp into the neutral contour's
-       ``state`` (:func:`~contours.neutral._kernels.store_state`, ``store_velocity``;
+       ``state`` (as :func:`~contours.neutral._kernels.store_state`, ``store_velocity``;
        R, A, v, ω̄ of the frame at rest stay);
     2. broad phase (with ``itab[BOX]``): the point's box and the contour's
        (:func:`~contours.neutral._kernels.bounding_box`) grown by the margin
@@ -76,10 +78,11 @@ def point_on_neutral_2s(q, u, itab, ftab, ctrl0, phi, state, span, frame1, point
        (:func:`~contact._detection_kernels.newton_2s`), the search's ``counts`` and
        ``start`` updated — no warm start, no tolerance yet or no root: FALLBACK (the
        caller runs the Python path, which searches the coarse grid);
-    5. C2 into ``point2``: r and its derivatives, the frame (eq. 3.23–3.29), ṙ (eq. 2.32)
-       with ``itab[VELOCITY]`` (:func:`~contours.neutral._kernels.evaluate_2s`),
-       J_T = A Φ (eq. 2.70 on a prescribed frame, :func:`mbs._kernels.point_jacobian_T`),
-       J_R = 0;
+    5. C2 into ``point2``: r and its derivatives (eq. 3.23, 3.25, 3.26: those of Newton's
+       last evaluation, at the root), the frame (eq. 3.27–3.29), ṙ (eq. 2.32)
+       with ``itab[VELOCITY]`` — what :func:`~contours.neutral._kernels.evaluate_2s`
+       gives at the root —, J_T = A Φ (eq. 2.70 on a prescribed frame,
+       :func:`mbs._kernels.point_jacobian_T`), J_R = 0;
     6. g_N (eq. 3.4) and n, T, ġ_T, w_N1, w_N2, w_T1, w_T2 (eq. 3.8) into ``kin``.
 
     Returns (outcome, g_N [m], ġ_N [m/s] (NaN without velocity), η, ξ).
@@ -87,50 +90,33 @@ def point_on_neutral_2s(q, u, itab, ftab, ctrl0, phi, state, span, frame1, point
     nan = np.nan
     n_f, nu1, nu2 = itab[NF], itab[NU1], itab[NU2]
     velocity = itab[VELOCITY] != 0
-    ints = itab[GEOM_AT:GEOM_AT + 6]
-    floats = ftab[FLOATS_AT:FLOATS_AT + 4]
-    o = KNOTS_AT
-    knots_e = ftab[o:o + itab[KNOTS_E_N]]
-    o += itab[KNOTS_E_N]
-    knots_x = ftab[o:o + itab[KNOTS_X_N]]
-    o += itab[KNOTS_X_N]
-    lo0, hi0 = ftab[o:o + 3], ftab[o + 3:o + 6]
-    phi_bound = ftab[o + 6:o + 6 + 3 * n_f].reshape(3, n_f)
-    pm = max(ints[0], ints[3]) + 1
-    B = work[:6 * pm].reshape(2, 3, pm)
-    o = 6 * pm
-    local = work[o:o + 18].reshape(6, 3)
-    D = work[o + 18:o + 36].reshape(6, 3)
-    g = work[o + 36:o + 39]
-    o += 39
-    phi_rows = work[o:o + 18 * n_f].reshape(6, 3 * n_f)
-    o += 18 * n_f
-    box1, box2 = work[o:o + 6].reshape(2, 3), work[o + 6:o + 12].reshape(2, 3)
 
-    # 1. the contours' states
+    # 1. the contours' states (store_state, store_velocity of the neutral contour)
     qp, up, qf, uf = itab[QP], itab[UP], itab[QF], itab[UF]
     for c in range(3):
         frame1[rigid.R_AT + c] = q[qp + c] + ftab[OFFSET_AT + c]
         frame1[rigid.V_AT + c] = u[up + c]
-    A = state[A_AT:A_AT + 9].reshape(3, 3)
-    store_state(state, state[R_AT:R_AT + 3], A, q[qf:qf + n_f])
-    store_velocity(state, state[STATE_V_AT:STATE_V_AT + 3], state[W_AT:W_AT + 3], u[uf:uf + n_f])
+    for k in range(n_f):
+        state[Q_AT + k] = q[qf + k]
+        state[Q_AT + n_f + k] = u[uf + k]
+    state[STAMP_AT] += 1.0
 
     # 2. broad phase
-    r1 = frame1[rigid.R_AT:rigid.R_AT + 3]
+    o = KNOTS_AT + itab[KNOTS_E_N] + itab[KNOTS_X_N]
+    work_at = WORK_AT + 18 * n_f
     if itab[BOX] != 0:
+        box1, box2 = work[work_at:work_at + 6].reshape(2, 3), work[work_at + 6:work_at + 12].reshape(2, 3)
         for c in range(3):
-            box1[0, c] = r1[c]
-            box1[1, c] = r1[c]
-        bounding_box(lo0, hi0, phi_bound, state, box2)
+            box1[0, c] = box1[1, c] = frame1[rigid.R_AT + c]
+        bounding_box(ftab[o:o + 3], ftab[o + 3:o + 6], ftab[o + 6:o + 6 + 3 * n_f].reshape(3, n_f), state, box2)
         if not boxes_overlap(box1, box2, ftab[MARGIN]):
             return APART, nan, nan, nan, nan
 
-    # 3. the point C1
-    for k in range(FRAME_AT - DERIVS_AT):
+    # 3. the point C1 (PointContour.evaluate)
+    for k in range(V_AT - DERIVS_AT):
         point1[DERIVS_AT + k] = 0.0
     for c in range(3):
-        point1[DERIVS_AT + c] = r1[c]
+        point1[DERIVS_AT + c] = frame1[rigid.R_AT + c]
     for k in range(9):
         point1[FRAME_AT + k] = frame1[rigid.A_AT + k]
     for k in range(6 * nu1):
@@ -140,12 +126,20 @@ def point_on_neutral_2s(q, u, itab, ftab, ctrl0, phi, state, span, frame1, point
             point1[V_AT + c] = frame1[rigid.V_AT + c]
     centre = point1[DERIVS_AT:DERIVS_AT + 3]
 
-    # 4. warm-started Newton
+    # 4. warm-started Newton; its last evaluation, at the root, is C2's r rows
     if np.isnan(start[0]) or np.isnan(ftab[TOL2]):
         return FALLBACK, nan, nan, nan, nan
-    found, eta, xi, gg, k, steps = newton_2s(centre, start[0], start[1], knots_e, knots_x, ints, floats, ctrl0, phi,
-                                             state, span, ftab[MAX_STEP_E], ftab[MAX_STEP_X], ftab[TOL2],
-                                             itab[MAX_ITER], B, local, D, g)
+    ints = itab[GEOM_AT:GEOM_AT + 6]
+    pm = max(ints[0], ints[3]) + 1
+    B = work[:6 * pm].reshape(2, 3, pm)
+    local = work[6 * pm:6 * pm + 18].reshape(6, 3)
+    D = work[6 * pm + 18:6 * pm + 36].reshape(6, 3)
+    g = work[6 * pm + 36:6 * pm + 39]
+    knots_e = ftab[KNOTS_AT:KNOTS_AT + itab[KNOTS_E_N]]
+    knots_x = ftab[KNOTS_AT + itab[KNOTS_E_N]:o]
+    found, eta, xi, gg, k, steps = newton_2s(centre, start[0], start[1], knots_e, knots_x, ints,
+                                             ftab[FLOATS_AT:FLOATS_AT + 4], ctrl0, phi, state, span, ftab[MAX_STEP_E],
+                                             ftab[MAX_STEP_X], ftab[TOL2], itab[MAX_ITER], B, local, D, g)
     if not found:
         return FALLBACK, nan, nan, nan, nan
     counts[NEWTON_SOLVES] += 1
@@ -153,13 +147,20 @@ def point_on_neutral_2s(q, u, itab, ftab, ctrl0, phi, state, span, frame1, point
     counts[LAST_ITERATIONS] = k
     start[0], start[1] = eta, xi
 
-    # 5. the point C2
+    # 5. the point C2 (the r rows of Newton's last evaluation, then the rest of evaluate_2s
+    # at the root: frame, Φ rows, ṙ; J_T, J_R)
+    for k in range(18):
+        point2[DERIVS_AT + k] = work[6 * pm + 18 + k]
     D2 = point2[DERIVS_AT:FRAME_AT].reshape(6, 3)
     F2 = point2[FRAME_AT:V_AT].reshape(3, 3)
     v2 = point2[V_AT:J_AT]
     J2 = point2[J_AT:J_AT + 3 * nu2].reshape(3, nu2)
-    evaluate_2s(eta, xi, knots_e, knots_x, ints, floats, ctrl0, phi, state, span, ftab[SIGN], True, velocity, B,
-                local, phi_rows, D2, F2, v2)
+    frame_2s(D2, ftab[SIGN], F2)
+    phi_rows = work[WORK_AT:WORK_AT + 18 * n_f].reshape(6, 3 * n_f)
+    contract_surface(B[0], int(span[1]), ints[0], B[1], int(span[2]), ints[3], phi, 1, phi_rows)
+    if velocity:
+        point_velocity(state, local[0], phi_rows[0], v2)
+    A = state[A_AT:A_AT + 9].reshape(3, 3)
     point_jacobian_T(A, A, local[0], phi_rows[0].reshape(3, n_f), False, 0, J2)   # prescribed frame: A Φ
     for k in range(3 * nu2):
         point2[J_AT + 3 * nu2 + k] = 0.0
@@ -167,13 +168,11 @@ def point_on_neutral_2s(q, u, itab, ftab, ctrl0, phi, state, span, frame1, point
     # 6. gap, frame, relative velocity, Jacobian pieces
     g_N = normal_gap(F2, centre, D2, 0.0)
     ko = KIN_AT
-    n = kin[itab[ko]:itab[ko + 1]]
     T = kin[itab[ko + 1]:itab[ko + 2]].reshape(3, 2)
-    gd_T = kin[itab[ko + 2]:itab[ko + 3]]
-    w_N1, w_N2 = kin[itab[ko + 3]:itab[ko + 4]], kin[itab[ko + 4]:itab[ko + 5]]
     w_T1 = kin[itab[ko + 5]:itab[ko + 6]].reshape(nu1, 2)
     w_T2 = kin[itab[ko + 6]:itab[ko + 7]].reshape(nu2, 2)
     J1 = point1[J_AT:J_AT + 3 * nu1].reshape(3, nu1)
-    gd_N = frame_rates_jacobians(F2, point1[V_AT:J_AT], v2, J1, J2, velocity, True, n, T, gd_T, w_N1, w_N2, w_T1,
-                                 w_T2)
+    gd_N = frame_rates_jacobians(F2, point1[V_AT:J_AT], v2, J1, J2, velocity, True, kin[itab[ko]:itab[ko + 1]], T,
+                                 kin[itab[ko + 2]:itab[ko + 3]], kin[itab[ko + 3]:itab[ko + 4]],
+                                 kin[itab[ko + 4]:itab[ko + 5]], w_T1, w_T2)
     return LOCATED, g_N, gd_N if velocity else nan, eta, xi

@@ -69,6 +69,7 @@ class PointOnNeutral2s:
         body1, body2 = point.body, surface.body
         return (type(point) is PointContour and body1 is not None and body1.translation_only
                 and isinstance(surface, Contour2sNeutralFactory) and surface.compiled
+                and max(surface.space.eta.p, surface.space.xi.p) <= K.MAX_DEGREE
                 and body2 is not None and getattr(body2, "frame_at_rest", False)
                 and type(k.search) is Contact2sSearch and k.search.compiled
                 and body1.q_slice is not None and body2.q_slice is not None)
@@ -100,7 +101,7 @@ class PointOnNeutral2s:
         ftab[K.FLOATS_AT:K.FLOATS_AT + 4] = floats
         self._itab, self._ftab = itab, ftab
         self._newton_settings()
-        work = np.zeros(K.work_size(max(ints[0], ints[3]), n_f))
+        work = np.zeros(K.work_size(n_f))
         self._args = (itab, ftab, ctrl0, phi, state, span, point.state, k.point1.buffer, k.point2.buffer, k.buffer,
                       k.start, k.search.counts, work)
         self._updates = [(c, c.body.q_slice, c.body.u_slice) for c in (point, surface)]

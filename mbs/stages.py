@@ -80,7 +80,8 @@ def contours(model, data, dt):
             data.spheres_started = True
         data.stats["pruned_contacts"] += model.spheres.prune(q, t, data.sphere_centres, data.sphere_radii, live,
                                                              data.closed)
-    for j in range(K.contours_in_use(model.owner_at, model.owners, live, data.contour_idx)):
+    n_contours = K.contours_in_use(model.owner_at, model.owners, live, data.contour_idx) if model.owners.size else 0
+    for j in range(n_contours):
         contour, owners, qs, us = model.contours[data.contour_idx[j]]
         if qs is None:
             contour.update(None, None, t)
