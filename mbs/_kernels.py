@@ -410,3 +410,55 @@ def point_masses_increment(q_at, u_at, q, du, out):
     for p in range(q_at.shape[0]):
         for c in range(3):
             out[q_at[p] + c] = q[q_at[p] + c] + du[u_at[p] + c]
+
+
+@njit(cache=True)
+def free_point_position_into(q, at, u0, phi, out):
+    """r = R + A (ū0 + Φ q_f) (3,) [m] (thesis eq. 2.24) of a point of a free quaternion
+    body whose coordinates (R, p, q_f) start at q[at] (the system's q), into ``out``.
+    Numpy reference: :meth:`mbs.floating_frame.FloatingFrameBody.point_position`."""
+    n = phi.shape[1]
+    s0 = 0.0
+    s1 = 0.0
+    s2 = 0.0
+    for a in range(n):
+        x = q[at + 7 + a]
+        s0 += phi[0, a] * x
+        s1 += phi[1, a] * x
+        s2 += phi[2, a] * x
+    ub0 = u0[0] + s0
+    ub1 = u0[1] + s1
+    ub2 = u0[2] + s2
+    p0 = q[at + 3]
+    p1 = q[at + 4]
+    p2 = q[at + 5]
+    p3 = q[at + 6]
+    out[0] = q[at] + ((1 - 2 * (p2 * p2 + p3 * p3)) * ub0 + 2 * (p1 * p2 - p0 * p3) * ub1
+                      + 2 * (p1 * p3 + p0 * p2) * ub2)
+    out[1] = q[at + 1] + (2 * (p1 * p2 + p0 * p3) * ub0 + (1 - 2 * (p1 * p1 + p3 * p3)) * ub1
+                          + 2 * (p2 * p3 - p0 * p1) * ub2)
+    out[2] = q[at + 2] + (2 * (p1 * p3 - p0 * p2) * ub0 + 2 * (p2 * p3 + p0 * p1) * ub1
+                          + (1 - 2 * (p1 * p1 + p2 * p2)) * ub2)
+
+
+@njit(cache=True)
+def finite_sum(q, u):
+    """Σ q + Σ u: finite exactly when every entry is (barring overflow of the sum), the
+    test of a diverged state (numpy reference: ``q.sum() + u.sum()``)."""
+    s = 0.0
+    for i in range(q.shape[0]):
+        s += q[i]
+    for i in range(u.shape[0]):
+        s += u[i]
+    return s
+
+
+@njit(cache=True)
+def free_quat_advance(q, u, step, du, out):
+    """Δu = step · u into ``du``, then q ⊕ Δu (:func:`free_quat_increment`) into ``out``
+    (may be ``q``) with its quaternion renormalized (:func:`normalize_quaternion`): a
+    whole position update of one free quaternion body, step [s]."""
+    for i in range(u.shape[0]):
+        du[i] = u[i] * step
+    free_quat_increment(q, du, out)
+    normalize_quaternion(out, 3)

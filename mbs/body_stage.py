@@ -102,6 +102,7 @@ class BodyStage:
                 self.D0[b.u_slice, b.u_slice] += Db
         self.additive = all(b.additive for b in self.active)
         self._rotating = [(b, b.q_slice) for b in self.active if not b.additive]
+        self._one_free = self._one and bool(getattr(self.active[0], "free_quaternion", False))
 
     @classmethod
     def of_equations(cls, equations) -> "BodyStage":
@@ -195,6 +196,17 @@ class BodyStage:
             b.increment_into(q[qs], du[us], out[qs])
         if self._point_u.size:
             K.point_masses_increment(self._point_q, self._point_u, q, du, out)
+
+    def advance(self, q, u, step, du, out) -> None:
+        """Δu = step · u [step: s] into ``du`` and q ⊕ Δu, renormalized, into ``out``
+        (:meth:`increment`, :meth:`normalize`; one kernel for a lone free quaternion body,
+        :func:`mbs._kernels.free_quat_advance`)."""
+        if self._one_free:
+            K.free_quat_advance(q, u, step, du, out)
+            return
+        np.multiply(u, step, out=du)
+        self.increment(q, du, out)
+        self.normalize(out)
 
     def normalize(self, q) -> None:
         """Project q onto its constraint manifold in place (unit quaternions)."""

@@ -117,3 +117,16 @@ def block_cho_solve_matrix(L, blocks, idle, B, X):
     may be ``B``."""
     for c in range(B.shape[1]):
         block_cho_solve_vector(L, blocks, idle, B[:, c], X[:, c])
+
+
+@njit(cache=True)
+def block_iteration_factor(M, K0, D0, a, b, blocks, A, L):
+    """A = (M + a D0) + b K0 (n, n) — the iteration matrix M̂ = M + θΔt D + θ²Δt² K with
+    a = θΔt [s], b = θ²Δt² [s²] and the bodies' constant tangents K0, D0 — and its
+    :func:`block_cholesky_into` factor into ``L``; returns its info. Numpy reference: the
+    same sums with ``np.multiply``/``np.add`` (:func:`mbs.stages._factor`)."""
+    n = M.shape[0]
+    for i in range(n):
+        for j in range(n):
+            A[i, j] = (M[i, j] + D0[i, j] * a) + K0[i, j] * b
+    return block_cholesky_into(A, blocks, L)

@@ -218,7 +218,7 @@ class Data:
         self.G_buf = np.zeros(m * m)
         self.lam_buf, self.gamma_plus_buf = np.zeros(m), np.zeros(m)
         self.xi_free_buf, self.gamma_pre_buf = np.zeros(m), np.zeros(m)
-        self.closing_buf, self.offset_buf, self.work_buf = np.zeros(m), np.zeros(m), np.zeros(m)
+        self.closing_buf, self.offset_buf = np.zeros(m), np.zeros(m)
         self.work_u = np.zeros(nu)          # M̂⁻¹ W Λ, then (1 − 2θ)Δt u_k
         self.u_prev = np.zeros(nu)          # u_k while u_{k+1} is formed
         self.solver_work = np.zeros((4, m))
@@ -239,7 +239,7 @@ class Data:
 
     def problem(self, nu, m):
         """Views (W (nu, m) C order, M̂⁻¹W (nu, m) Fortran order, G (m, m), Λ, γ⁺, ξ_free,
-        γ⁻, closing, offset, work (m,)) of the contact problem with m rows, made once
+        γ⁻, closing, offset (m,)) of the contact problem with m rows, made once
         per (nu, m) and kept in ``problem_views``."""
         views = self.problem_views.get((nu, m))
         if views is None:
@@ -249,5 +249,4 @@ class Data:
     def _problem(self, nu, m):
         return (self.W_buf[:nu * m].reshape(nu, m), self.MW_buf[:nu * m].reshape(m, nu).T,
                 self.G_buf[:m * m].reshape(m, m), self.lam_buf[:m], self.gamma_plus_buf[:m],
-                self.xi_free_buf[:m], self.gamma_pre_buf[:m], self.closing_buf[:m], self.offset_buf[:m],
-                self.work_buf[:m])
+                self.xi_free_buf[:m], self.gamma_pre_buf[:m], self.closing_buf[:m], self.offset_buf[:m])

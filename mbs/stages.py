@@ -45,7 +45,7 @@ from contact.laws import Bilateral
 from contact.solver import ContactSet
 
 from . import _stage_kernels as K
-from .linalg_kernels import block_cho_solve_matrix, block_cho_solve_vector, block_cholesky_into
+from .linalg_kernels import block_cho_solve_matrix, block_cho_solve_vector, block_iteration_factor
 from .step_failure import StepFailure
 
 STAGES = ("midpoint", "bodies", "contours", "detect", "constraints", "impulses", "velocity", "position")
@@ -55,9 +55,7 @@ def midpoint(model, data, dt):
     """Stage 1: t_m = t + θΔt, q_m = q ⊕ θΔt u, renormalized."""
     th_dt = model.theta * dt
     data.t_m = data.t + th_dt
-    np.multiply(data.u, th_dt, out=data.du)
-    model.body_stage.increment(data.q, data.du, data.q_m)
-    model.body_stage.normalize(data.q_m)
+    model.body_stage.advance(data.q, data.u, th_dt, data.du, data.q_m)
 
 
 def bodies(model, data, dt):
@@ -134,7 +132,7 @@ def constraints(model, data, dt):
     if m == 0:
         return
     nu, n_c = model.nu, model.n_c
-    W, MW, G, lam, gamma_plus, xi_free, gamma_pre, closing, offset, work = data.problem(nu, m)
+    W, MW, G, lam, gamma_plus, xi_free, gamma_pre, closing, offset = data.problem(nu, m)
     W.fill(0.0)
     closing.fill(0.0)
     offset.fill(0.0)
@@ -152,12 +150,7 @@ def constraints(model, data, dt):
             closing[row] = c.kinematics.g_N / dt
         row += dim
     solve_matrix(model, data, factor, W, MW)
-    np.matmul(W.T, MW, out=G)
-    np.matmul(W.T, data.u_free, out=xi_free)
-    xi_free += offset
-    xi_free += closing
-    np.matmul(W.T, data.u, out=gamma_pre)
-    gamma_pre += offset
+    K.contact_problem_into(W, MW, data.u_free, data.u, offset, closing, G, xi_free, gamma_pre)
 
 
 def impulses(model, data, dt):
@@ -169,7 +162,7 @@ def impulses(model, data, dt):
             data.warm.fill(False)            # nothing closed: no warm start, no resting contact
             data.warm_joints = False
         return
-    W, MW, G, lam, gamma_plus, xi_free, gamma_pre, closing, offset, work = data.problem(model.nu, m)
+    W, MW, G, lam, gamma_plus, xi_free, gamma_pre, closing, offset = data.problem(model.nu, m)
     warm_start(model, data, lam)
     it, residual, converged = model.solver.solve_into(contact_set(model, data), G, xi_free, gamma_pre, lam,
                                                       gamma_plus, data.solver_work[:, :m])
@@ -180,9 +173,7 @@ def impulses(model, data, dt):
     data.stats["solver_iterations"] += it
     last[2] += it
     last[3] = max(last[3], residual)
-    np.subtract(gamma_plus, closing, out=work)
-    work += gamma_pre
-    last[4] += 0.5 * float(lam @ work)
+    last[4] += K.impulse_work(lam, gamma_plus, closing, gamma_pre)
     keep_warm_start(model, data, lam)
 
 
@@ -194,8 +185,7 @@ def velocity(model, data, dt):
         data.u[:] = data.u_free
     else:
         W, MW, G, lam = data.problem(model.nu, m)[:4]
-        np.matmul(MW, lam, out=data.work_u)
-        np.add(data.u_free, data.work_u, out=data.u)
+        K.velocity_into(data.u_free, MW, lam, data.u)
     data.stats["closed_contacts"] += data.n_closed
     if data.n_closed > data.last[0]:
         data.last[0] = data.n_closed
@@ -204,12 +194,14 @@ def velocity(model, data, dt):
 def position(model, data, dt):
     """Stage 8: q_{k+1} = q_m ⊕ Δt (θ u_{k+1} + (1 − 2θ) u_k), renormalized; t += Δt."""
     th = model.theta
-    np.multiply(data.u, th * dt, out=data.du)
-    if th != 0.5:
+    if th == 0.5:
+        model.body_stage.advance(data.q_m, data.u, th * dt, data.du, data.q)
+    else:
+        np.multiply(data.u, th * dt, out=data.du)
         np.multiply(data.u_prev, (1.0 - 2.0 * th) * dt, out=data.work_u)
         data.du += data.work_u
-    model.body_stage.increment(data.q_m, data.du, data.q)
-    model.body_stage.normalize(data.q)
+        model.body_stage.increment(data.q_m, data.du, data.q)
+        model.body_stage.normalize(data.q)
     data.t += dt
     data.h_last = dt
 
@@ -270,21 +262,24 @@ def _factor_array(model):
 
 
 def _factor(model, data, dt, out):
-    """Cholesky factor of M̂ (tangents at q_m) into ``out``: block by block over the
-    active bodies (:func:`~mbs.linalg_kernels.block_cholesky_into`) when M̂ is block
-    diagonal (``model.blocks``), else LAPACK's on the active rows."""
+    """Cholesky factor of M̂ (tangents at q_m) into ``out``, M̂ into ``data.D``: block by
+    block over the active bodies, M̂ from the bodies' constant tangents in the same
+    kernel (:func:`~mbs.linalg_kernels.block_iteration_factor`), when M̂ is block diagonal
+    (``model.blocks``), else from the body stage's tangents and LAPACK's factor on the
+    active rows."""
     th = model.theta
     K, D, M = data.K, data.D, data.M
-    model.body_stage.tangents(data.t_m, data.q_m, data.u, K, D)
+    stage = model.body_stage
+    if model.blocks is not None:            # constant tangents: M̂ and its factor in one kernel
+        info = block_iteration_factor(M, stage.K0, stage.D0, th * dt, th * th * dt * dt, model.blocks, D, out)
+        if info != 0:
+            raise StepFailure(f"M + θΔt D + θΔt² K is not positive definite (pivot of row {info - 1})")
+        return out
+    stage.tangents(data.t_m, data.q_m, data.u, K, D)
     np.multiply(D, th * dt, out=D)
     np.add(M, D, out=D)
     np.multiply(K, th * th * dt * dt, out=K)
     np.add(D, K, out=D)                     # M̂ = M + θΔt D + θ²Δt² K
-    if model.blocks is not None:
-        info = block_cholesky_into(D, model.blocks, out)
-        if info != 0:
-            raise StepFailure(f"M + θΔt D + θΔt² K is not positive definite (pivot of row {info - 1})")
-        return out
     if model.active_u is None:
         out[...] = D
     else:
