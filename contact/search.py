@@ -135,6 +135,9 @@ class _Search:
     """
 
     dim: int
+    #: what a solve changes (:mod:`mbs.state_arrays`); ``_G``: the coarse grid's workspace
+    run_state = ("_length_scale", "newton_iterations", "newton_solves", "coarse_searches", "last_iterations",
+                 "_point", "_g", "_G")
 
     def __init__(self, contour, tol, max_iter, length_scale, compiled):
         if contour.dim != self.dim:

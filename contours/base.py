@@ -51,6 +51,8 @@ class ContourPoint:
         Jacobians of translation and rotation (filled when asked for).
     """
 
+    run_state = ("eta", "xi", "derivs", "frame", "v", "J_T", "J_R")     # (mbs.state_arrays)
+
     def __init__(self, nu: int):
         self.eta = 0.0
         self.xi = 0.0

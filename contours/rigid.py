@@ -30,6 +30,8 @@ class _FrameContour(Contour):
     """Shared state of the rigid contours: the frame's position, orientation, velocity
     and Jacobians, read once per update."""
 
+    run_state = ("_r", "_A", "_v", "_w", "_J_T", "_J_R")     # what update() wrote (mbs.state_arrays)
+
     def __init__(self, frame, name):
         body = None if frame.is_ground else frame.body
         super().__init__(body, name)

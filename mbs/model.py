@@ -19,6 +19,10 @@ possible closed set, the warm starts (Λ of the last step per contact and for th
 joints), counters and the record of the last step. The contours' states and the
 searches' warm starts stay in the contour and contact-kinematics objects (their own
 preallocated arrays), which the contour and detection stages update.
+
+A checkpoint (:mod:`mbs.checkpoint`) holds every array and scalar of Data
+(:meth:`Data.collect`, :meth:`Data.restore`) but the cache of the contact sets' law
+encodings, which is rebuilt on demand from the Model.
 """
 
 from __future__ import annotations
@@ -27,9 +31,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import state_arrays
+from .body_stage import BodyStage
 from .bounding_spheres import sphere_pair
 from .equations import Equations
-from .body_stage import BodyStage
 
 N_FACTORS = 8          # Cholesky factors of a constant M̂ kept for different step sizes (+1)
 
@@ -201,3 +206,49 @@ class Data:
                 self.G_buf[:m * m].reshape(m, m), self.lam_buf[:m], self.gamma_plus_buf[:m],
                 self.xi_free_buf[:m], self.gamma_pre_buf[:m], self.closing_buf[:m], self.offset_buf[:m],
                 self.work_buf[:m])
+
+    def collect(self, prefix, arrays: dict, kinds: dict) -> None:
+        """Every array and scalar of the run under ``prefix/…`` (:mod:`mbs.state_arrays`):
+        the factors of a constant M̂ as ``factor_steps`` (k,) [s] and ``factor_stack``
+        (k, n_act, n_act), ``stats`` and ``last`` entry by entry; ``contact_sets`` left out
+        (a cache of the laws' kernel encodings, rebuilt on demand)."""
+        for name, value in vars(self).items():
+            if name == "contact_sets":
+                continue
+            if name == "factors":
+                n = self.rhs_act.size
+                arrays[f"{prefix}/factor_steps"] = np.array([h for h, _ in value], dtype=float)
+                arrays[f"{prefix}/factor_stack"] = np.array([f for _, f in value]).reshape(len(value), n, n)
+                kinds[f"{prefix}/factor_steps"] = kinds[f"{prefix}/factor_stack"] = "array"
+            elif name in ("stats", "last"):
+                for key, entry in (value.items() if name == "stats" else enumerate(value)):
+                    state_arrays.put(f"{prefix}/{name}/{key}", entry, arrays, kinds)
+            else:
+                state_arrays.put(f"{prefix}/{name}", value, arrays, kinds)
+
+    def restore(self, prefix, arrays, kinds) -> None:
+        """The state :meth:`collect` saved, into this Data of the same Model
+        (:class:`~mbs.state_arrays.StateMismatch` if it does not fit)."""
+        take = state_arrays.take
+        for name, value in vars(self).items():
+            if name == "contact_sets":
+                continue
+            if name == "factors":
+                steps = take(f"{prefix}/factor_steps", None, arrays, kinds)
+                stack = take(f"{prefix}/factor_stack", None, arrays, kinds)
+                n = self.rhs_act.size
+                if stack.shape != (steps.size, n, n):
+                    raise state_arrays.StateMismatch(f"{prefix}/factor_stack has shape {stack.shape}, this run's "
+                                                     f"factors are ({n}, {n})")
+                self.factors = [(float(h), np.asfortranarray(f)) for h, f in zip(steps, stack)]
+            elif name == "stats":
+                at = f"{prefix}/stats/"             # the saved keys in their order
+                self.stats = {k[len(at):]: take(k, value.get(k[len(at):]), arrays, kinds)
+                              for k in kinds if k.startswith(at)}
+            elif name == "last":
+                value[:] = [take(f"{prefix}/last/{i}", v, arrays, kinds) for i, v in enumerate(value)]
+            elif name == "factor":
+                saved = take(f"{prefix}/factor", value, arrays, kinds)
+                self.factor = None if saved is None else np.asfortranarray(saved)
+            else:
+                setattr(self, name, take(f"{prefix}/{name}", value, arrays, kinds))
