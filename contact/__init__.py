@@ -9,24 +9,27 @@ Public API::
 * :mod:`contact.broad_phase` — bounding-box pruning of contact pairs.
 * :mod:`contact.laws` — set-valued and regularized force laws.
 * :mod:`contact.solver` — the contact problem of a Moreau step (prox, semismooth Newton).
-* :mod:`contact.contact` — a contact (kinematics + law) to add to a System.
+* :mod:`contact.contact` — a contact (kinematics + law) to add to a System; :func:`connect`
+  picks the kinematics from the two contour kinds.
+* :mod:`contact.registry` — the laws, pair kinematics and solvers by name.
 """
 
 from .broad_phase import BroadPhase, overlapping
-from .contact import Contact, CurveConstraint
+from .contact import Contact, ContactElement, CurveConstraint, connect
 from .kinematics import (ContactKinematics, ContactKinematicsPointContour1s, ContactKinematicsPointContour2s,
                          ContactKinematicsPointPlane, ContactKinematicsSphereContour1s,
                          ContactKinematicsSphereContour2s, ContactKinematicsSpherePlane,
                          ContactKinematicsSphereSphere, PointOnCurveConstraint)
 from .laws import (Bilateral, LinearRegularizedUnilateralConstraint, RegularizedCoulombFriction,
                    SpatialCoulombFriction, UnilateralCoulombContact, UnilateralNewtonImpact)
+from .registry import BILATERAL_KINEMATICS, LAWS, PAIR_KINEMATICS, SOLVERS, make_law
 from .search import Contact1sSearch, Contact2sSearch
 from .solver import ContactSolution, ProxSolver
 
-__all__ = ["Bilateral", "BroadPhase", "Contact", "Contact1sSearch", "Contact2sSearch", "ContactKinematics",
+__all__ = ["BILATERAL_KINEMATICS", "Bilateral", "BroadPhase", "Contact", "Contact1sSearch", "Contact2sSearch", "ContactElement", "ContactKinematics",
            "ContactKinematicsPointContour1s", "ContactKinematicsPointContour2s", "ContactKinematicsPointPlane",
            "ContactKinematicsSphereContour1s", "ContactKinematicsSphereContour2s", "ContactKinematicsSpherePlane",
-           "ContactKinematicsSphereSphere", "ContactSolution", "CurveConstraint",
-           "LinearRegularizedUnilateralConstraint", "PointOnCurveConstraint", "ProxSolver",
-           "RegularizedCoulombFriction", "SpatialCoulombFriction", "UnilateralCoulombContact",
-           "UnilateralNewtonImpact", "overlapping"]
+           "ContactKinematicsSphereSphere", "ContactSolution", "CurveConstraint", "LAWS",
+           "LinearRegularizedUnilateralConstraint", "PAIR_KINEMATICS", "PointOnCurveConstraint", "ProxSolver",
+           "RegularizedCoulombFriction", "SOLVERS", "SpatialCoulombFriction", "UnilateralCoulombContact",
+           "UnilateralNewtonImpact", "connect", "make_law", "overlapping"]

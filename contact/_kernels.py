@@ -201,3 +201,49 @@ def diagonal_floor(G, tiny, d):
     for i in range(d.shape[0]):
         if not d[i] > tiny * d_max:
             d[i] = d_max
+
+
+@njit(cache=True)
+def gauss_seidel_solve(G, xi_free, gamma_pre, restitution, kinds, offsets, mu, tangent_at, alpha, tiny, tol,
+                       max_iter, lam, gamma_plus, work):
+    """The projected Gauss–Seidel solve of :meth:`contact.solver.ProxSolver.solve_into`
+    with automatic r, whole: c = ξ_free + ε γ⁻ (Λ = 0 when c = 0); r_i = α / G_ii
+    (:func:`diagonal_floor`), a Coulomb contact's tangential rows α / max(λ_max(G_TT),
+    G_T1T1, G_T2T2); :func:`prox_iterate` from the warm start in ``lam``; γ⁺ = ξ_free + G Λ.
+    ``tangent_at``: the first tangential row of every Coulomb contact; ``work`` (4, m)
+    scratch (c, r, ξ, the sweeps' r). Returns (sweeps, residual [m/s], converged).
+    Numpy reference: the same steps with ``np.multiply``, ``np.add``, ``np.matmul``
+    (``tests/test_contact_solver.py``)."""
+    m = G.shape[0]
+    c = work[0]
+    r = work[1]
+    xi = work[2]
+    r_work = work[3]
+    nonzero = False
+    for i in range(m):
+        c[i] = xi_free[i] + restitution[i] * gamma_pre[i]
+        if c[i] != 0.0:
+            nonzero = True
+    if not nonzero:                 # Λ = 0 solves every law
+        for i in range(m):
+            lam[i] = 0.0
+            gamma_plus[i] = xi_free[i]
+        return 0, 0.0, True
+    diagonal_floor(G, tiny, r)
+    for i in range(m):
+        r_work[i] = r[i]            # the diagonal, kept for the tangential rows
+        r[i] = alpha / r[i]
+    for k in range(tangent_at.shape[0]):
+        t = tangent_at[k]
+        a = G[t, t]
+        b = G[t, t + 1]
+        e = G[t + 1, t + 1]
+        lam_max = 0.5 * (a + e) + math.hypot(0.5 * (a - e), b)
+        r[t] = r[t + 1] = alpha / max(lam_max, r_work[t], r_work[t + 1])
+    it, residual, converged = prox_iterate(G, c, r, kinds, offsets, mu, lam, xi, r_work, False, tol, max_iter)
+    for i in range(m):
+        s = 0.0
+        for j in range(m):
+            s += G[i, j] * lam[j]
+        gamma_plus[i] = xi_free[i] + s
+    return it, residual, converged

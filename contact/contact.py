@@ -9,7 +9,8 @@
   closed instead of opening for a step and letting the body fall; Moreau lets a pressed
   contact close such a gap, :mod:`mbs.integrators.moreau`); it then adds ``dim`` rows to
   the contact problem, W = [w_N] or [w_N, w_T1, w_T2] (thesis eq. 3.1, 4.1);
-* single-valued (``LinearRegularizedUnilateralConstraint``, optionally with
+* single-valued (``LinearRegularizedUnilateralConstraint`` or any law with ``kind =
+  "single-valued"``, ``force`` and ``derivatives``, optionally with
   ``RegularizedCoulombFriction``): a force W_N F_N + W_T F_T added to h.
 
 :class:`CurveConstraint` keeps a point on a curve (bilateral, 2 rows; thesis Sec. 5.3).
@@ -30,32 +31,50 @@ import numpy as np
 
 from ffrmbs.errors import ModelError
 
+from contours.registry import CONTOURS
+
 from ._detection_kernels import boxes_overlap
 from .kinematics import ContactKinematics, PointOnCurveConstraint
-from .laws import (Bilateral, LinearRegularizedUnilateralConstraint, RegularizedCoulombFriction,
-                   UnilateralCoulombContact, UnilateralNewtonImpact)
+from .registry import BILATERAL_KINEMATICS, PAIR_KINEMATICS, make_law
+from .laws import Bilateral, RegularizedCoulombFriction, UnilateralCoulombContact, UnilateralNewtonImpact
 
 SET_VALUED = (UnilateralNewtonImpact, UnilateralCoulombContact)
 
 
-class Contact:
+class ContactElement:
+    """What a System takes as a contact (the Moreau stages use nothing else): ``name``,
+    ``kinematics``, ``law``; ``set_valued`` (rows in the contact problem) and
+    ``unilateral``; ``dim`` (rows of Λ when set-valued); ``bodies()`` and ``contours()``;
+    ``locate()`` (True when closed, after the contours were updated); ``jacobian(out)``
+    (W (nu, dim) of a closed set-valued contact); ``penetration`` [m]."""
+
+    set_valued: bool
+    unilateral: bool
+    dim: int
+
+    def bodies(self):
+        return [c.body for c in self.contours() if c.body is not None]
+
+    def contours(self):
+        return [self.kinematics.contour1, self.kinematics.contour2]
+
+
+class Contact(ContactElement):
     """A unilateral contact: ``kinematics`` and a ``law`` (see module docstring);
     ``friction`` only with a single-valued normal law."""
 
-    is_contact = True
     unilateral = True
     run_state = ("closed", "force_N", "box1", "box2", "kinematics")     # (mbs.state_arrays)
 
     def __init__(self, kinematics: ContactKinematics, law, friction=None, name="contact", margin="auto",
                  closing_tol=1e-12):
-        if not isinstance(law, SET_VALUED + (LinearRegularizedUnilateralConstraint,)):
+        self.set_valued = isinstance(law, SET_VALUED)
+        if not (self.set_valued or _single_valued(law)):
             raise ModelError(f"{name}: unsupported contact law {law!r}")
-        if friction is not None and not (isinstance(friction, RegularizedCoulombFriction)
-                                         and isinstance(law, LinearRegularizedUnilateralConstraint)):
+        if friction is not None and not (isinstance(friction, RegularizedCoulombFriction) and not self.set_valued):
             raise ModelError(f"{name}: friction= takes a RegularizedCoulombFriction with a regularized "
                              "normal law; use UnilateralCoulombContact for set-valued friction")
         self.kinematics, self.law, self.friction, self.name = kinematics, law, friction, name
-        self.set_valued = isinstance(law, SET_VALUED)
         self.dim = law.dim if self.set_valued else 0
         self.closed = False
         self.force_N = 0.0
@@ -67,12 +86,6 @@ class Contact:
             raise ModelError(f"{name}: margin must be >= 0 [m], 'auto' or None, got {margin!r}")
         self.margin = None if self.margin is None else float(self.margin)
         self.box1, self.box2 = np.zeros((2, 3)), np.zeros((2, 3))     # broad-phase workspaces
-
-    def bodies(self):
-        return [c.body for c in self.contours() if c.body is not None]
-
-    def contours(self):
-        return [self.kinematics.contour1, self.kinematics.contour2]
 
     @property
     def penetration(self) -> float:
@@ -112,6 +125,13 @@ class Contact:
                 h[s] += w_T @ F_T
 
 
+def _single_valued(law) -> bool:
+    """Whether ``law`` is a single-valued normal law: ``kind == "single-valued"`` with
+    ``force(g_N, gd_N)`` [N] and ``derivatives(g_N, gd_N)`` (:mod:`contact.laws`)."""
+    return (getattr(law, "kind", None) == "single-valued" and callable(getattr(law, "force", None))
+            and callable(getattr(law, "derivatives", None)))
+
+
 def _auto_margin(contour) -> float:
     """A tenth of the largest finite edge of the contour's bounding box [m] (0 if none)."""
     edges = np.ptp(contour.bounding_box(), axis=0)
@@ -119,10 +139,9 @@ def _auto_margin(contour) -> float:
     return 0.1 * float(edges.max()) if edges.size else 0.0
 
 
-class CurveConstraint:
+class CurveConstraint(ContactElement):
     """A point kept on a curve (bilateral, γ⁺ = 0 on the two normal-plane directions)."""
 
-    is_contact = True
     set_valued = True
     unilateral = False
     dim = 2
@@ -133,12 +152,6 @@ class CurveConstraint:
             raise ModelError(f"{name}: needs PointOnCurveConstraint kinematics")
         self.kinematics, self.law, self.name = kinematics, Bilateral(2), name
         self.closed = False
-
-    def bodies(self):
-        return [c.body for c in self.contours() if c.body is not None]
-
-    def contours(self):
-        return [self.kinematics.contour1, self.kinematics.contour2]
 
     penetration = 0.0
 
@@ -155,3 +168,17 @@ class CurveConstraint:
 
     def jacobian(self, out) -> None:
         self.kinematics.W(out)
+
+
+def connect(contour1, contour2, law, friction=None, name="contact", margin="auto"):
+    """The contact between ``contour1`` (point side) and ``contour2`` (surface side) with
+    the kinematics registered for their kinds: a :class:`Contact` with
+    :data:`contact.PAIR_KINEMATICS`, or for a :class:`~contact.laws.Bilateral` law a
+    :class:`CurveConstraint` with :data:`contact.BILATERAL_KINEMATICS` (contour kinds:
+    :data:`contours.CONTOURS`). ``law`` is a law or a name of :data:`contact.LAWS` (its
+    default parameters); ``friction``, ``margin`` [m] as for :class:`Contact`."""
+    law = make_law(law) if isinstance(law, str) else law
+    kinds = (CONTOURS.name_of(contour1), CONTOURS.name_of(contour2))
+    if isinstance(law, Bilateral):
+        return CurveConstraint(BILATERAL_KINEMATICS[kinds](contour1, contour2), name=name)
+    return Contact(PAIR_KINEMATICS[kinds](contour1, contour2), law, friction=friction, name=name, margin=margin)

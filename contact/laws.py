@@ -21,7 +21,8 @@ with C the law's admissible set of impulses, ε its restitution coefficients
 :meth:`project` is prox_C; the solver (:mod:`contact.solver`) iterates (*) over all
 contacts. Single-valued laws (``kind = "single-valued"``) give a force [N] as a function
 of the contact kinematics; the integrator adds it to h (thesis eq. 3.1b) and may use
-:meth:`derivatives` in a linearly implicit step.
+:meth:`derivatives` in a linearly implicit step. A law's ``units`` ({parameter: unit})
+name the units of its parameters for messages and scene files (dimensionless ones left out).
 
 References: J.J. Moreau, Unilateral contact and dry friction in finite freedom dynamics,
 CISM 302, 1988. M. Jean, The non-smooth contact dynamics method, CMAME 177, 1999.
@@ -223,6 +224,7 @@ class LinearRegularizedUnilateralConstraint:
     d: float = 0.0
     kind: ClassVar[str] = "single-valued"
     dim: ClassVar[int] = 1
+    units: ClassVar[dict] = {"k": "N/m", "d": "N s/m"}
 
     def __post_init__(self):
         object.__setattr__(self, "k", _coefficient(self, "k", self.k, 0.0))
@@ -266,6 +268,7 @@ class RegularizedCoulombFriction:
     v_eps: float
     kind: ClassVar[str] = "single-valued"
     dim: ClassVar[int] = 2
+    units: ClassVar[dict] = {"v_eps": "m/s"}
 
     def __post_init__(self):
         object.__setattr__(self, "mu", _coefficient(self, "mu", self.mu, 0.0))

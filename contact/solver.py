@@ -218,10 +218,16 @@ class ProxSolver:
         """:meth:`solve` on consistent float arrays without validation: Λ in place in
         ``lam`` (its warm start on entry), γ⁺ = ξ_free + G Λ into ``gamma_plus``,
         ``work`` (4, m) scratch; returns (iterations, residual [m/s], converged). The
-        Gauss–Seidel method with automatic r allocates nothing."""
+        Gauss–Seidel method with automatic r is one kernel call
+        (:func:`contact._kernels.gauss_seidel_solve`) and allocates nothing."""
         if self.method == "newton" and cs.frictional:
             raise ModelError("ProxSolver: method 'newton' covers unilateral and bilateral "
                              "contacts only; use 'gauss-seidel' with friction")
+        if self.method == "gauss-seidel" and self.r == "auto":
+            it, residual, converged = kern.gauss_seidel_solve(
+                G, xi_free, gamma_pre, cs.restitution, cs.kinds, cs.entry_offsets, cs.mu, cs.tangent_at,
+                self.relaxation, TINY_DIAGONAL, self.tol, self.max_iter, lam, gamma_plus, work)
+            return int(it), float(residual), bool(converged)
         c, r, xi, r_work = work[0], work[1], work[2], work[3]
         np.multiply(cs.restitution, gamma_pre, out=c)
         np.add(xi_free, c, out=c)

@@ -11,6 +11,7 @@ Public API::
 * :mod:`contours.derived` — ``FlexibleBand`` and ``FlexibleCylinder`` on a 1s neutral contour.
 * :mod:`contours.rigid` — point, sphere and plane on any frame.
 * :mod:`contours.node_grid` — the node matrix O from a node group, node lines.
+* :mod:`contours.registry` — the contour kinds by name (:data:`CONTOURS`).
 
 Every contour: ``update(q, u, t)`` once per step, then ``evaluate(point, η, ξ, …)`` into
 a :class:`ContourPoint` (position, tangents, frame, velocity, J_T, J_R),
@@ -22,9 +23,10 @@ from .derived import FlexibleBand, FlexibleCylinder
 from .neutral import (Contour1sNeutralFFR, Contour1sNeutralFactory, Contour1sNeutralRigid, Contour2sNeutralFFR,
                       Contour2sNeutralFactory, Contour2sNeutralRigid)
 from .node_grid import node_line, node_matrix
+from .registry import CONTOURS
 from .rigid import PlaneContour, PointContour, SphereContour
 
-__all__ = ["Contour", "Contour1sNeutralFFR", "Contour1sNeutralFactory", "Contour1sNeutralRigid",
+__all__ = ["CONTOURS", "Contour", "Contour1sNeutralFFR", "Contour1sNeutralFactory", "Contour1sNeutralRigid",
            "Contour2sNeutralFFR", "Contour2sNeutralFactory", "Contour2sNeutralRigid", "ContourPoint",
            "FlexibleBand", "FlexibleCylinder", "PlaneContour", "PointContour", "SphereContour", "node_line",
            "node_matrix"]

@@ -1,7 +1,8 @@
 """ffrmbs: flexible multibody dynamics with sliding contacts — the bottom layer.
 
-This package holds only what every other package shares: the version and the exception
-hierarchy (:mod:`ffrmbs.errors`). It imports nothing of ours. The library lives in
+This package holds only what every other package shares: the version, the exception
+hierarchy (:mod:`ffrmbs.errors`) and the registry of kinds by name
+(:mod:`ffrmbs.registry`). It imports nothing of ours. The library lives in
 ``preprocess``, ``contours``, ``contact`` and ``mbs``; the application (command line,
 jobs, scene files, built-in scenes, export, plots) in ``ffrmbs_app``; the validation
 cases, benchmarks and stability suite in ``validation``.

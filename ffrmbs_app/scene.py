@@ -1,6 +1,6 @@
 """A scene: one simulation job — a System with its initial state set, how to integrate it
 and what to record — as built by the default scene, a TOML scene file
-(:mod:`ffrmbs_app.scene_toml`) or a Python model script.
+(:mod:`ffrmbs_app.scene_file`) or a Python model script.
 
 A model script is a Python file defining ``scene() -> Scene``; ``ffrmbs run model.py``
 calls it. :func:`load_scene` dispatches on the file's suffix.
@@ -104,7 +104,7 @@ def load_scene(path) -> Scene:
 
     path = regular_file(path)
     if path.suffix == ".toml":
-        from ffrmbs_app.scene_toml import read_scene
+        from ffrmbs_app.scene_file import read_scene
 
         return read_scene(path)
     if path.suffix == ".py":

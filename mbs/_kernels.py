@@ -383,3 +383,82 @@ def point_jacobian_T(A, T, u_bar, phi, free, f0, out):
     for c in range(3):
         for k in range(n_f):
             out[c, f0 + k] = A[c, 0] * phi[0, k] + A[c, 1] * phi[1, k] + A[c, 2] * phi[2, k]
+
+
+@njit(cache=True)
+def point_masses_mass(u_at, mass, M):
+    """The point masses' blocks m_p 1 (3, 3) of M at rows/columns u_at[p].. (the rest of
+    M untouched)."""
+    for p in range(u_at.shape[0]):
+        for c in range(3):
+            M[u_at[p] + c, u_at[p] + c] = mass[p]
+
+
+@njit(cache=True)
+def point_masses_h(u_at, force, h):
+    """The point masses' h (zero: no velocity-dependent or elastic forces) plus the
+    constant force[p] (3,) [N] (their gravity m g) into h at rows u_at[p].."""
+    for p in range(u_at.shape[0]):
+        for c in range(3):
+            h[u_at[p] + c] = 0.0 + force[p, c]
+
+
+@njit(cache=True)
+def point_masses_increment(q_at, u_at, q, du, out):
+    """out = q + Δu on the point masses' coordinates (q[q_at[p]..] and Δu[u_at[p]..], 3
+    each); ``out`` may be ``q``."""
+    for p in range(q_at.shape[0]):
+        for c in range(3):
+            out[q_at[p] + c] = q[q_at[p] + c] + du[u_at[p] + c]
+
+
+@njit(cache=True)
+def free_point_position_into(q, at, u0, phi, out):
+    """r = R + A (ū0 + Φ q_f) (3,) [m] (thesis eq. 2.24) of a point of a free quaternion
+    body whose coordinates (R, p, q_f) start at q[at] (the system's q), into ``out``.
+    Numpy reference: :meth:`mbs.floating_frame.FloatingFrameBody.point_position`."""
+    n = phi.shape[1]
+    s0 = 0.0
+    s1 = 0.0
+    s2 = 0.0
+    for a in range(n):
+        x = q[at + 7 + a]
+        s0 += phi[0, a] * x
+        s1 += phi[1, a] * x
+        s2 += phi[2, a] * x
+    ub0 = u0[0] + s0
+    ub1 = u0[1] + s1
+    ub2 = u0[2] + s2
+    p0 = q[at + 3]
+    p1 = q[at + 4]
+    p2 = q[at + 5]
+    p3 = q[at + 6]
+    out[0] = q[at] + ((1 - 2 * (p2 * p2 + p3 * p3)) * ub0 + 2 * (p1 * p2 - p0 * p3) * ub1
+                      + 2 * (p1 * p3 + p0 * p2) * ub2)
+    out[1] = q[at + 1] + (2 * (p1 * p2 + p0 * p3) * ub0 + (1 - 2 * (p1 * p1 + p3 * p3)) * ub1
+                          + 2 * (p2 * p3 - p0 * p1) * ub2)
+    out[2] = q[at + 2] + (2 * (p1 * p3 - p0 * p2) * ub0 + 2 * (p2 * p3 + p0 * p1) * ub1
+                          + (1 - 2 * (p1 * p1 + p2 * p2)) * ub2)
+
+
+@njit(cache=True)
+def finite_sum(q, u):
+    """Σ q + Σ u: finite exactly when every entry is (barring overflow of the sum), the
+    test of a diverged state (numpy reference: ``q.sum() + u.sum()``)."""
+    s = 0.0
+    for i in range(q.shape[0]):
+        s += q[i]
+    for i in range(u.shape[0]):
+        s += u[i]
+    return s
+
+
+@njit(cache=True)
+def free_quat_advance(q, u, step, du, out):
+    """Δu = step · u into ``du``, then q ⊕ Δu (:func:`free_quat_increment`) into ``out``
+    (may be ``q``) with its quaternion renormalized (:func:`normalize_quaternion`): a
+    whole position update of one free quaternion body, step [s]."""
+    for i in range(u.shape[0]):
+        du[i] = u[i] * step
+    free_quat_increment(q, du, out)
+    normalize_quaternion(out, 3)

@@ -13,7 +13,11 @@ gets the identity as its mass block, zero force and a position that does not mov
 The tangents are K = blockdiag(−∂h_b/∂q) + the force elements' and D likewise (for the
 iteration matrices of the implicit schemes).
 
-Each body contributes through its in-place methods (``mass_and_h_into``, ``h_into``,
+Point masses (M = m 1, h = 0 but for gravity, q ⊕ Δu = q + Δu) are done all at once
+by the kernels :func:`mbs._kernels.point_masses_mass`, :func:`~mbs._kernels.point_masses_h`
+and :func:`~mbs._kernels.point_masses_increment` over their index arrays, their gravity
+m g included, so that many of them cost one call. Every other body contributes through
+its in-place methods (``mass_and_h_into``, ``h_into``,
 ``increment_into``, ``add_point_load_into`` of :class:`mbs.body.Body`): numba kernels
 for FFR bodies (free quaternion, prescribed and fixed frames), rigid bodies and point
 masses, a copy from the allocating methods for the rest. Gravity and force elements
@@ -29,6 +33,9 @@ from __future__ import annotations
 import numpy as np
 
 from ffrmbs.errors import ModelError
+
+from . import _kernels as K
+from .rigid_body import PointMass
 
 GRAVITY_TABLE = np.array([-np.inf])     # gravity acts at every time: one table row from −inf
 
@@ -58,13 +65,20 @@ class BodyStage:
         self.idle = [b for b, on in zip(self.bodies, flags) if not on]
         if any(b.u_slice is None for b in self.bodies):
             raise ModelError("BodyStage: every body needs its slices (add it to a System first)")
-        self._items = [(b, b.q_slice, b.u_slice, b.workspace()) for b in self.active]
-        self._work = {id(b): w for b, _, _, w in self._items}
         self._one = len(self.bodies) == 1 and len(self.active) == 1 and self.active[0].nu == self.nu
+        points = [] if self._one else [b for b in self.active if type(b) is PointMass]
+        self._items = [(b, b.q_slice, b.u_slice, b.workspace()) for b in self.active if b not in points]
+        self._work = {id(b): w for b, _, _, w in self._items}
+        self._work.update((id(b), b.workspace()) for b in points)
         self.gravity = np.asarray(gravity, dtype=float).reshape(3)
+        self._point_q = np.array([b.q_slice.start for b in points], dtype=np.int64)
+        self._point_u = np.array([b.u_slice.start for b in points], dtype=np.int64)
+        self._point_mass = np.array([b.mass for b in points], dtype=float)
+        self._point_force = np.zeros((len(points), 3))      # their gravity m g [N]
         self.forces = list(forces)
         self._loads = []            # ("point", body, q_slice, u_slice, frame, times, values, body_axes, work)
         if self.gravity.any():      # or ("element", force element)
+            self._point_force[:] = np.multiply.outer(self._point_mass, self.gravity)
             for b, qs, us, work in self._items:
                 F = (b.mass * self.gravity).reshape(1, 3)
                 self._loads.append(("point", b, qs, us, b.com_frame(), GRAVITY_TABLE, F, False, work))
@@ -88,6 +102,7 @@ class BodyStage:
                 self.D0[b.u_slice, b.u_slice] += Db
         self.additive = all(b.additive for b in self.active)
         self._rotating = [(b, b.q_slice) for b in self.active if not b.additive]
+        self._one_free = self._one and bool(getattr(self.active[0], "free_quaternion", False))
 
     @classmethod
     def of_equations(cls, equations) -> "BodyStage":
@@ -123,6 +138,9 @@ class BodyStage:
                         M[i, i] = 1.0
             for b, qs, us, work in self._items:
                 b.mass_and_h_into(q[qs], u[us], t, M[us, us], h[us], work)
+            if self._point_u.size:
+                K.point_masses_mass(self._point_u, self._point_mass, M)
+                K.point_masses_h(self._point_u, self._point_force, h)
         if self._loads:
             self._add_loads(t, q, u, h)
 
@@ -136,6 +154,8 @@ class BodyStage:
                 h.fill(0.0)
             for b, qs, us, work in self._items:
                 b.h_into(q[qs], u[us], t, h[us], work)
+            if self._point_u.size:
+                K.point_masses_h(self._point_u, self._point_force, h)
         if self._loads:
             self._add_loads(t, q, u, h)
 
@@ -174,6 +194,19 @@ class BodyStage:
                 out[b.q_slice] = q[b.q_slice]
         for b, qs, us, _ in self._items:
             b.increment_into(q[qs], du[us], out[qs])
+        if self._point_u.size:
+            K.point_masses_increment(self._point_q, self._point_u, q, du, out)
+
+    def advance(self, q, u, step, du, out) -> None:
+        """Δu = step · u [step: s] into ``du`` and q ⊕ Δu, renormalized, into ``out``
+        (:meth:`increment`, :meth:`normalize`; one kernel for a lone free quaternion body,
+        :func:`mbs._kernels.free_quat_advance`)."""
+        if self._one_free:
+            K.free_quat_advance(q, u, step, du, out)
+            return
+        np.multiply(u, step, out=du)
+        self.increment(q, du, out)
+        self.normalize(out)
 
     def normalize(self, q) -> None:
         """Project q onto its constraint manifold in place (unit quaternions)."""

@@ -9,6 +9,11 @@ flexible body within its body's sphere (:meth:`mbs.body.Body.bounding_sphere`:
 centre R + A c, radius max_j |ū0_j − c| + Σ_k max_j |Φ_jk| |q_f,k|; for a frame fixed
 in space the centre is constant and the radius is computed in place). Anything else
 (planes, derived contours) cannot be bounded: None.
+
+:class:`SphereTable` holds the distinct spheres of all prunable contacts of a run as
+arrays and prunes every pair in one call of the kernels of :mod:`._sphere_kernels`
+(the spheres of point masses and of flexible bodies at rest computed there, the others
+by their callables), so the cost per far-apart pair is a few array reads.
 """
 
 from __future__ import annotations
@@ -17,6 +22,7 @@ import numpy as np
 
 from contours import Contour1sNeutralFFR, Contour2sNeutralFFR, PointContour, SphereContour
 
+from . import _sphere_kernels as K
 from .rigid_body import PointMass
 
 NEUTRAL_FFR = (Contour1sNeutralFFR, Contour2sNeutralFFR)
@@ -76,3 +82,88 @@ def sphere_pair(contact):
         return None
     s1, s2 = contour_sphere(contact.kinematics.contour1), contour_sphere(contact.kinematics.contour2)
     return (s1, s2) if s1 is not None and s2 is not None else None
+
+
+class SphereTable:
+    """The bounding spheres of the prunable contacts of a run (module docstring).
+
+    Parameters
+    ----------
+    contacts : sequence
+        The System's contacts; those with a :func:`sphere_pair` are pruned.
+
+    Attributes
+    ----------
+    spheres : list of callables
+        The distinct spheres (each once, shared between contacts).
+    kind, at : (n_s,) int
+        Kernel kind (:data:`._sphere_kernels.POINT`, ``AT_REST``, ``CALLED``) and the first
+        index into the global q it reads (the point's position, the body's q_f).
+    offset (n_s, 3) [m], radius0 (n_s,) [m], reach (n_s, max n_f) [m], n_reach (n_s,) :
+        The constants of :func:`._sphere_kernels.sphere_states`.
+    contact, sphere1, sphere2 : (n_p,) int;  margin : (n_p,) [m]
+        Each prunable contact's index and spheres, and its margin.
+    """
+
+    def __init__(self, contacts):
+        self.spheres, index, pairs = [], {}, []
+        for i, c in enumerate(contacts):
+            pair = sphere_pair(c)
+            if pair is None:
+                continue
+            ids = []
+            for sphere in pair:
+                key = _identity(sphere)
+                if key not in index:
+                    index[key] = len(self.spheres)
+                    self.spheres.append(sphere)
+                ids.append(index[key])
+            pairs.append((i, ids[0], ids[1], c.margin))
+        n = len(self.spheres)
+        self.kind = np.full(n, K.CALLED, dtype=np.int64)
+        self.at = np.zeros(n, dtype=np.int64)
+        self.offset, self.radius0 = np.zeros((n, 3)), np.zeros(n)
+        self.n_reach = np.zeros(n, dtype=np.int64)
+        width = max((s.body.n_modes for s in self.spheres if isinstance(s, FlexibleBodySphere)), default=0)
+        self.reach = np.zeros((n, width))
+        for s, sphere in enumerate(self.spheres):
+            if isinstance(sphere, FrameSphere) and sphere._offset is not None:
+                self.kind[s], self.at[s] = K.POINT, sphere.body.q_slice.start
+                self.offset[s], self.radius0[s] = sphere._offset, sphere.radius
+            elif isinstance(sphere, FlexibleBodySphere) and sphere.body.frame_at_rest:
+                b = sphere.body
+                self.kind[s], self.at[s] = K.AT_REST, sphere._f.start
+                self.radius0[s], self.n_reach[s] = b._box_radius, b.n_modes
+                self.reach[s, :b.n_modes] = b._phi_reach
+        self.called = [s for s in range(n) if self.kind[s] == K.CALLED]
+        self.at_rest = [s for s in range(n) if self.kind[s] == K.AT_REST]
+        self.contact = np.array([p[0] for p in pairs], dtype=np.int64)
+        self.sphere1 = np.array([p[1] for p in pairs], dtype=np.int64)
+        self.sphere2 = np.array([p[2] for p in pairs], dtype=np.int64)
+        self.margin = np.array([p[3] for p in pairs], dtype=float)
+
+    def __len__(self):
+        return len(self.contact)
+
+    def start(self, q, t, centres, radii) -> None:
+        """The constant centres of the spheres at rest at (q, t) into ``centres`` (once per
+        run, before :meth:`prune`)."""
+        for s in self.at_rest:
+            centres[s] = self.spheres[s](q, t)[0]
+
+    def prune(self, q, t, centres, radii, live, closed) -> int:
+        """Every prunable contact live or not at (q, t) (:func:`._sphere_kernels.prune_pairs`);
+        ``centres`` (n_s, 3), ``radii`` (n_s,) the spheres' workspaces. Returns the
+        number pruned."""
+        for s in self.called:
+            centre, radii[s] = self.spheres[s](q, t)
+            centres[s] = centre
+        K.sphere_states(q, self.kind, self.at, self.offset, self.radius0, self.reach, self.n_reach, centres, radii)
+        return K.prune_pairs(self.contact, self.sphere1, self.sphere2, self.margin, centres, radii, live, closed)
+
+
+def _identity(sphere):
+    """What makes two sphere callables the same sphere: the frame (radius) or the body."""
+    if isinstance(sphere, FrameSphere):
+        return ("frame", id(sphere.frame), id(sphere.body), sphere.radius)
+    return ("body", id(sphere.body))

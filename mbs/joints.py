@@ -54,19 +54,19 @@ from __future__ import annotations
 import numpy as np
 
 from ffrmbs.errors import ModelError
+from ffrmbs.registry import Registry
 
 from .body import Frame
 from .link import Constraint, body_q, body_u
 
-# kind: (point equations d?, offset directions (rows of the triad), dot-product pairs
-# (row of e fixed in frame1, row of f fixed in frame2))
-_EQUATIONS = {
-    "fixed": (True, (), ((0, 1), (0, 2), (1, 2))),
-    "spherical": (True, (), ()),
-    "revolute": (True, (), ((0, 1), (0, 2))),
-    "prismatic": (False, (1, 2), ((0, 1), (0, 2), (1, 2))),
-}
-KINDS = tuple(_EQUATIONS)
+# JOINTS: kind -> (point equations d?, offset directions (rows of the triad), dot-product
+# pairs (row of e fixed in frame1, row of f fixed in frame2)); a new kind is one line here
+JOINTS = Registry("joint kind")
+JOINTS.register("fixed", (True, (), ((0, 1), (0, 2), (1, 2))))
+JOINTS.register("spherical", (True, (), ()))
+JOINTS.register("revolute", (True, (), ((0, 1), (0, 2))))
+JOINTS.register("prismatic", (False, (1, 2), ((0, 1), (0, 2), (1, 2))))
+AXIS_KINDS = ("revolute", "prismatic")      # the kinds that take an axis
 
 
 def _triad(axis):
@@ -105,8 +105,7 @@ class Joint(Constraint):
     """
 
     def __init__(self, frame1, frame2, kind, axis=None):
-        if kind not in KINDS:
-            raise ModelError(f"unknown joint kind {kind!r}; choose one of {list(KINDS)}")
+        equations = JOINTS[kind]
         for f in (frame1, frame2):
             if not isinstance(f, Frame):
                 raise ModelError(f"a {kind} joint joins two frames, got {f!r}")
@@ -114,14 +113,14 @@ class Joint(Constraint):
             raise ModelError(f"a {kind} joint needs two different frames, got {frame1!r} twice")
         if frame1.body is None and frame2.body is None:
             raise ModelError(f"a {kind} joint between two ground frames constrains nothing")
-        needs_axis = kind in ("revolute", "prismatic")
+        needs_axis = kind in AXIS_KINDS
         if needs_axis and axis is None:
             raise ModelError(f"a {kind} joint needs an axis (3 components in frame1's axes)")
         if not needs_axis and axis is not None:
             raise ModelError(f"a {kind} joint takes no axis, got {axis!r}")
         self.frame1, self.frame2, self.kind = frame1, frame2, kind
         self.triad = np.eye(3) if axis is None else _triad(axis)
-        self._point, offsets, pairs = _EQUATIONS[kind]
+        self._point, offsets, pairs = equations
         self._offsets = self.triad[list(offsets)]
         self._dot_e = self.triad[[i for i, _ in pairs]]
         self._dot_f = self.triad[[j for _, j in pairs]]

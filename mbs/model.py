@@ -13,7 +13,7 @@ is never mutated.
 :class:`Data` holds everything that changes during a run as preallocated arrays: t, q,
 u, the midpoint state (t_m, q_m), the increment du, h, M, the tangents K, D, M̂ and its
 Cholesky factors (one per step size of a constant M̂), u_free, the contact flags (live,
-closed), penalty normal forces, the closed set, the buffers of W (nu, m), M̂⁻¹W, the
+closed), penalty normal forces, the bounding spheres of a planned run, the closed set, the buffers of W (nu, m), M̂⁻¹W, the
 Delassus matrix G (m, m), ξ_free, γ⁻, the gap-closing term, Λ and γ⁺ for the largest
 possible closed set, the warm starts (Λ of the last step per contact and for the
 joints), counters and the record of the last step. The contours' states and the
@@ -21,8 +21,8 @@ searches' warm starts stay in the contour and contact-kinematics objects (their 
 preallocated arrays), which the contour and detection stages update.
 
 A checkpoint (:mod:`mbs.checkpoint`) holds every array and scalar of Data
-(:meth:`Data.collect`, :meth:`Data.restore`) but the cache of the contact sets' law
-encodings, which is rebuilt on demand from the Model.
+(:meth:`Data.collect`, :meth:`Data.restore`) but its caches, rebuilt on demand from the
+Model: the contact sets' law encodings and the views of the contact problem's buffers.
 """
 
 from __future__ import annotations
@@ -33,10 +33,11 @@ import numpy as np
 
 from . import state_arrays
 from .body_stage import BodyStage
-from .bounding_spheres import sphere_pair
+from .bounding_spheres import SphereTable
 from .equations import Equations
 
 N_FACTORS = 8          # Cholesky factors of a constant M̂ kept for different step sizes (+1)
+CACHES = ("contact_sets", "problem_views")     # Data rebuilt on demand from the Model: not in a checkpoint
 
 
 @dataclass(frozen=True)
@@ -73,13 +74,25 @@ class Model:
     penalty : tuple of int
         Single-valued unilateral contacts with law derivatives (their stiffness is
         checked against the step).
-    spheres : tuple
-        (sphere1, sphere2) of each prunable contact (:mod:`mbs.bounding_spheres`), else None.
+    spheres : SphereTable or None
+        The bounding spheres of the prunable contacts of a planned run
+        (:class:`mbs.bounding_spheres.SphereTable`), None without a plan.
     contours : tuple of (contour, owners, q_slice, u_slice)
         Every contour of a contact once, the indices of the contacts owning it and its
         body's slices (None on the ground).
+    owner_at, owners : int arrays
+        The owners of contour k as flat arrays: owners[owner_at[k]:owner_at[k + 1]]
+        (:func:`mbs._stage_kernels.contours_in_use`).
+    single_valued : tuple of int
+        The contacts with a single-valued law (their forces join h).
     m_max : int
         Rows of the largest contact problem: n_c + Σ dims.
+    blocks : (k, 2) int array or None
+        Rows [a, b) of each active body: M̂ is block diagonal with these blocks when no
+        force element has tangents (factored and solved block by block,
+        :mod:`mbs.linalg_kernels`); None: M̂ is factored whole (LAPACK).
+    idle_rows : int array
+        Rows of u of the bodies the plan solves apart (zero in every solve).
     """
 
     system: object
@@ -100,9 +113,14 @@ class Model:
     dims: tuple
     lam_at: tuple
     penalty: tuple
-    spheres: tuple
+    spheres: SphereTable | None
     contours: tuple
+    owner_at: np.ndarray
+    owners: np.ndarray
+    single_valued: tuple
     m_max: int
+    blocks: np.ndarray | None
+    idle_rows: np.ndarray
 
     @property
     def n_act(self) -> int:
@@ -138,13 +156,24 @@ def compile_model(system, plan=None, theta=0.5, solver=None) -> Model:
             if i not in owners:
                 owners.append(i)
     contours = tuple((k, tuple(owners), qs, us) for k, owners, qs, us in table)
-    return Model(system=system, equations=equations, body_stage=BodyStage.of_equations(equations),
+    owner_at = np.cumsum([0] + [len(owners) for _, owners, _, _ in table]).astype(np.int64)
+    owners = np.array([i for _, owners, _, _ in table for i in owners], dtype=np.int64)
+    body_stage = BodyStage.of_equations(equations)
+    blocks = None
+    if body_stage.constant_tangents:
+        blocks = np.array([[b.u_slice.start, b.u_slice.stop] for b in body_stage.active], dtype=np.int64)
+        blocks = blocks.reshape(-1, 2)
+    idle_rows = np.array([i for b in equations.idle for i in range(b.u_slice.start, b.u_slice.stop)],
+                         dtype=np.int64)
+    return Model(system=system, equations=equations, body_stage=body_stage,
                  nq=system.nq, nu=system.nu, n_c=system.n_c, idle=equations.idle, active_u=active_u,
                  theta=float(theta), solver=solver, constant_iteration=equations.constant_iteration_matrix,
                  prune=plan is not None, contacts=contacts, set_valued=set_valued,
                  unilateral=tuple(bool(c.unilateral) for c in contacts), dims=dims, lam_at=lam_at,
-                 penalty=penalty, spheres=tuple(sphere_pair(c) if plan is not None else None for c in contacts),
-                 contours=contours, m_max=system.n_c + sum(dims))
+                 penalty=penalty, spheres=SphereTable(contacts) if plan is not None else None,
+                 contours=contours, owner_at=owner_at, owners=owners,
+                 single_valued=tuple(i for i, sv in enumerate(set_valued) if not sv), m_max=system.n_c + sum(dims),
+                 blocks=blocks, idle_rows=idle_rows)
 
 
 class Data:
@@ -164,7 +193,8 @@ class Data:
         for b in model.idle:
             np.fill_diagonal(self.M[b.u_slice, b.u_slice], 1.0)
         self.K, self.D = np.zeros((nu, nu)), np.zeros((nu, nu))
-        self.factors = []                   # [(step size, Cholesky factor of M̂ (n_act, n_act), Fortran order)]
+        self.factors = []                   # [(step size, Cholesky factor of M̂)]: (nu, nu) blockwise with
+                                            # model.blocks, else (n_act, n_act) Fortran order
         self.factor = None                  # the factor of this step
         self.u_free = np.zeros(nu)
         self.rhs = np.zeros(nu)             # M̂⁻¹ b on all rows
@@ -172,22 +202,29 @@ class Data:
         self.w_N = np.zeros(nu)             # a penalty contact's W_N
         # contacts
         self.live = np.ones(n, dtype=bool)
+        self.live_idx = np.zeros(n, dtype=np.intp)             # the live contacts, n_live of them
+        self.n_live = 0
+        self.contour_idx = np.zeros(len(model.contours), dtype=np.intp)   # contours of live contacts
         self.closed = np.zeros(n, dtype=bool)
         self.force_N = np.zeros(n)
         self.closed_idx = np.zeros(n, dtype=np.intp)
         self.n_closed = 0
         self.m = 0
+        self.problem_views = {}             # (nu, m) -> views of the buffers below (Data.problem)
         self.W_buf = np.zeros(nu * m)
         self.MW_buf = np.zeros(nu * m)
         self.W_act_buf = np.zeros(n_act * m)
         self.G_buf = np.zeros(m * m)
         self.lam_buf, self.gamma_plus_buf = np.zeros(m), np.zeros(m)
         self.xi_free_buf, self.gamma_pre_buf = np.zeros(m), np.zeros(m)
-        self.closing_buf, self.offset_buf, self.work_buf = np.zeros(m), np.zeros(m), np.zeros(m)
+        self.closing_buf, self.offset_buf = np.zeros(m), np.zeros(m)
         self.work_u = np.zeros(nu)          # M̂⁻¹ W Λ, then (1 − 2θ)Δt u_k
         self.u_prev = np.zeros(nu)          # u_k while u_{k+1} is formed
         self.solver_work = np.zeros((4, m))
-        self.sphere_gap = np.zeros(3)       # centre distance of two bounding spheres
+        n_s = 0 if model.spheres is None else len(model.spheres.spheres)
+        self.sphere_centres = np.zeros((n_s, 3))    # bounding spheres of the prunable contacts [m]
+        self.sphere_radii = np.zeros(n_s)
+        self.spheres_started = False                # the constant centres written
         self.lam_prev = np.zeros(sum(model.dims))
         self.warm = np.zeros(n, dtype=bool)         # the contact has Λ of the last step
         self.lam_joints = np.zeros(model.n_c)
@@ -201,25 +238,30 @@ class Data:
 
     def problem(self, nu, m):
         """Views (W (nu, m) C order, M̂⁻¹W (nu, m) Fortran order, G (m, m), Λ, γ⁺, ξ_free,
-        γ⁻, closing, offset, work (m,)) of the contact problem with m rows."""
+        γ⁻, closing, offset (m,)) of the contact problem with m rows, made once
+        per (nu, m) and kept in ``problem_views``."""
+        views = self.problem_views.get((nu, m))
+        if views is None:
+            views = self.problem_views[(nu, m)] = self._problem(nu, m)
+        return views
+
+    def _problem(self, nu, m):
         return (self.W_buf[:nu * m].reshape(nu, m), self.MW_buf[:nu * m].reshape(m, nu).T,
                 self.G_buf[:m * m].reshape(m, m), self.lam_buf[:m], self.gamma_plus_buf[:m],
-                self.xi_free_buf[:m], self.gamma_pre_buf[:m], self.closing_buf[:m], self.offset_buf[:m],
-                self.work_buf[:m])
+                self.xi_free_buf[:m], self.gamma_pre_buf[:m], self.closing_buf[:m], self.offset_buf[:m])
 
     def collect(self, prefix, arrays: dict, kinds: dict) -> None:
         """Every array and scalar of the run under ``prefix/…`` (:mod:`mbs.state_arrays`):
-        the factors of a constant M̂ as ``factor_steps`` (k,) [s] and ``factor_stack``
-        (k, n_act, n_act), ``stats`` and ``last`` entry by entry; ``contact_sets`` left out
-        (a cache of the laws' kernel encodings, rebuilt on demand)."""
+        the factors of a constant M̂ as ``factors/<j>/step`` [s] and ``factors/<j>/factor``
+        (in their memory order), ``stats`` and ``last`` entry by entry; the caches
+        (:data:`CACHES`) left out."""
         for name, value in vars(self).items():
-            if name == "contact_sets":
+            if name in CACHES:
                 continue
             if name == "factors":
-                n = self.rhs_act.size
-                arrays[f"{prefix}/factor_steps"] = np.array([h for h, _ in value], dtype=float)
-                arrays[f"{prefix}/factor_stack"] = np.array([f for _, f in value]).reshape(len(value), n, n)
-                kinds[f"{prefix}/factor_steps"] = kinds[f"{prefix}/factor_stack"] = "array"
+                for j, (step, factor) in enumerate(value):
+                    state_arrays.put(f"{prefix}/factors/{j}/step", step, arrays, kinds)
+                    state_arrays.put(f"{prefix}/factors/{j}/factor", factor, arrays, kinds)
             elif name in ("stats", "last"):
                 for key, entry in (value.items() if name == "stats" else enumerate(value)):
                     state_arrays.put(f"{prefix}/{name}/{key}", entry, arrays, kinds)
@@ -231,24 +273,22 @@ class Data:
         (:class:`~mbs.state_arrays.StateMismatch` if it does not fit)."""
         take = state_arrays.take
         for name, value in vars(self).items():
-            if name == "contact_sets":
+            if name in CACHES:
                 continue
             if name == "factors":
-                steps = take(f"{prefix}/factor_steps", None, arrays, kinds)
-                stack = take(f"{prefix}/factor_stack", None, arrays, kinds)
-                n = self.rhs_act.size
-                if stack.shape != (steps.size, n, n):
-                    raise state_arrays.StateMismatch(f"{prefix}/factor_stack has shape {stack.shape}, this run's "
-                                                     f"factors are ({n}, {n})")
-                self.factors = [(float(h), np.asfortranarray(f)) for h, f in zip(steps, stack)]
+                self.factors = []
+                while f"{prefix}/factors/{len(self.factors)}/step" in kinds:
+                    at = f"{prefix}/factors/{len(self.factors)}"
+                    step, factor = take(f"{at}/step", 0.0, arrays, kinds), take(f"{at}/factor", None, arrays, kinds)
+                    if factor.ndim != 2 or factor.shape[0] != factor.shape[1] or factor.shape[0] not in (
+                            self.rhs.size, self.rhs_act.size):
+                        raise state_arrays.StateMismatch(f"{at}/factor has shape {factor.shape}, not this run's")
+                    self.factors.append((step, factor))
             elif name == "stats":
                 at = f"{prefix}/stats/"             # the saved keys in their order
                 self.stats = {k[len(at):]: take(k, value.get(k[len(at):]), arrays, kinds)
                               for k in kinds if k.startswith(at)}
             elif name == "last":
                 value[:] = [take(f"{prefix}/last/{i}", v, arrays, kinds) for i, v in enumerate(value)]
-            elif name == "factor":
-                saved = take(f"{prefix}/factor", value, arrays, kinds)
-                self.factor = None if saved is None else np.asfortranarray(saved)
             else:
                 setattr(self, name, take(f"{prefix}/{name}", value, arrays, kinds))

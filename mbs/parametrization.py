@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ffrmbs.errors import ModelError
+from ffrmbs.registry import Registry
 
 from . import rotations as rot
 
@@ -103,13 +103,11 @@ class Cardan:
         pass
 
 
-PARAMETRIZATIONS = {"quaternion": Quaternion, "cardan": Cardan}
+PARAMETRIZATIONS = Registry("rotation parametrization")
+PARAMETRIZATIONS.register("quaternion", Quaternion)
+PARAMETRIZATIONS.register("cardan", Cardan)
 
 
 def parametrization(name: str):
     """The parametrization class named ``name`` ("quaternion" or "cardan")."""
-    try:
-        return PARAMETRIZATIONS[name]
-    except KeyError:
-        raise ModelError(f"unknown rotation parametrization {name!r}; "
-                         f"choose one of {sorted(PARAMETRIZATIONS)}") from None
+    return PARAMETRIZATIONS[name]

@@ -42,6 +42,8 @@ from scipy.linalg.lapack import dpotrf, dpotrs
 from contact.laws import Bilateral
 from contact.solver import ContactSet
 
+from . import _stage_kernels as K
+from .linalg_kernels import block_cho_solve_matrix, block_cho_solve_vector, block_iteration_factor
 from .step_failure import StepFailure
 
 STAGES = ("midpoint", "bodies", "contours", "detect", "constraints", "impulses", "velocity", "position")
@@ -51,9 +53,7 @@ def midpoint(model, data, dt):
     """Stage 1: t_m = t + θΔt, q_m = q ⊕ θΔt u, renormalized."""
     th_dt = model.theta * dt
     data.t_m = data.t + th_dt
-    np.multiply(data.u, th_dt, out=data.du)
-    model.body_stage.increment(data.q, data.du, data.q_m)
-    model.body_stage.normalize(data.q_m)
+    model.body_stage.advance(data.q, data.u, th_dt, data.du, data.q_m)
 
 
 def bodies(model, data, dt):
@@ -70,26 +70,19 @@ def contours(model, data, dt):
     if not model.contacts:
         return
     t, q, u, live = data.t_m, data.q_m, data.u, data.live
-    if model.prune:
-        for i, pair in enumerate(model.spheres):
-            if pair is None:
-                continue
-            c1, r1 = pair[0](q, t)
-            c2, r2 = pair[1](q, t)
-            d = np.subtract(c1, c2, out=data.sphere_gap)
-            reach = r1 + r2 + model.contacts[i].margin
-            live[i] = not float(d @ d) > reach * reach
-            if not live[i]:
-                data.closed[i] = False
-                data.stats["pruned_contacts"] += 1
-    for contour, owners, qs, us in model.contours:
-        for i in owners:
-            if live[i]:
-                if qs is None:
-                    contour.update(None, None, t)
-                else:
-                    contour.update(q[qs], u[us], t)
-                break
+    if model.prune and len(model.spheres):
+        if not data.spheres_started:
+            model.spheres.start(q, t, data.sphere_centres, data.sphere_radii)
+            data.spheres_started = True
+        data.stats["pruned_contacts"] += model.spheres.prune(q, t, data.sphere_centres, data.sphere_radii, live,
+                                                             data.closed)
+    for j in range(K.contours_in_use(model.owner_at, model.owners, live, data.contour_idx)):
+        contour, owners, qs, us = model.contours[data.contour_idx[j]]
+        if qs is None:
+            contour.update(None, None, t)
+        else:
+            contour.update(q[qs], u[us], t)
+    data.n_live = K.live_contacts(live, data.live_idx)
 
 
 def detect(model, data, dt):
@@ -99,9 +92,9 @@ def detect(model, data, dt):
     n_closed = 0
     last = data.last
     m = model.n_c
-    for i, c in enumerate(model.contacts):
-        if not data.live[i]:
-            continue
+    for j in range(data.n_live):
+        i = data.live_idx[j]
+        c = model.contacts[i]
         closed = c.locate()
         data.closed[i] = closed
         if closed:
@@ -121,9 +114,9 @@ def detect(model, data, dt):
 def constraints(model, data, dt):
     """Stage 5: single-valued contact forces into h; M̂ factored; u_free; the contact
     problem (W, M̂⁻¹W, G, ξ_free, γ⁻, closing) of the joints and closed contacts."""
-    for i, c in enumerate(model.contacts):
-        if not model.set_valued[i] and data.live[i]:
-            data.force_N[i] = add_penalty_force(c, data.closed[i], data.h)
+    for i in model.single_valued:
+        if data.live[i]:
+            data.force_N[i] = add_penalty_force(model.contacts[i], data.closed[i], data.h)
     factor = iteration_factor(model, data, dt)
     if model.penalty:
         check_penalty(model, data, factor, dt)
@@ -134,7 +127,7 @@ def constraints(model, data, dt):
     if m == 0:
         return
     nu, n_c = model.nu, model.n_c
-    W, MW, G, lam, gamma_plus, xi_free, gamma_pre, closing, offset, work = data.problem(nu, m)
+    W, MW, G, lam, gamma_plus, xi_free, gamma_pre, closing, offset = data.problem(nu, m)
     W.fill(0.0)
     closing.fill(0.0)
     offset.fill(0.0)
@@ -152,12 +145,7 @@ def constraints(model, data, dt):
             closing[row] = c.kinematics.g_N / dt
         row += dim
     solve_matrix(model, data, factor, W, MW)
-    np.matmul(W.T, MW, out=G)
-    np.matmul(W.T, data.u_free, out=xi_free)
-    xi_free += offset
-    xi_free += closing
-    np.matmul(W.T, data.u, out=gamma_pre)
-    gamma_pre += offset
+    K.contact_problem_into(W, MW, data.u_free, data.u, offset, closing, G, xi_free, gamma_pre)
 
 
 def impulses(model, data, dt):
@@ -169,7 +157,7 @@ def impulses(model, data, dt):
             data.warm.fill(False)            # nothing closed: no warm start, no resting contact
             data.warm_joints = False
         return
-    W, MW, G, lam, gamma_plus, xi_free, gamma_pre, closing, offset, work = data.problem(model.nu, m)
+    W, MW, G, lam, gamma_plus, xi_free, gamma_pre, closing, offset = data.problem(model.nu, m)
     warm_start(model, data, lam)
     it, residual, converged = model.solver.solve_into(contact_set(model, data), G, xi_free, gamma_pre, lam,
                                                       gamma_plus, data.solver_work[:, :m])
@@ -180,9 +168,7 @@ def impulses(model, data, dt):
     data.stats["solver_iterations"] += it
     last[2] += it
     last[3] = max(last[3], residual)
-    np.subtract(gamma_plus, closing, out=work)
-    work += gamma_pre
-    last[4] += 0.5 * float(lam @ work)
+    last[4] += K.impulse_work(lam, gamma_plus, closing, gamma_pre)
     keep_warm_start(model, data, lam)
 
 
@@ -194,8 +180,7 @@ def velocity(model, data, dt):
         data.u[:] = data.u_free
     else:
         W, MW, G, lam = data.problem(model.nu, m)[:4]
-        np.matmul(MW, lam, out=data.work_u)
-        np.add(data.u_free, data.work_u, out=data.u)
+        K.velocity_into(data.u_free, MW, lam, data.u)
     data.stats["closed_contacts"] += data.n_closed
     if data.n_closed > data.last[0]:
         data.last[0] = data.n_closed
@@ -204,12 +189,14 @@ def velocity(model, data, dt):
 def position(model, data, dt):
     """Stage 8: q_{k+1} = q_m ⊕ Δt (θ u_{k+1} + (1 − 2θ) u_k), renormalized; t += Δt."""
     th = model.theta
-    np.multiply(data.u, th * dt, out=data.du)
-    if th != 0.5:
+    if th == 0.5:
+        model.body_stage.advance(data.q_m, data.u, th * dt, data.du, data.q)
+    else:
+        np.multiply(data.u, th * dt, out=data.du)
         np.multiply(data.u_prev, (1.0 - 2.0 * th) * dt, out=data.work_u)
         data.du += data.work_u
-    model.body_stage.increment(data.q_m, data.du, data.q)
-    model.body_stage.normalize(data.q)
+        model.body_stage.increment(data.q_m, data.du, data.q)
+        model.body_stage.normalize(data.q)
     data.t += dt
     data.h_last = dt
 
@@ -253,19 +240,37 @@ def iteration_factor(model, data, dt):
         if len(data.factors) > 8:            # step-size control: keep the latest few
             data.factors.clear()
         data.M[...] = model.equations.mass_matrix(data.t_m, data.q_m)
-        factor = _factor(model, data, dt, np.empty((model.n_act, model.n_act), order="F"))
+        factor = _factor(model, data, dt, _factor_array(model))
         data.factors.append((dt, factor))
         return factor
     if data.factor is None:
-        data.factor = np.empty((model.n_act, model.n_act), order="F")
+        data.factor = _factor_array(model)
     return _factor(model, data, dt, data.factor)
 
 
+def _factor_array(model):
+    """Storage of a factor of M̂: (nu, nu) for the block factor, else (n_act, n_act)
+    Fortran order (LAPACK)."""
+    if model.blocks is not None:
+        return np.zeros((model.nu, model.nu))
+    return np.empty((model.n_act, model.n_act), order="F")
+
+
 def _factor(model, data, dt, out):
-    """Cholesky factor of M̂ (tangents at q_m) into ``out`` (n_act, n_act), Fortran order."""
+    """Cholesky factor of M̂ (tangents at q_m) into ``out``, M̂ into ``data.D``: block by
+    block over the active bodies, M̂ from the bodies' constant tangents in the same
+    kernel (:func:`~mbs.linalg_kernels.block_iteration_factor`), when M̂ is block diagonal
+    (``model.blocks``), else from the body stage's tangents and LAPACK's factor on the
+    active rows."""
     th = model.theta
     K, D, M = data.K, data.D, data.M
-    model.body_stage.tangents(data.t_m, data.q_m, data.u, K, D)
+    stage = model.body_stage
+    if model.blocks is not None:            # constant tangents: M̂ and its factor in one kernel
+        info = block_iteration_factor(M, stage.K0, stage.D0, th * dt, th * th * dt * dt, model.blocks, D, out)
+        if info != 0:
+            raise StepFailure(f"M + θΔt D + θΔt² K is not positive definite (pivot of row {info - 1})")
+        return out
+    stage.tangents(data.t_m, data.q_m, data.u, K, D)
     np.multiply(D, th * dt, out=D)
     np.add(M, D, out=D)
     np.multiply(K, th * th * dt * dt, out=K)
@@ -286,6 +291,9 @@ def _factor(model, data, dt, out):
 def solve(model, data, factor, b):
     """b ← M̂⁻¹ b in place (nu,); on the active rows only when the plan left bodies out
     (zero on theirs: their blocks of M̂ are decoupled from the rest)."""
+    if model.blocks is not None:
+        block_cho_solve_vector(factor, model.blocks, model.idle_rows, b, b)
+        return
     if model.active_u is None:
         dpotrs(factor, b, lower=True, overwrite_b=True)
         return
@@ -298,6 +306,9 @@ def solve(model, data, factor, b):
 
 def solve_matrix(model, data, factor, W, MW):
     """M̂⁻¹ W (nu, m) into MW (Fortran order without left-out bodies, else C order)."""
+    if model.blocks is not None:
+        block_cho_solve_matrix(factor, model.blocks, model.idle_rows, W, MW)
+        return
     if model.active_u is None:
         MW[...] = W
         dpotrs(factor, MW, lower=True, overwrite_b=True)

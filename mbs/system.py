@@ -23,6 +23,7 @@ import logging
 
 import numpy as np
 
+from contact.contact import ContactElement
 from ffrmbs.errors import ModelError
 
 from .body import Body, Frame, ground_frame
@@ -56,7 +57,7 @@ class System:
             self.nu += item.nu
             self.bodies.append(item)
             self.com_frames.append(item.com_frame())
-        elif isinstance(item, (ForceElement, Constraint)) or getattr(item, "is_contact", False):
+        elif isinstance(item, (ForceElement, Constraint, ContactElement)):
             for body in item.bodies():
                 if body is not None and body not in self.bodies:
                     raise ModelError(f"{type(item).__name__} acts on body {body.name!r}, "
@@ -64,7 +65,7 @@ class System:
             if isinstance(item, Constraint):
                 self.constraints.append(item)
                 self.n_c += item.n_c
-            elif getattr(item, "is_contact", False):
+            elif isinstance(item, ContactElement):
                 self.contacts.append(item)
             else:
                 self.forces.append(item)

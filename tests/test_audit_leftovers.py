@@ -242,11 +242,11 @@ def test_a_directory_as_the_scene_file_is_named(tmp_path, name):
 
 
 def test_read_scene_refuses_a_fifo_without_opening_it(tmp_path):
-    """ffrmbs_app.scene_toml.read_scene called from Python (not through load_scene) on a
+    """ffrmbs_app.scene_file.read_scene called from Python (not through load_scene) on a
     FIFO: refused at once (it blocked in read_bytes)."""
     fifo = tmp_path / "scene.toml"
     os.mkfifo(fifo)
-    code = ("import sys\nfrom ffrmbs.errors import InputFileError\nfrom ffrmbs_app.scene_toml import read_scene\n"
+    code = ("import sys\nfrom ffrmbs.errors import InputFileError\nfrom ffrmbs_app.scene_file import read_scene\n"
             "try:\n    read_scene(sys.argv[1])\nexcept InputFileError as exc:\n    print(exc)\n")
     res = subprocess.run([sys.executable, "-c", code, str(fifo)], capture_output=True, text=True, timeout=60)
     assert "not a regular file (a FIFO)" in res.stdout, res.stdout + res.stderr

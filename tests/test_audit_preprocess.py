@@ -93,7 +93,7 @@ def test_info_on_a_body_directory_prints_the_surface_nodes(small_body, body_dir,
 
 
 def test_a_scene_body_given_as_a_directory_keeps_its_node_groups(body_dir):
-    from ffrmbs_app.scene_toml import read_scene
+    from ffrmbs_app.scene_file import read_scene
 
     scene_file = body_dir.parent / "scene.toml"
     scene_file.write_text(textwrap.dedent("""\

@@ -346,7 +346,7 @@ def test_the_scene_reader_quotes_a_force_file_short(tmp_path):
     """A nodal load whose force file is a password file: the message names the file, the
     line and the scene entry, and quotes 20 characters of it."""
     from ffrmbs.errors import InputFileError
-    from ffrmbs_app.scene_toml import read_scene
+    from ffrmbs_app.scene_file import read_scene
 
     (tmp_path / "passwd").write_text("root:x:0:0:root:/root:/bin/bash\ndaemon:x:1:1:daemon:/usr/sbin\n")
     scene = tmp_path / "scene.toml"
@@ -361,7 +361,7 @@ def test_the_scene_reader_quotes_a_force_file_short(tmp_path):
 
 def test_the_scene_reader_quotes_its_own_strings_short(tmp_path):
     from ffrmbs.errors import InputFileError
-    from ffrmbs_app.scene_toml import read_scene
+    from ffrmbs_app.scene_file import read_scene
 
     scene = scene_file(tmp_path)
     scene.write_text(scene.read_text().replace('"rk4"', '"\\u001b[2J' + "r" * 500 + '"'))

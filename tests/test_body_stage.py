@@ -17,7 +17,8 @@ from mbs import rotations as rot
 from mbs.body_stage import BodyStage
 from mbs.equations import Equations
 from mbs.integrators.generalized_alpha import GeneralizedAlpha
-from mbs.linalg_kernels import cho_solve_into, cholesky_into
+from mbs.linalg_kernels import (block_cho_solve_matrix, block_cho_solve_vector, block_cholesky_into,
+                                block_iteration_factor, cho_solve_into, cholesky_into)
 from preprocess import box, build_body
 from validation.cases.cantilever import MATERIAL
 
@@ -136,6 +137,22 @@ def test_quaternion_increment_kernel_equals_the_exponential_map(data, seed):
 
 
 @pytest.mark.parametrize("seed", SEEDS)
+def test_quaternion_advance_kernel_equals_scaled_increment_and_normalization(data, seed):
+    """free_quat_advance = (Δu = s u, q ⊕ Δu, renormalized) by the numpy exponential map."""
+    rng = np.random.default_rng(seed)
+    body = FlexibleBodyFFR(data, N_F)
+    q, u = random_quaternion_state(body, rng)
+    s = 1e-3 * (seed + 1)
+    du_ref = u * s
+    ref = np.concatenate((q[:3] + du_ref[:3], rot.quat_multiply(q[3:7], rot.quat_from_rotvec(du_ref[3:6])),
+                          q[7:] + du_ref[6:]))
+    ref[3:7] /= np.linalg.norm(ref[3:7])
+    out, du = np.empty(body.nq), np.empty(body.nu)
+    kern.free_quat_advance(q, u, s, du, out)
+    assert np.array_equal(du, du_ref) and rel(out, ref) < 1e-14
+
+
+@pytest.mark.parametrize("seed", SEEDS)
 def test_point_force_kernel_equals_jacobian_transpose(data, seed):
     """h += J_Tᵀ F with J_T = [1, −A ũ, A Φ] (thesis eq. 2.70), F from a step table."""
     rng = np.random.default_rng(seed)
@@ -175,6 +192,52 @@ def test_cholesky_and_solves_equal_scipy(n):
     assert np.array_equal(b, x)
     A2 = A.copy()
     assert cholesky_into(A2, A2) == 0 and np.array_equal(A2, L)
+
+
+def test_block_cholesky_and_solves_equal_scipy_on_the_active_rows():
+    """A block-diagonal matrix with rows 5, 6 left out (idle): the block factor and
+    solves equal scipy's on the active rows and give zero on the idle ones."""
+    rng = np.random.default_rng(11)
+    blocks = np.array([[0, 3], [3, 5], [7, 11]], dtype=np.int64)
+    idle = np.array([5, 6], dtype=np.int64)
+    n = 11
+    A = np.zeros((n, n))
+    for a, b in blocks:
+        X = rng.normal(size=(b - a, b - a))
+        A[a:b, a:b] = X @ X.T + (b - a) * np.eye(b - a)
+    A[5:7, 5:7] = np.nan                          # never read
+    L = np.zeros((n, n))
+    assert block_cholesky_into(A, blocks, L) == 0
+    act = np.setdiff1d(np.arange(n), idle)
+    factor = scipy.linalg.cho_factor(A[np.ix_(act, act)])
+    b, B = rng.normal(size=n), rng.normal(size=(n, 3))
+    x, X_ = np.full(n, np.nan), np.full((n, 3), np.nan, order="F")
+    block_cho_solve_vector(L, blocks, idle, b, x)
+    block_cho_solve_matrix(L, blocks, idle, B, X_)
+    assert rel(x[act], scipy.linalg.cho_solve(factor, b[act])) < 1e-12 and not x[idle].any()
+    assert rel(X_[act], scipy.linalg.cho_solve(factor, B[act])) < 1e-12 and not X_[idle].any()
+    A[8, 8] = -1.0
+    assert block_cholesky_into(A, blocks, L) == 8 + 1
+
+
+def test_block_iteration_factor_equals_numpy_sum_and_scipy_factor():
+    """M̂ = (M + a D0) + b K0 equals the numpy sum bit for bit; its block factor scipy's."""
+    rng = np.random.default_rng(5)
+    blocks = np.array([[0, 4], [4, 9]], dtype=np.int64)
+    n = 9
+    M, K0, D0 = np.zeros((n, n)), np.zeros((n, n)), np.zeros((n, n))
+    for a, b in blocks:
+        for X in (M, K0, D0):
+            Y = rng.normal(size=(b - a, b - a))
+            X[a:b, a:b] = Y @ Y.T + (b - a) * np.eye(b - a)
+    a, b = 5e-4, 2.5e-7
+    A, L = np.zeros((n, n)), np.zeros((n, n))
+    assert block_iteration_factor(M, K0, D0, a, b, blocks, A, L) == 0
+    assert np.array_equal(A, np.add(np.add(M, np.multiply(D0, a)), np.multiply(K0, b)))
+    for lo, hi in blocks:
+        assert rel(np.tril(L[lo:hi, lo:hi]), scipy.linalg.cholesky(A[lo:hi, lo:hi], lower=True)) < 1e-13
+    M[6, 6] = -1e6
+    assert block_iteration_factor(M, K0, D0, a, b, blocks, A, L) > 0
 
 
 def test_cholesky_reports_matrices_not_positive_definite():

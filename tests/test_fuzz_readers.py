@@ -30,7 +30,7 @@ from hypothesis import strategies as st
 
 from ffrmbs.errors import InputFileError
 from ffrmbs_app.scene import Scene
-from ffrmbs_app.scene_toml import read_scene
+from ffrmbs_app.scene_file import read_scene
 from preprocess import Material, bodyfiles, build_body, read_body, write_body
 from preprocess.bodyfiles import HDF5_FILE, TEXT_FILES
 from preprocess.geometry import box

@@ -1,4 +1,4 @@
-"""TOML scene files (ffrmbs_app.scene_toml): the same System as the Python API, and
+"""TOML scene files (ffrmbs_app.scene_file): the same System as the Python API, and
 errors that name the file, the line and the key."""
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ from contact import (ContactKinematicsPointContour2s, ContactKinematicsPointPlan
 from contours import Contour1sNeutralFFR, Contour2sNeutralFFR, FlexibleBand, FlexibleCylinder, PlaneContour
 from ffrmbs.errors import InputFileError
 from ffrmbs_app.scene import Scene, load_scene
-from ffrmbs_app.scene_toml import read_scene
+from ffrmbs_app.scene_file import read_scene
 from mbs import (DistributedForce, FlexibleBodyFFR, Force, Joint, NodalForces, PointMass, PrescribedFrameMotion,
                  RigidBody, SpringDamper, System, Tabulated, Torque, ground_frame, write_force_file)
 from preprocess import Material, build_body, read_body, write_body

@@ -19,7 +19,7 @@ A case that plants code (a pickle whose ``__reduce__`` runs ``touch MARKER``) is
 ``silent`` whenever the marker exists afterwards, whatever the exit status, and is flagged
 ``EXECUTED``.
 
-Kinds of bad inputs (``--only``): ``scene`` (TOML scene files, :mod:`ffrmbs_app.scene_toml`),
+Kinds of bad inputs (``--only``): ``scene`` (TOML scene files, :mod:`ffrmbs_app.scene_file`),
 ``body`` (the thesis's text files and ``body.h5``, via ``ffrmbs info`` and via a scene),
 ``mesh`` (``ffrmbs preprocess`` inputs and options), ``run`` (options of the default
 scene, ``--resume`` with missing, damaged and planted checkpoints) and ``result``

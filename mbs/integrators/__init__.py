@@ -13,21 +13,21 @@ time-stepping (:class:`MoreauTimeStepping`, "moreau") for contacts and impacts.
 
 from __future__ import annotations
 
-from ffrmbs.errors import ModelError
+from ffrmbs.registry import Registry
 
 from .explicit import RK4
 from .generalized_alpha import GeneralizedAlpha
 from .moreau import AdaptiveMoreauTimeStepping, MoreauTimeStepping
 
-INTEGRATORS = {"generalized-alpha": GeneralizedAlpha, "rk4": RK4, "moreau": MoreauTimeStepping,
-               "moreau-adaptive": AdaptiveMoreauTimeStepping}
+INTEGRATORS = Registry("integrator")
+INTEGRATORS.register("moreau", MoreauTimeStepping)
+INTEGRATORS.register("moreau-adaptive", AdaptiveMoreauTimeStepping)
+INTEGRATORS.register("generalized-alpha", GeneralizedAlpha)
+INTEGRATORS.register("rk4", RK4)
 
 
 def integrator_class(name):
     """The integrator class registered as ``name`` (or a class passed through)."""
     if isinstance(name, type):
         return name
-    try:
-        return INTEGRATORS[name]
-    except KeyError:
-        raise ModelError(f"unknown integrator {name!r}; choose one of {sorted(INTEGRATORS)}") from None
+    return INTEGRATORS[name]

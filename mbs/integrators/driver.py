@@ -24,9 +24,9 @@ from threadpoolctl import threadpool_limits
 from ffrmbs.errors import ModelError, RunInterrupted, SimulationError
 
 from .. import state_arrays
-from ..body import Frame
-from ..link import body_q
+from .._kernels import finite_sum
 from ..model import Data, compile_model
+from ..probes import FramePosition, probe
 from ..result import Result
 from ..step_failure import StepFailure
 from ..validity import SpinMonitor
@@ -43,15 +43,6 @@ def output_times(t_end, dt, t_out):
     if t_out.size == 0 or np.any(np.diff(t_out) <= 0) or t_out[0] < 0 or t_out[-1] > t_end * (1 + 1e-12):
         raise ModelError("t_out must be strictly increasing times within [0, t_end]")
     return t_out
-
-
-def _probe(system, spec):
-    """A callable (t, q, u) -> array for an output spec: a Frame (its position) or a callable."""
-    if isinstance(spec, Frame):
-        return lambda t, q, u: spec.position(body_q(spec, q), t)
-    if callable(spec):
-        return spec
-    raise ModelError(f"an output must be a Frame or a callable (t, q, u), got {spec!r}")
 
 
 def non_finite(t, step, what) -> SimulationError:
@@ -180,7 +171,7 @@ class Integrator:
         """Book an accepted step of size ``h``; a NaN or infinite state stops the run, so
         does a requested stop (:func:`request_stop`)."""
         self.steps += 1
-        if not math.isfinite(self.q.sum() + self.u.sum()):     # a NaN or inf anywhere propagates
+        if not math.isfinite(finite_sum(self.q, self.u)):       # a NaN or inf anywhere propagates
             raise non_finite(self.t, self.steps, "q/u")
         if _stop[1] > 1:
             raise RunInterrupted(self.t, self.steps, _stop[0])
@@ -269,7 +260,7 @@ class Integrator:
         res.plan = "" if plan is None else str(plan)
         res.stats["modal_cpu_s"] = time.process_time() - cpu0
         state = RunState(times, sorted(set(times.tolist()) | set(breaks)), breaks,
-                         {name: _probe(sys, spec) for name, spec in outputs.items()}, res, modal, energies, contacts,
+                         {name: probe(spec) for name, spec in outputs.items()}, res, modal, energies, contacts,
                          stepping=len(modal) < len(sys.bodies), cpu_s=time.process_time() - cpu0)
         for b in modal:
             u[b.u_slice] = 0.0
@@ -357,14 +348,18 @@ class Integrator:
         q, u = res.q[i], res.u[i]
         for b, (qb, ub) in st.modal.items():
             q[b.q_slice], u[b.u_slice] = qb[i], ub[i]
-        if not math.isfinite(q.sum() + u.sum()):            # as in accepted(), modal-plan bodies included
+        if not math.isfinite(finite_sum(q, u)):             # as in accepted(), modal-plan bodies included
             raise non_finite(self.t, self.steps, "q/u")
         self.monitor.check(self.t, q, u)
-        for name, probe in st.probes.items():
-            value = np.asarray(probe(self.t, q, u), dtype=float)
-            if name not in res.outputs:
-                res.outputs[name] = np.full((n,) + value.shape, np.nan)
-            res.outputs[name][i] = value
+        for name, sample in st.probes.items():
+            rows = res.outputs.get(name)
+            if rows is not None and type(sample) is FramePosition:
+                sample.into(self.t, q, rows[i])         # in place (mbs.probes)
+                continue
+            value = np.asarray(sample(self.t, q, u), dtype=float)
+            if rows is None:
+                rows = res.outputs[name] = np.full((n,) + value.shape, np.nan)
+            rows[i] = value
         if st.energies:
             for key in ("kinetic", "potential"):
                 res.energy.setdefault(key, np.full(n, np.nan))

@@ -1,0 +1,62 @@
+"""numba kernels of the planned broad phase (:mod:`mbs.bounding_spheres`): the bounding
+spheres of contours at the global state and the pruning of every prunable contact in one
+call, allocation-free.
+
+Sphere kinds (``kind`` codes):
+
+- :data:`POINT`: a frame on a point mass, centre r = q[at:at+3] + ū0 [m] (``offset``),
+  constant radius (``radius0``) — :class:`mbs.bounding_spheres.FrameSphere`;
+- :data:`AT_REST`: a flexible body on a frame fixed in space, constant centre (written
+  once by the caller), radius max_j |ū0_j − c| + Σ_k max_j |Φ_jk| |q_f,k| with
+  max_j |Φ_jk| in ``reach[s, :n_reach[s]]`` and q_f at q[at:] —
+  :meth:`mbs.flexible_body.FlexibleBodyFFR.bounding_sphere`;
+- :data:`CALLED`: any other sphere; the caller writes its centre and radius (the
+  kernel leaves them).
+
+Plain-numpy reference: the sphere callables of :mod:`mbs.bounding_spheres` and the
+test d·d > (r1 + r2 + margin)² of each pair; ``tests/test_bounding_spheres.py`` compares
+them.
+"""
+
+from __future__ import annotations
+
+from numba import njit
+
+POINT, AT_REST, CALLED = 0, 1, 2
+
+
+@njit(cache=True)
+def sphere_states(q, kind, at, offset, radius0, reach, n_reach, centres, radii):
+    """Centres (n_s, 3) [m] and radii (n_s,) [m] of the POINT and AT_REST spheres at the
+    global q into ``centres``, ``radii`` (module docstring); CALLED rows untouched."""
+    for s in range(kind.shape[0]):
+        k = kind[s]
+        if k == POINT:
+            for c in range(3):
+                centres[s, c] = q[at[s] + c] + offset[s, c]
+            radii[s] = radius0[s]
+        elif k == AT_REST:
+            r = 0.0
+            for j in range(n_reach[s]):
+                r += reach[s, j] * abs(q[at[s] + j])
+            radii[s] = radius0[s] + r
+
+
+@njit(cache=True)
+def prune_pairs(contact, sphere1, sphere2, margin, centres, radii, live, closed):
+    """Each prunable contact ``contact[p]`` live when its spheres ``sphere1[p]``,
+    ``sphere2[p]`` come within ``margin[p]`` [m]: not |c1 − c2|² > (r1 + r2 + margin)²;
+    a contact pruned is also open (``closed`` False). Returns the number pruned."""
+    pruned = 0
+    for p in range(contact.shape[0]):
+        a, b, i = sphere1[p], sphere2[p], contact[p]
+        d0 = centres[a, 0] - centres[b, 0]
+        d1 = centres[a, 1] - centres[b, 1]
+        d2 = centres[a, 2] - centres[b, 2]
+        reach = radii[a] + radii[b] + margin[p]
+        on = not d0 * d0 + d1 * d1 + d2 * d2 > reach * reach
+        live[i] = on
+        if not on:
+            closed[i] = False
+            pruned += 1
+    return pruned

@@ -1,0 +1,117 @@
+"""The planned broad phase and the step's bookkeeping as kernels (mbs.bounding_spheres,
+mbs._sphere_kernels, mbs._stage_kernels, the point-mass kernels of mbs.body_stage)
+against their plain-Python references: the sphere callables and the pair test
+d·d > (r1 + r2 + margin)², list comprehensions, the System's assembly."""
+
+import numpy as np
+import pytest
+
+from contact import Contact, ContactKinematicsPointContour2s, UnilateralNewtonImpact
+from contours import PointContour
+from mbs import PointMass, RigidBody, System
+from mbs import _stage_kernels as SK
+from mbs.body_stage import BodyStage
+from mbs.bounding_spheres import SphereTable, sphere_pair
+
+
+def far_pairs_scene(n):
+    """The default scene with n point masses, each in a contact with the beam's top face."""
+    from ffrmbs_app.scenes import point_mass_beam as pmb
+
+    scene = pmb.build("A", modes=20)
+    system = scene.system
+    surface = scene.contact.kinematics.contour2
+    for k in range(n):
+        mass = system.add(PointMass(0.1, position=(0.0, 0.2 + 0.1 * k, 0.0), name=f"far{k}"))
+        system.add(Contact(ContactKinematicsPointContour2s(PointContour(mass.point), surface),
+                           UnilateralNewtonImpact(0.0), name=f"far contact {k}"))
+    return system
+
+
+def reference_prune(contacts, q, t):
+    """live flags of the prunable contacts by the sphere callables, pair by pair."""
+    live = {}
+    for i, c in enumerate(contacts):
+        pair = sphere_pair(c)
+        if pair is None:
+            continue
+        c1, r1 = pair[0](q, t)
+        c1 = c1.copy()
+        c2, r2 = pair[1](q, t)
+        d = c1 - c2
+        reach = r1 + r2 + c.margin
+        live[i] = not float(d @ d) > reach * reach
+    return live
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_sphere_table_prunes_as_the_sphere_callables(seed):
+    system = far_pairs_scene(6)
+    contacts = list(system.contacts)
+    table = SphereTable(contacts)
+    assert len(table) == len(contacts)
+    assert len(table.spheres) == 1 + len(contacts)           # the beam's sphere once
+    rng = np.random.default_rng(seed)
+    q, _ = system.initial_state()
+    beam = system.bodies[0]
+    q[beam.q_slice] = 1e-3 * rng.normal(size=beam.nq)
+    for b in system.bodies[1:]:
+        q[b.q_slice] = rng.normal(scale=0.2, size=3)
+    centres, radii = np.zeros((len(table.spheres), 3)), np.zeros(len(table.spheres))
+    live, closed = np.ones(len(contacts), dtype=bool), np.ones(len(contacts), dtype=bool)
+    table.start(q, 0.0, centres, radii)
+    pruned = table.prune(q, 0.0, centres, radii, live, closed)
+    ref = reference_prune(contacts, q, 0.0)
+    assert live.tolist() == [ref[i] for i in range(len(contacts))]
+    assert pruned == sum(not v for v in ref.values())
+    assert not closed[~live].any() and closed[live].all()
+    for s, sphere in enumerate(table.spheres):
+        c, r = sphere(q, 0.0)
+        np.testing.assert_allclose(centres[s], c, rtol=1e-15, atol=1e-15)
+        assert abs(radii[s] - r) <= 1e-14 * r
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_stage_kernels_equal_their_references(seed):
+    rng = np.random.default_rng(seed)
+    n_contacts, n_contours = 7, 5
+    owners = [sorted(rng.choice(n_contacts, size=rng.integers(1, 3), replace=False).tolist())
+              for _ in range(n_contours)]
+    owner_at = np.cumsum([0] + [len(o) for o in owners]).astype(np.int64)
+    flat = np.array([i for o in owners for i in o], dtype=np.int64)
+    live = rng.random(n_contacts) < 0.5
+    out = np.zeros(n_contours, dtype=np.intp)
+    n = SK.contours_in_use(owner_at, flat, live, out)
+    assert out[:n].tolist() == [k for k in range(n_contours) if any(live[i] for i in owners[k])]
+    out = np.zeros(n_contacts, dtype=np.intp)
+    n = SK.live_contacts(live, out)
+    assert out[:n].tolist() == np.flatnonzero(live).tolist()
+
+
+@pytest.mark.parametrize("gravity", [(0.0, 0.0, 0.0), (0.0, -9.81, 1.0)])
+def test_point_masses_in_the_body_stage_equal_the_system_assembly(gravity):
+    """Point masses among a quaternion rigid body (non-additive increment): M, h and the
+    increment of the body stage's point-mass kernels against the System's."""
+    system = System(gravity=gravity)
+    for k in range(3):
+        system.add(PointMass(0.5 + k, position=(k, 1.0, 2.0), velocity=(0.1, k, 0.0), name=f"p{k}"))
+    system.add(RigidBody(3.0, np.diag([1.0, 2.0, 3.0]), com=(0.1, 0.2, -0.3), name="rigid"))
+    system.add(PointMass(0.7, name="p3"))
+    q, u = system.initial_state()
+    rng = np.random.default_rng(5)
+    u[:] = rng.normal(size=system.nu)
+    stage = BodyStage.of_equations(system.equations())
+    assert stage._point_u.size == 4
+    nu = system.nu
+    M, h = np.full((nu, nu), np.nan), np.full(nu, np.nan)
+    stage.mass_and_h(0.3, q, u, M, h)
+    M_ref, h_ref = system.mass_and_h(0.3, q, u)
+    np.testing.assert_array_equal(M, M_ref)
+    np.testing.assert_allclose(h, h_ref, rtol=1e-14, atol=1e-14)
+    h2 = np.full(nu, np.nan)
+    stage.h_only(0.3, q, u, h2)
+    np.testing.assert_array_equal(h2, h)
+    du = 0.1 * rng.normal(size=nu)
+    out = np.full(system.nq, np.nan)
+    stage.increment(q, du, out)
+    np.testing.assert_allclose(out, system.increment(q, du), rtol=1e-15, atol=1e-15)
