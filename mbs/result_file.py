@@ -59,8 +59,9 @@ HDF5 cannot close a file after a failed write (:func:`ensure_space`).
 changed since the run started); the run made again from its inputs and given it
 (``System.simulate(checkpoint=…)``) reopens the file, cuts it back to the checkpoint's
 samples and trace rows and goes on; the result equals the uninterrupted run's bit for bit
-(the state is restored exactly, the computation is deterministic). The checkpoint is removed when the run completes and kept when it is
-interrupted or fails.
+(the state is restored exactly, the computation is deterministic); a result file with
+fewer rows than its checkpoint is refused. The checkpoint is removed when the run
+completes and kept when it is interrupted or fails.
 
 Reading: :func:`load_result` gives a :class:`~mbs.result.Result` and the file's
 attributes; a damaged file is an InputFileError (:func:`damaged_result_file`, which the
