@@ -73,6 +73,9 @@ class ContactKinematics(ABC):
         takes them as one array.
     """
 
+    #: what update() wrote (:mod:`mbs.state_arrays`)
+    run_state = ("active", "g_N", "n", "T", "gd_N", "gd_T", "w_N1", "w_N2", "w_T1", "w_T2", "point1", "point2")
+
     def __init__(self, contour1, contour2, nu_total=None):
         self.contour1, self.contour2 = contour1, contour2
         self.point1, self.point2 = contour1.new_point(), contour2.new_point()
@@ -208,6 +211,7 @@ class _CentreContact(ContactKinematics):
     (``_project``), g_N = nᵀ (c − r_C2) − ρ and C1 = c − ρ n."""
 
     side1: type
+    run_state = ContactKinematics.run_state + ("_centre", "_A1")
 
     def __init__(self, contour1, contour2, nu_total):
         _require(contour1, self.side1, f"a {self.side1.__name__}")
@@ -243,6 +247,7 @@ class _SearchContact(_CentreContact):
     when there is none, before the first search or after a search found nothing)."""
 
     search_class: type
+    run_state = _CentreContact.run_state + ("search", "start")     # the search and its warm start
 
     def __init__(self, contour1, contour2, search, nu_total):
         super().__init__(contour1, _require_dim(contour2, self.search_class.dim), nu_total)
@@ -356,6 +361,7 @@ class ContactKinematicsSphereSphere(_CentreContact):
     2's frame at C2, ġ by eq. 3.8. Inactive when the centres coincide (no normal)."""
 
     side1 = SphereContour
+    run_state = _CentreContact.run_state + ("_A2",)
 
     def __init__(self, sphere1, sphere2, nu_total=None):
         super().__init__(sphere1, _require(sphere2, SphereContour, "a SphereContour"), nu_total)
@@ -384,6 +390,8 @@ class PointOnCurveConstraint(ContactKinematicsPointContour1s):
     the rotation of (n, t2) adds terms of order |g|). Valid while :attr:`active` (η*
     inside an open curve's domain).
     """
+
+    run_state = ContactKinematicsPointContour1s.run_state + ("g", "gd")
 
     def __init__(self, point, curve, search=None, nu_total=None):
         super().__init__(point, curve, search, nu_total)

@@ -145,6 +145,8 @@ class _Search:
     """
 
     dim: int
+    #: what a solve changes (:mod:`mbs.state_arrays`); ``_G``: the coarse grid's workspace
+    run_state = ("_length_scale", "counts", "_point", "_g", "_G")
 
     def __init__(self, contour, tol, max_iter, length_scale, compiled):
         if contour.dim != self.dim:

@@ -19,6 +19,10 @@ possible closed set, the warm starts (Λ of the last step per contact and for th
 joints), counters and the record of the last step. The contours' states and the
 searches' warm starts stay in the contour and contact-kinematics objects (their own
 preallocated arrays), which the contour and detection stages update.
+
+A checkpoint (:mod:`mbs.checkpoint`) holds every array and scalar of Data
+(:meth:`Data.collect`, :meth:`Data.restore`) but its caches, rebuilt on demand from the
+Model: the contact sets' law encodings and the views of the contact problem's buffers.
 """
 
 from __future__ import annotations
@@ -27,12 +31,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import state_arrays
+from .body_stage import BodyStage
 from .bounding_spheres import SphereTable
 from .equations import Equations
 from .fused_detection import fused_detection
-from .body_stage import BodyStage
 
 N_FACTORS = 8          # Cholesky factors of a constant M̂ kept for different step sizes (+1)
+CACHES = ("contact_sets", "problem_views")     # Data rebuilt on demand from the Model: not in a checkpoint
 
 
 @dataclass(frozen=True)
@@ -250,3 +256,46 @@ class Data:
         return (self.W_buf[:nu * m].reshape(nu, m), self.MW_buf[:nu * m].reshape(m, nu).T,
                 self.G_buf[:m * m].reshape(m, m), self.lam_buf[:m], self.gamma_plus_buf[:m],
                 self.xi_free_buf[:m], self.gamma_pre_buf[:m], self.closing_buf[:m], self.offset_buf[:m])
+
+    def collect(self, prefix, arrays: dict, kinds: dict) -> None:
+        """Every array and scalar of the run under ``prefix/…`` (:mod:`mbs.state_arrays`):
+        the factors of a constant M̂ as ``factors/<j>/step`` [s] and ``factors/<j>/factor``
+        (in their memory order), ``stats`` and ``last`` entry by entry; the caches
+        (:data:`CACHES`) left out."""
+        for name, value in vars(self).items():
+            if name in CACHES:
+                continue
+            if name == "factors":
+                for j, (step, factor) in enumerate(value):
+                    state_arrays.put(f"{prefix}/factors/{j}/step", step, arrays, kinds)
+                    state_arrays.put(f"{prefix}/factors/{j}/factor", factor, arrays, kinds)
+            elif name in ("stats", "last"):
+                for key, entry in (value.items() if name == "stats" else enumerate(value)):
+                    state_arrays.put(f"{prefix}/{name}/{key}", entry, arrays, kinds)
+            else:
+                state_arrays.put(f"{prefix}/{name}", value, arrays, kinds)
+
+    def restore(self, prefix, arrays, kinds) -> None:
+        """The state :meth:`collect` saved, into this Data of the same Model
+        (:class:`~mbs.state_arrays.StateMismatch` if it does not fit)."""
+        take = state_arrays.take
+        for name, value in vars(self).items():
+            if name in CACHES:
+                continue
+            if name == "factors":
+                self.factors = []
+                while f"{prefix}/factors/{len(self.factors)}/step" in kinds:
+                    at = f"{prefix}/factors/{len(self.factors)}"
+                    step, factor = take(f"{at}/step", 0.0, arrays, kinds), take(f"{at}/factor", None, arrays, kinds)
+                    if factor.ndim != 2 or factor.shape[0] != factor.shape[1] or factor.shape[0] not in (
+                            self.rhs.size, self.rhs_act.size):
+                        raise state_arrays.StateMismatch(f"{at}/factor has shape {factor.shape}, not this run's")
+                    self.factors.append((step, factor))
+            elif name == "stats":
+                at = f"{prefix}/stats/"             # the saved keys in their order
+                self.stats = {k[len(at):]: take(k, value.get(k[len(at):]), arrays, kinds)
+                              for k in kinds if k.startswith(at)}
+            elif name == "last":
+                value[:] = [take(f"{prefix}/last/{i}", v, arrays, kinds) for i, v in enumerate(value)]
+            else:
+                setattr(self, name, take(f"{prefix}/{name}", value, arrays, kinds))

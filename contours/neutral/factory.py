@@ -67,6 +67,10 @@ class NeutralContour(Contour):
         the state and the cache.
     """
 
+    #: what update() and the lazy products wrote (:mod:`mbs.state_arrays`)
+    run_state = ("_state", "_span", "T", "_has_u", "_fields_stamp", "_velocity_stamp", "_local_position",
+                 "_position_field", "_velocity_field")
+
     def __init__(self, body, space, nodal_u0, nodal_phi, name, compiled=True):
         super().__init__(body, name)
         self.space = space
@@ -104,6 +108,7 @@ class NeutralContour(Contour):
         ctrl0 = self._local_position.ctrl0
         phi = self.mode_shapes.ctrl if n_f else np.zeros(self.space.ctrl_shape + (0,))
         span = np.full(K.SPAN_KEY + 3 * int(np.prod([d.p + 1 for d in self._directions()])), -1.0)
+        self._span = span
         self.kernel_data = self.space.geometry + (ctrl0, phi, self._state, span)
         P0 = ctrl0.reshape(-1, 3)
         self._box0 = (P0.min(axis=0), P0.max(axis=0))
@@ -269,12 +274,14 @@ class Contour1sNeutralFactory(NeutralContour):
     n = the body-frame reference direction ``normal`` (rotated with the body, made
     perpendicular to t1), t2 = n × t1."""
 
+    run_state = NeutralContour.run_state + ("_n_ref",)
+
     def __init__(self, body, space, nodal_u0, nodal_phi, normal, name, compiled=True):
         normal = np.asarray(normal, dtype=float).reshape(3)
         if not np.linalg.norm(normal) > 0:
             raise ModelError(f"{name}: the reference normal must be a nonzero vector, got {normal}")
         self.normal_ref = normal / np.linalg.norm(normal)
-        self._n_ref = np.zeros(3)
+        self._n_ref = np.zeros(3)       # A n̄_ref of the last update
         super().__init__(body, space, nodal_u0, nodal_phi, name, compiled)
 
     def update(self, q, u=None, t=0.0) -> None:
