@@ -64,6 +64,7 @@ class Contact(ContactElement):
     ``friction`` only with a single-valued normal law."""
 
     unilateral = True
+    run_state = ("closed", "force_N", "box1", "box2", "kinematics")     # (mbs.state_arrays)
 
     def __init__(self, kinematics: ContactKinematics, law, friction=None, name="contact", margin="auto",
                  closing_tol=1e-12):
@@ -144,6 +145,7 @@ class CurveConstraint(ContactElement):
     set_valued = True
     unilateral = False
     dim = 2
+    run_state = ("closed", "kinematics")
 
     def __init__(self, kinematics: PointOnCurveConstraint, name="on curve"):
         if not isinstance(kinematics, PointOnCurveConstraint):

@@ -67,7 +67,14 @@ class ContactKinematics(ABC):
         Point-local Jacobian pieces J_T1ᵀ n and −J_T2ᵀ n in the bodies' own u.
     w_T1, w_T2 : (nu1, 2), (nu2, 2)
         J_T1ᵀ T and −J_T2ᵀ T.
+    buffer : (11 + 3 (nu1 + nu2),)
+        n, T (row-major), gd_T, w_N1, w_N2, w_T1, w_T2 (row-major) are views of this one
+        vector, in this order (offsets :func:`buffer_layout`), so that a compiled kernel
+        takes them as one array.
     """
+
+    #: what update() wrote (:mod:`mbs.state_arrays`)
+    run_state = ("active", "g_N", "n", "T", "gd_N", "gd_T", "w_N1", "w_N2", "w_T1", "w_T2", "point1", "point2")
 
     def __init__(self, contour1, contour2, nu_total=None):
         self.contour1, self.contour2 = contour1, contour2
@@ -75,12 +82,15 @@ class ContactKinematics(ABC):
         self._nu_total = nu_total
         self.active = False
         self.g_N = np.nan
-        self.n = np.zeros(3)
-        self.T = np.zeros((3, 2))
         self.gd_N = np.nan
-        self.gd_T = np.zeros(2)
-        self.w_N1, self.w_N2 = np.zeros(contour1.nu), np.zeros(contour2.nu)
-        self.w_T1, self.w_T2 = np.zeros((contour1.nu, 2)), np.zeros((contour2.nu, 2))
+        nu1, nu2 = contour1.nu, contour2.nu
+        n_at, T_at, gd_T_at, w_N1_at, w_N2_at, w_T1_at, w_T2_at, size = buffer_layout(nu1, nu2)
+        self.buffer = b = np.zeros(size)
+        self.n = b[n_at:T_at]
+        self.T = b[T_at:gd_T_at].reshape(3, 2)
+        self.gd_T = b[gd_T_at:w_N1_at]
+        self.w_N1, self.w_N2 = b[w_N1_at:w_N2_at], b[w_N2_at:w_T1_at]
+        self.w_T1, self.w_T2 = b[w_T1_at:w_T2_at].reshape(nu1, 2), b[w_T2_at:size].reshape(nu2, 2)
 
     @abstractmethod
     def _locate(self, velocity, jacobians) -> bool:
@@ -169,6 +179,13 @@ class ContactKinematics(ABC):
         return f"{type(self).__name__}({self.contour1!r}, {self.contour2!r})"
 
 
+def buffer_layout(nu1, nu2):
+    """Offsets of n, T, gd_T, w_N1, w_N2, w_T1, w_T2 in :attr:`ContactKinematics.buffer`
+    for bodies with nu1, nu2 velocities, and its length."""
+    w_N1 = 11
+    return 0, 3, 9, w_N1, w_N1 + nu1, w_N1 + nu1 + nu2, w_N1 + 3 * nu1 + nu2, w_N1 + 3 * (nu1 + nu2)
+
+
 def _require(contour, kind, what):
     if not isinstance(contour, kind):
         raise ModelError(f"expected {what}, got {contour!r}")
@@ -194,6 +211,7 @@ class _CentreContact(ContactKinematics):
     (``_project``), g_N = nᵀ (c − r_C2) − ρ and C1 = c − ρ n."""
 
     side1: type
+    run_state = ContactKinematics.run_state + ("_centre", "_A1")
 
     def __init__(self, contour1, contour2, nu_total):
         _require(contour1, self.side1, f"a {self.side1.__name__}")
@@ -225,22 +243,30 @@ class _CentreContact(ContactKinematics):
 
 class _SearchContact(_CentreContact):
     """Contour 2 located by ``search_class`` (or a given search on it), warm-started at
-    the last contact point."""
+    the last contact point: ``start`` ((η, ξ) on a 2s contour, (η,) on a 1s one; NaN
+    when there is none, before the first search or after a search found nothing)."""
 
     search_class: type
+    run_state = _CentreContact.run_state + ("search", "start")     # the search and its warm start
 
     def __init__(self, contour1, contour2, search, nu_total):
         super().__init__(contour1, _require_dim(contour2, self.search_class.dim), nu_total)
         if search is not None and search.contour is not contour2:
             raise ModelError(f"{type(self).__name__}: the search runs on {search.contour!r}, not on {contour2!r}")
         self.search = self.search_class(contour2) if search is None else search
-        self._start = None
+        self.start = np.full(self.search.dim, np.nan)
 
     def _project(self, c, velocity, jacobians):
-        found = self.search.solve(c, self._start)
-        self._start = found
+        start = self.start
+        if np.isnan(start[0]):
+            start = None
+        elif self.search.dim == 1:
+            start = start[0]
+        found = self.search.solve(c, start)
         if found is None:
+            self.start[:] = np.nan
             return False
+        self.start[:] = found
         coords = found if self.search.dim == 2 else (found,)
         self.contour2.evaluate(self.point2, *coords, velocity=velocity, jacobians=jacobians)
         return True
@@ -335,6 +361,7 @@ class ContactKinematicsSphereSphere(_CentreContact):
     2's frame at C2, ġ by eq. 3.8. Inactive when the centres coincide (no normal)."""
 
     side1 = SphereContour
+    run_state = _CentreContact.run_state + ("_A2",)
 
     def __init__(self, sphere1, sphere2, nu_total=None):
         super().__init__(sphere1, _require(sphere2, SphereContour, "a SphereContour"), nu_total)
@@ -363,6 +390,8 @@ class PointOnCurveConstraint(ContactKinematicsPointContour1s):
     the rotation of (n, t2) adds terms of order |g|). Valid while :attr:`active` (η*
     inside an open curve's domain).
     """
+
+    run_state = ContactKinematicsPointContour1s.run_state + ("g", "gd")
 
     def __init__(self, point, curve, search=None, nu_total=None):
         super().__init__(point, curve, search, nu_total)

@@ -54,6 +54,13 @@ from . import _detection_kernels as K
 from ._detection_kernels import SINGULAR as _SINGULAR
 
 
+NEWTON_SOLVES, NEWTON_ITERATIONS, LAST_ITERATIONS, COARSE_SEARCHES = range(4)   # entries of _Search.counts
+
+
+def _set(search, which, n):
+    search.counts[which] = n
+
+
 class _Axis:
     """One surface coordinate of the search grid: domain [a, b], closedness, grid nodes and
     the cells between neighbouring nodes (on a closed direction the last cell wraps)."""
@@ -129,12 +136,17 @@ class _Search:
         Counters since construction or :meth:`reset_counters`.
     last_iterations : int
         Newton iterations of the last converged start.
+    counts : (4,) int64
+        The four counters, at ``NEWTON_SOLVES``, ``NEWTON_ITERATIONS``,
+        ``LAST_ITERATIONS``, ``COARSE_SEARCHES`` (a compiled detection counts there).
     compiled : bool
         Newton runs in the numba kernel: asked for (``compiled=True``) and the contour is
         a compiled neutral contour or a compiled band or cylinder (decided at construction).
     """
 
     dim: int
+    #: what a solve changes (:mod:`mbs.state_arrays`); ``_G``: the coarse grid's workspace
+    run_state = ("_length_scale", "counts", "_point", "_g", "_G")
 
     def __init__(self, contour, tol, max_iter, length_scale, compiled):
         if contour.dim != self.dim:
@@ -148,10 +160,18 @@ class _Search:
         self.compiled = (bool(compiled) and isinstance(contour, (NeutralContour, OffsetContour))
                          and contour.compiled)
         self._work = contour.kernel_workspace() + (self._g,) if self.compiled else None
-        self.reset_counters()
+        self.counts = np.zeros(4, dtype=np.int64)
 
     def reset_counters(self):
-        self.newton_iterations = self.newton_solves = self.coarse_searches = self.last_iterations = 0
+        self.counts[:] = 0
+
+    newton_solves = property(lambda self: int(self.counts[NEWTON_SOLVES]), lambda self, n: _set(self, NEWTON_SOLVES, n))
+    newton_iterations = property(lambda self: int(self.counts[NEWTON_ITERATIONS]),
+                                 lambda self, n: _set(self, NEWTON_ITERATIONS, n))
+    last_iterations = property(lambda self: int(self.counts[LAST_ITERATIONS]),
+                               lambda self, n: _set(self, LAST_ITERATIONS, n))
+    coarse_searches = property(lambda self: int(self.counts[COARSE_SEARCHES]),
+                               lambda self, n: _set(self, COARSE_SEARCHES, n))
 
     @property
     def length_scale(self) -> float:
@@ -162,6 +182,14 @@ class _Search:
 
     def _tol2(self):
         return (self.tol * self.length_scale) ** 2
+
+    def newton_settings(self):
+        """(largest step per surface coordinate (tuple), (tol · length scale)² [m²],
+        iterations) of Newton, as the kernels take them; None while the length scale
+        is not known (it is fixed at the first search, module docstring)."""
+        if self._length_scale is None:
+            return None
+        return tuple(ax.max_step for ax in self.axes), self._tol2(), self.max_iter
 
     def _grid_positions(self):
         """Positions of the grid nodes (k, 3) [m] at the contour's current state."""

@@ -67,6 +67,7 @@ class OffsetContour(Contour):
     """
 
     dim = 2
+    run_state = ("neutral",)    # its state is the neutral contour's (mbs.state_arrays)
 
     def __init__(self, neutral: Contour1sNeutralFactory, xi_domain, closed_xi, reach, name, compiled=True):
         if not isinstance(neutral, Contour1sNeutralFactory):

@@ -26,20 +26,29 @@ from ffrmbs.errors import ModelError
 from .base import D_ETA, D_ETA_ETA, D_ETA_XI, D_XI, D_XI_XI, VALUE, Contour
 
 
+# layout of _FrameContour.state: r, A (row-major), v, ω, J_T (3, nu), J_R (3, nu)
+R_AT, A_AT, V_AT, W_AT, J_AT = 0, 3, 12, 15, 18
+
+
 class _FrameContour(Contour):
     """Shared state of the rigid contours: the frame's position, orientation, velocity
-    and Jacobians, read once per update."""
+    and Jacobians, read once per update (views of one vector ``state``, layout
+    ``R_AT`` … ``J_AT``, so that a compiled kernel takes them as one array)."""
+
+    run_state = ("_r", "_A", "_v", "_w", "_J_T", "_J_R")     # what update() wrote (mbs.state_arrays)
 
     def __init__(self, frame, name):
         body = None if frame.is_ground else frame.body
         super().__init__(body, name)
         self.frame_ref = frame
-        self._r = np.zeros(3)
-        self._A = np.eye(3)
-        self._v = np.zeros(3)
-        self._w = np.zeros(3)
-        self._J_T = np.zeros((3, self.nu))
-        self._J_R = np.zeros((3, self.nu))
+        self.state = s = np.zeros(J_AT + 6 * self.nu)
+        self._r = s[R_AT:A_AT]
+        self._A = s[A_AT:V_AT].reshape(3, 3)
+        self._A[:] = np.eye(3)
+        self._v = s[V_AT:W_AT]
+        self._w = s[W_AT:J_AT]
+        self._J_T = s[J_AT:J_AT + 3 * self.nu].reshape(3, self.nu)
+        self._J_R = s[J_AT + 3 * self.nu:].reshape(3, self.nu)
         self._on_point_mass = body is not None and body.translation_only   # the shortcut of the module docstring
         if self._on_point_mass:
             self._A[:] = frame.A_rel

@@ -16,8 +16,9 @@ The job, for a scene (:class:`ffrmbs_app.scene.Scene`) built fresh by ``make_sce
    every ``checkpoint_every`` seconds of wall time; SIGINT and SIGTERM stop it at its next
    output sample with a checkpoint and a cleanly closed file (status "interrupted"); a
    second signal stops it after the current step. ``resume=True`` continues a killed or
-   interrupted run from its checkpoint (refused if an input file changed since); the
-   result equals the uninterrupted run's bit for bit;
+   interrupted run from its checkpoint (refused if an input file changed since): the
+   scene is made again from its inputs and the run's state loaded from the checkpoint's
+   arrays (:mod:`mbs.checkpoint`); the result equals the uninterrupted run's bit for bit;
 3. the accuracy: the same scene once more at Δt/2 (``check``); max |x(Δt) − x(Δt/2)| over
    every output estimates the time-discretization error (the error of the Δt/2 run is
    about half of it for a first-order scheme across impacts), reported in the output's
@@ -46,7 +47,7 @@ from ffrmbs_app.limits import check_resources
 from ffrmbs_app.output_lock import output_lock
 from ffrmbs_app.scene import MOREAU
 from mbs.integrators import driver
-from mbs.result_file import ResultRecorder, resume_recording
+from mbs.result_file import ResultRecorder, resume_checkpoint
 
 
 def contact_intervals(t, dt, closed):
@@ -142,7 +143,8 @@ def _run(make_scene, scene, path, check, resume, checkpoint_every, flush_every, 
         with _stop_on_signals(log), progress as bar:
             if resume:
                 log(f"resuming {path} from its checkpoint")
-                res = resume_recording(recorder, progress=bar.update_to, inputs=scene.inputs)
+                checkpoint = resume_checkpoint(recorder, inputs=scene.inputs)
+                res = _simulate(scene, recorder=recorder, progress=bar.update_to, contacts=True, checkpoint=checkpoint)
             else:
                 res = _simulate(scene, recorder=recorder, progress=bar.update_to, contacts=True)
         in_run = clock.seconds - compiling_before       # compilation inside the run: not its cost

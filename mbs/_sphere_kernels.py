@@ -23,6 +23,7 @@ from __future__ import annotations
 from numba import njit
 
 POINT, AT_REST, CALLED = 0, 1, 2
+INTS_AT = 3     # ints: n_s, n_p, width, then kind, at, n_reach (n_s each), contact, sphere1, sphere2 (n_p each)
 
 
 @njit(cache=True)
@@ -60,3 +61,22 @@ def prune_pairs(contact, sphere1, sphere2, margin, centres, radii, live, closed)
             closed[i] = False
             pruned += 1
     return pruned
+
+
+@njit(cache=True)
+def prune(q, ints, floats, centres, radii, live, closed):
+    """:func:`sphere_states` then :func:`prune_pairs` in one call, their arrays views of
+    ``ints`` (n_s, n_p, width, then kind, at, n_reach, contact, sphere1, sphere2) and
+    ``floats`` (offset (n_s, 3), radius0, reach (n_s, width), margin) — the layout of
+    :class:`mbs.bounding_spheres.SphereTable`. Returns the number pruned."""
+    n, n_p, width = ints[0], ints[1], ints[2]
+    o = INTS_AT
+    kind, at, n_reach = ints[o:o + n], ints[o + n:o + 2 * n], ints[o + 2 * n:o + 3 * n]
+    o += 3 * n
+    contact, sphere1, sphere2 = ints[o:o + n_p], ints[o + n_p:o + 2 * n_p], ints[o + 2 * n_p:o + 3 * n_p]
+    offset = floats[:3 * n].reshape(n, 3)
+    radius0 = floats[3 * n:4 * n]
+    reach = floats[4 * n:(4 + width) * n].reshape(n, width)
+    margin = floats[(4 + width) * n:(4 + width) * n + n_p]
+    sphere_states(q, kind, at, offset, radius0, reach, n_reach, centres, radii)
+    return prune_pairs(contact, sphere1, sphere2, margin, centres, radii, live, closed)

@@ -103,6 +103,9 @@ class SphereTable:
         The constants of :func:`._sphere_kernels.sphere_states`.
     contact, sphere1, sphere2 : (n_p,) int;  margin : (n_p,) [m]
         Each prunable contact's index and spheres, and its margin.
+    ints, floats : int and float vectors
+        The arrays above are views of these two (layout of
+        :func:`._sphere_kernels.prune`), which the kernel takes.
     """
 
     def __init__(self, contacts):
@@ -119,13 +122,16 @@ class SphereTable:
                     self.spheres.append(sphere)
                 ids.append(index[key])
             pairs.append((i, ids[0], ids[1], c.margin))
-        n = len(self.spheres)
-        self.kind = np.full(n, K.CALLED, dtype=np.int64)
-        self.at = np.zeros(n, dtype=np.int64)
-        self.offset, self.radius0 = np.zeros((n, 3)), np.zeros(n)
-        self.n_reach = np.zeros(n, dtype=np.int64)
+        n, n_p = len(self.spheres), len(pairs)
         width = max((s.body.n_modes for s in self.spheres if isinstance(s, FlexibleBodySphere)), default=0)
-        self.reach = np.zeros((n, width))
+        self.ints = np.zeros(K.INTS_AT + 3 * n + 3 * n_p, dtype=np.int64)
+        self.ints[:K.INTS_AT] = n, n_p, width
+        self.kind, self.at, self.n_reach, self.contact, self.sphere1, self.sphere2 = (
+            self.ints[K.INTS_AT + a:K.INTS_AT + b] for a, b in _blocks((n, n, n, n_p, n_p, n_p)))
+        self.floats = np.zeros((4 + width) * n + n_p)
+        offset, self.radius0, reach, self.margin = (self.floats[a:b] for a, b in _blocks((3 * n, n, width * n, n_p)))
+        self.offset, self.reach = offset.reshape(n, 3), reach.reshape(n, width)
+        self.kind[:] = K.CALLED
         for s, sphere in enumerate(self.spheres):
             if isinstance(sphere, FrameSphere) and sphere._offset is not None:
                 self.kind[s], self.at[s] = K.POINT, sphere.body.q_slice.start
@@ -137,10 +143,8 @@ class SphereTable:
                 self.reach[s, :b.n_modes] = b._phi_reach
         self.called = [s for s in range(n) if self.kind[s] == K.CALLED]
         self.at_rest = [s for s in range(n) if self.kind[s] == K.AT_REST]
-        self.contact = np.array([p[0] for p in pairs], dtype=np.int64)
-        self.sphere1 = np.array([p[1] for p in pairs], dtype=np.int64)
-        self.sphere2 = np.array([p[2] for p in pairs], dtype=np.int64)
-        self.margin = np.array([p[3] for p in pairs], dtype=float)
+        for p, (i, s1, s2, margin) in enumerate(pairs):
+            self.contact[p], self.sphere1[p], self.sphere2[p], self.margin[p] = i, s1, s2, margin
 
     def __len__(self):
         return len(self.contact)
@@ -152,14 +156,20 @@ class SphereTable:
             centres[s] = self.spheres[s](q, t)[0]
 
     def prune(self, q, t, centres, radii, live, closed) -> int:
-        """Every prunable contact live or not at (q, t) (:func:`._sphere_kernels.prune_pairs`);
+        """Every prunable contact live or not at (q, t) (:func:`._sphere_kernels.prune`:
+        :func:`~._sphere_kernels.sphere_states`, then :func:`~._sphere_kernels.prune_pairs`);
         ``centres`` (n_s, 3), ``radii`` (n_s,) the spheres' workspaces. Returns the
         number pruned."""
         for s in self.called:
             centre, radii[s] = self.spheres[s](q, t)
             centres[s] = centre
-        K.sphere_states(q, self.kind, self.at, self.offset, self.radius0, self.reach, self.n_reach, centres, radii)
-        return K.prune_pairs(self.contact, self.sphere1, self.sphere2, self.margin, centres, radii, live, closed)
+        return K.prune(q, self.ints, self.floats, centres, radii, live, closed)
+
+
+def _blocks(sizes):
+    """[(start, stop)] of consecutive blocks of the given sizes."""
+    stops = np.cumsum(sizes)
+    return list(zip(stops - np.asarray(sizes), stops))
 
 
 def _identity(sphere):

@@ -19,6 +19,10 @@ possible closed set, the warm starts (Λ of the last step per contact and for th
 joints), counters and the record of the last step. The contours' states and the
 searches' warm starts stay in the contour and contact-kinematics objects (their own
 preallocated arrays), which the contour and detection stages update.
+
+A checkpoint (:mod:`mbs.checkpoint`) holds every array and scalar of Data
+(:meth:`Data.collect`, :meth:`Data.restore`) but its caches, rebuilt on demand from the
+Model: the contact sets' law encodings and the views of the contact problem's buffers.
 """
 
 from __future__ import annotations
@@ -27,11 +31,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import state_arrays
+from .body_stage import BodyStage
 from .bounding_spheres import SphereTable
 from .equations import Equations
-from .body_stage import BodyStage
+from .fused_detection import fused_detection
 
 N_FACTORS = 8          # Cholesky factors of a constant M̂ kept for different step sizes (+1)
+CACHES = ("contact_sets", "problem_views", "factor_dt", "factor_last")   # Data rebuilt on demand (the
+                              # last step's factor of a constant M̂ is looked up again in ``factors``):
+                              # not in a checkpoint
 
 
 @dataclass(frozen=True)
@@ -73,12 +82,16 @@ class Model:
     spheres : SphereTable or None
         The bounding spheres of the prunable contacts of a planned run
         (:class:`mbs.bounding_spheres.SphereTable`), None without a plan.
+    fused : tuple
+        Per contact its fused detection (:func:`mbs.fused_detection.fused_detection`:
+        contour update and detection in one compiled call) or None (the Python path).
     contours : tuple of (contour, owners, q_slice, u_slice)
         Every contour of a contact once, the indices of the contacts owning it and its
         body's slices (None on the ground).
     owner_at, owners : int arrays
-        The owners of contour k as flat arrays: owners[owner_at[k]:owner_at[k + 1]]
-        (:func:`mbs._stage_kernels.contours_in_use`).
+        The owners of contour k without a fused detection, as flat arrays:
+        owners[owner_at[k]:owner_at[k + 1]] (:func:`mbs._stage_kernels.contours_in_use`;
+        a contour whose owners all have one is updated by them, in the detection stage).
     single_valued : tuple of int
         The contacts with a single-valued law (their forces join h).
     m_max : int
@@ -111,6 +124,7 @@ class Model:
     lam_rows: np.ndarray
     penalty: tuple
     spheres: SphereTable | None
+    fused: tuple
     contours: tuple
     owner_at: np.ndarray
     owners: np.ndarray
@@ -141,6 +155,7 @@ def compile_model(system, plan=None, theta=0.5, solver=None) -> Model:
     lam_at = tuple(int(a) for a in np.concatenate(([0], np.cumsum(dims)))[:-1]) if contacts else ()
     penalty = tuple(i for i, c in enumerate(contacts)
                     if not c.set_valued and c.unilateral and hasattr(c.law, "derivatives"))
+    fused = tuple(fused_detection(c) for c in contacts)
     seen, table = {}, []
     for i, c in enumerate(contacts):
         for contour in c.contours():
@@ -150,7 +165,7 @@ def compile_model(system, plan=None, theta=0.5, solver=None) -> Model:
                 table.append([contour, [], None if body is None else body.q_slice,
                               None if body is None else body.u_slice])
             owners = table[seen[id(contour)]][1]
-            if i not in owners:
+            if i not in owners and fused[i] is None:
                 owners.append(i)
     contours = tuple((k, tuple(owners), qs, us) for k, owners, qs, us in table)
     owner_at = np.cumsum([0] + [len(owners) for _, owners, _, _ in table]).astype(np.int64)
@@ -168,7 +183,7 @@ def compile_model(system, plan=None, theta=0.5, solver=None) -> Model:
                  prune=plan is not None, contacts=contacts, set_valued=set_valued,
                  unilateral=tuple(bool(c.unilateral) for c in contacts), dims=dims, lam_at=lam_at,
                  lam_rows=np.array([lam_at, dims], dtype=np.int64).T.reshape(-1, 2),
-                 penalty=penalty, spheres=SphereTable(contacts) if plan is not None else None,
+                 penalty=penalty, spheres=SphereTable(contacts) if plan is not None else None, fused=fused,
                  contours=contours, owner_at=owner_at, owners=owners,
                  single_valued=tuple(i for i, sv in enumerate(set_valued) if not sv), m_max=system.n_c + sum(dims),
                  blocks=blocks, idle_rows=idle_rows)
@@ -193,8 +208,9 @@ class Data:
         self.K, self.D = np.zeros((nu, nu)), np.zeros((nu, nu))
         self.factors = []                   # [(step size, Cholesky factor of M̂)]: (nu, nu) blockwise with
                                             # model.blocks, else (n_act, n_act) Fortran order
-        self.factor = None                  # the factor of this step (of the last, for a constant M̂)
-        self.factor_dt = np.nan             # the step size [s] of ``factor`` for a constant M̂
+        self.factor = None                  # the factor of this step
+        self.factor_dt = np.nan             # a constant M̂: the last step size [s] and its entry of
+        self.factor_last = None             # ``factors``
         self.u_free = np.zeros(nu)
         self.rhs = np.zeros(nu)             # M̂⁻¹ b on all rows
         self.rhs_act = np.zeros(n_act)      # ... on the active rows
@@ -249,3 +265,47 @@ class Data:
         return (self.W_buf[:nu * m].reshape(nu, m), self.MW_buf[:nu * m].reshape(m, nu).T,
                 self.G_buf[:m * m].reshape(m, m), self.lam_buf[:m], self.gamma_plus_buf[:m],
                 self.xi_free_buf[:m], self.gamma_pre_buf[:m], self.closing_buf[:m], self.offset_buf[:m])
+
+    def collect(self, prefix, arrays: dict, kinds: dict) -> None:
+        """Every array and scalar of the run under ``prefix/…`` (:mod:`mbs.state_arrays`):
+        the factors of a constant M̂ as ``factors/<j>/step`` [s] and ``factors/<j>/factor``
+        (in their memory order), ``stats`` and ``last`` entry by entry; the caches
+        (:data:`CACHES`) left out."""
+        for name, value in vars(self).items():
+            if name in CACHES:
+                continue
+            if name == "factors":
+                for j, (step, factor) in enumerate(value):
+                    state_arrays.put(f"{prefix}/factors/{j}/step", step, arrays, kinds)
+                    state_arrays.put(f"{prefix}/factors/{j}/factor", factor, arrays, kinds)
+            elif name in ("stats", "last"):
+                for key, entry in (value.items() if name == "stats" else enumerate(value)):
+                    state_arrays.put(f"{prefix}/{name}/{key}", entry, arrays, kinds)
+            else:
+                state_arrays.put(f"{prefix}/{name}", value, arrays, kinds)
+
+    def restore(self, prefix, arrays, kinds) -> None:
+        """The state :meth:`collect` saved, into this Data of the same Model
+        (:class:`~mbs.state_arrays.StateMismatch` if it does not fit)."""
+        take = state_arrays.take
+        for name, value in vars(self).items():
+            if name in CACHES:
+                continue
+            if name == "factors":
+                self.factors = []
+                while f"{prefix}/factors/{len(self.factors)}/step" in kinds:
+                    at = f"{prefix}/factors/{len(self.factors)}"
+                    step, factor = take(f"{at}/step", 0.0, arrays, kinds), take(f"{at}/factor", None, arrays, kinds)
+                    if factor.ndim != 2 or factor.shape[0] != factor.shape[1] or factor.shape[0] not in (
+                            self.rhs.size, self.rhs_act.size):
+                        raise state_arrays.StateMismatch(f"{at}/factor has shape {factor.shape}, not this run's")
+                    self.factors.append((step, factor))
+            elif name == "stats":
+                at = f"{prefix}/stats/"             # the saved keys in their order
+                self.stats = {k[len(at):]: take(k, value.get(k[len(at):]), arrays, kinds)
+                              for k in kinds if k.startswith(at)}
+            elif name == "last":
+                value[:] = [take(f"{prefix}/last/{i}", v, arrays, kinds) for i, v in enumerate(value)]
+            else:
+                setattr(self, name, take(f"{prefix}/{name}", value, arrays, kinds))
+        self.factor_dt, self.factor_last = np.nan, None

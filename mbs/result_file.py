@@ -50,16 +50,18 @@ are buffered and appended every ``flush_every`` seconds of wall time, every FLUS
 samples, at every checkpoint and at the end, then the file is flushed, so a reader — or
 a run killed at any moment — finds every sample up to the last flush. Every
 ``checkpoint_every`` seconds of wall time, at the next output sample, the whole run state
-goes to the checkpoint ``<name>.h5.ckpt`` beside the file (:mod:`mbs.checkpoint`, written
-atomically); after the samples up to it are in the file. A write that fails (full disk)
+goes to the checkpoint ``<name>.h5.ckpt`` beside the file (:mod:`mbs.checkpoint`: arrays,
+written atomically), after the samples up to it are in the file. A write that fails (full disk)
 stops the run with :class:`~ffrmbs.errors.OutputFileError`, the file's status set to
 "failed: …" where the disk still allows; the free space is checked before each flush, as
 HDF5 cannot close a file after a failed write (:func:`ensure_space`).
-:func:`resume_recording` continues a killed run from its checkpoint: the file is cut back
-to the checkpoint's samples and trace rows and the run goes on; the result equals the
-uninterrupted run's bit for bit (the state is restored exactly, the computation is
-deterministic). The checkpoint is removed when the run completes and kept when it is
-interrupted or fails.
+:func:`resume_checkpoint` reads the checkpoint of a killed run (refused if an input file
+changed since the run started); the run made again from its inputs and given it
+(``System.simulate(checkpoint=…)``) reopens the file, cuts it back to the checkpoint's
+samples and trace rows and goes on; the result equals the uninterrupted run's bit for bit
+(the state is restored exactly, the computation is deterministic); a result file with
+fewer rows than its checkpoint is refused. The checkpoint is removed when the run
+completes and kept when it is interrupted or fails.
 
 Reading: :func:`load_result` gives a :class:`~mbs.result.Result` and the file's
 attributes; a damaged file is an InputFileError (:func:`damaged_result_file`, which the
@@ -210,6 +212,11 @@ class ResultRecorder:
             self.traced = min(traced.values(), default=0)
             for name, obj in datasets(f):
                 keep = traced.get(name[len("trace/"):], 0) if name.startswith("trace/") else n
+                if obj.maxshape[0] is None and obj.shape[0] < keep:
+                    f.close()
+                    self.file = None
+                    raise InputFileError(self.path, None, f"holds fewer rows in {name} ({obj.shape[0]}) than its "
+                                                          f"checkpoint ({keep}); restart the run")
                 if obj.maxshape[0] is None and obj.shape[0] > keep:
                     obj.resize(keep, axis=0)
             f.attrs["status"] = "running"
@@ -231,8 +238,7 @@ class ResultRecorder:
         with self._writing(self.path, "result file"):
             self._flush(integ)
         with self._writing(self.checkpoint_path, "checkpoint"):
-            write_checkpoint(self.checkpoint_path, {"integrator": integ, "samples": self.written,
-                                                    "result_file": str(self.path)})
+            write_checkpoint(self.checkpoint_path, integ, {"samples": self.written, "trace_rows": self.traced})
         self.checkpoints += 1
         self._last_checkpoint = time.perf_counter()
 
@@ -417,15 +423,13 @@ def modal_units(body) -> tuple[str, str]:
     return "SI", "SI"
 
 
-def resume_recording(recorder, progress=None, inputs=None):
-    """Continue the run whose checkpoint sits beside ``recorder.path`` to its end,
-    recording with ``recorder``; returns the full :class:`~mbs.result.Result` (samples
-    before the checkpoint included). ``inputs`` ({label: path}, the scene's): refuse if
-    one changed since the run started."""
-    from .integrators.driver import resume
-
+def resume_checkpoint(recorder, inputs=None):
+    """The checkpoint (:class:`mbs.checkpoint.Checkpoint`) beside ``recorder.path``, to
+    continue its run with ``System.simulate(checkpoint=…, recorder=recorder)``.
+    ``inputs`` ({label: path}, the scene's): refused if one changed since the run
+    started. InputFileError if there is no checkpoint or it cannot be read."""
     path, ckpt = recorder.path, recorder.checkpoint_path
-    if not ckpt.is_file():
+    if not ckpt.exists():
         raise InputFileError(ckpt, None, "no checkpoint to resume from (the run completed, or never "
                                          "reached its first checkpoint)")
     if inputs:
@@ -435,7 +439,7 @@ def resume_recording(recorder, progress=None, inputs=None):
         if changed:
             raise InputFileError(path, None, f"cannot resume: input(s) changed since the run started: "
                                              f"{', '.join(changed)}")
-    return resume(read_checkpoint(ckpt)["integrator"], recorder, progress)
+    return read_checkpoint(ckpt)
 
 
 def _create(f, name, row_shape, dtype, units):

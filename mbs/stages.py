@@ -9,9 +9,11 @@ its :class:`~mbs.model.Data` that reads the arrays the previous stages wrote:
 2. :func:`bodies`: h (and M unless M̂ is constant) at (t_θ, q_θ, u_k) → ``h``, ``M``;
 3. :func:`contours`: in a planned run the contacts whose contours' bounding spheres
    come within the margin (the others open, counted as pruned) → ``live``; every
-   contour of a live contact updated at (t_θ, q_θ, u_k), each once;
+   contour of a live contact updated at (t_θ, q_θ, u_k), each once — but those of
+   contacts with a fused detection (``model.fused``), which stage 4 updates;
 4. :func:`detect`: the live contacts located (broad phase by bounding boxes, search,
-   g_N, frame, point Jacobians); a unilateral contact is closed where
+   g_N, frame, point Jacobians; a fused detection, :mod:`mbs.fused_detection`, updates
+   its contours and does all this in one compiled call); a unilateral contact is closed where
    g_N(q_θ) <= its ``closing_tol`` → ``closed``, the closed set-valued contacts in
    ``closed_idx``, the largest penetration;
 5. :func:`constraints`: the contact laws at the located contacts — single-valued
@@ -66,7 +68,7 @@ def bodies(model, data, dt):
 
 def contours(model, data, dt):
     """Stage 3: the live contacts (planned runs: bounding spheres within the margin) and
-    their contours updated at (t_m, q_m, u)."""
+    their contours updated at (t_m, q_m, u) (but those of fused detections)."""
     if not model.contacts:
         return
     t, q, u, live = data.t_m, data.q_m, data.u, data.live
@@ -76,7 +78,8 @@ def contours(model, data, dt):
             data.spheres_started = True
         data.stats["pruned_contacts"] += model.spheres.prune(q, t, data.sphere_centres, data.sphere_radii, live,
                                                              data.closed)
-    for j in range(K.contours_in_use(model.owner_at, model.owners, live, data.contour_idx)):
+    n_contours = K.contours_in_use(model.owner_at, model.owners, live, data.contour_idx) if model.owners.size else 0
+    for j in range(n_contours):
         contour, owners, qs, us = model.contours[data.contour_idx[j]]
         if qs is None:
             contour.update(None, None, t)
@@ -92,10 +95,12 @@ def detect(model, data, dt):
     n_closed = 0
     last = data.last
     m = model.n_c
+    fused = model.fused
     for j in range(data.n_live):
         i = data.live_idx[j]
         c = model.contacts[i]
-        closed = c.locate()
+        f = fused[i]
+        closed = c.locate() if f is None else f.locate(data.q_m, data.u, data.t_m)
         data.closed[i] = closed
         if closed:
             if model.set_valued[i]:
@@ -239,18 +244,18 @@ def iteration_factor(model, data, dt):
     (Fortran order); for a constant M̂ the factor of this step size, computed once (steps
     landing on output times differ by rounding: within 1e-12 Δt they share it)."""
     if model.constant_iteration:
-        if dt == data.factor_dt:             # the last step's size (``data.factor`` its factor)
-            return data.factor
+        if dt == data.factor_dt:             # the last step's size
+            return data.factor_last
         for step_size, factor in data.factors:
             if abs(step_size - dt) <= 1e-12 * dt:
-                data.factor_dt, data.factor = dt, factor
+                data.factor_dt, data.factor_last = dt, factor
                 return factor
         if len(data.factors) > 8:            # step-size control: keep the latest few
             data.factors.clear()
         data.M[...] = model.equations.mass_matrix(data.t_m, data.q_m)
         factor = _factor(model, data, dt, _factor_array(model))
         data.factors.append((dt, factor))
-        data.factor_dt, data.factor = dt, factor
+        data.factor_dt, data.factor_last = dt, factor
         return factor
     if data.factor is None:
         data.factor = _factor_array(model)

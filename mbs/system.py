@@ -185,7 +185,7 @@ class System:
     # --- simulation ---------------------------------------------------------------------
     def simulate(self, t_end, dt, integrator="generalized-alpha", t_out=None, outputs=None,
                  energies=False, q0=None, u0=None, breakpoints=(), plan=True, tolerance=None, contacts=False,
-                 recorder=None, progress=None, **options):
+                 recorder=None, progress=None, checkpoint=None, **options):
         """Integrate from t = 0 to ``t_end`` [s] with step ``dt`` [s].
 
         ``integrator``: "generalized-alpha" (implicit, default; option ``rho_inf``),
@@ -211,6 +211,9 @@ class System:
         ``recorder``: streams the samples to a result file while the run goes and takes
         checkpoints (:class:`mbs.result_file.ResultRecorder`); ``progress``: a callable
         (t) called after each output time (e.g. :func:`ffrmbs_app.progress.progress_bar`).
+        ``checkpoint``: a :class:`mbs.checkpoint.Checkpoint` of this same run (same
+        arguments, same System built afresh): the run continues from it
+        (:meth:`mbs.integrators.driver.Integrator.run`).
         """
         from .integrators import integrator_class
 
@@ -228,4 +231,4 @@ class System:
         return integrator_class(integrator)(self, **options).run(
             q0, u0, t_end, dt, t_out, outputs or {}, energies,
             set(breakpoints).union(*(f.breakpoints() for f in self.forces)), the_plan,
-            recorder=recorder, progress=progress, contacts=contacts)
+            recorder=recorder, progress=progress, contacts=contacts, checkpoint=checkpoint)

@@ -1,5 +1,4 @@
-"""Shared fixtures: small meshes of the report's beam (built once per session); the
-checkpoint key of the test runs in a temporary directory, never the user's."""
+"""Shared fixtures: small meshes of the report's beam (built once per session)."""
 
 import pytest
 
@@ -7,16 +6,6 @@ from contours import Contour1sNeutralFFR
 from mbs import FlexibleBodyFFR
 from preprocess import Material, build_body
 from preprocess.geometry import box
-
-
-@pytest.fixture(scope="session", autouse=True)
-def checkpoint_key_dir(tmp_path_factory):
-    """$FFRMBS_CONFIG (the checkpoint key's directory, mbs.checkpoint) for the whole
-    session, subprocesses included: the tests never write to the user's config."""
-    with pytest.MonkeyPatch.context() as mp:
-        path = tmp_path_factory.mktemp("ffrmbs-config")
-        mp.setenv("FFRMBS_CONFIG", str(path))
-        yield path
 
 
 @pytest.fixture(scope="session")

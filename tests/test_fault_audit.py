@@ -6,6 +6,7 @@ from __future__ import annotations
 import pickle
 from collections import Counter
 
+import numpy as np
 import pytest
 
 from ffrmbs.errors import InputFileError
@@ -51,7 +52,7 @@ def test_the_case_table_covers_every_kind_with_at_least_102_cases():
     kinds = Counter(c.kind for c in cases)
     assert set(kinds) == set(fa.KINDS) and min(kinds.values()) >= 10
     assert all(c.expect for c in cases), "every bad input names what a clear message must mention"
-    assert sum(c.marker is not None for c in cases) == 2      # the planted pickles, with and without the header
+    assert sum(c.marker is not None for c in cases) == 3      # the planted pickles: bare, old header, in an .npz
 
 
 @pytest.mark.parametrize("name, source, options, expect", fa.MESH_OPTIONS, ids=[c[0] for c in fa.MESH_OPTIONS])
@@ -71,23 +72,38 @@ def test_bad_preprocess_options_reach_the_command(name, source, options, expect)
 def test_the_planted_pickle_runs_its_command_when_loaded(tmp_path):
     """The planted checkpoint is a real threat: unpickling it creates the marker."""
     ckpt = tmp_path / "x.h5.ckpt"
-    fa.planted_pickle(fa.FORGED_HEADER, "EXECUTED")(ckpt, tmp_path)
+    fa.planted_pickle(fa.PICKLED_HEADER, "EXECUTED")(ckpt, tmp_path)
     data = ckpt.read_bytes()
-    assert data.startswith(fa.FORGED_HEADER)
+    assert data.startswith(fa.PICKLED_HEADER)
     assert not (tmp_path / "EXECUTED").exists()
-    pickle.loads(data[len(fa.FORGED_HEADER):])
+    pickle.loads(data[len(fa.PICKLED_HEADER):])
     assert (tmp_path / "EXECUTED").exists()
 
 
-@pytest.mark.parametrize("name", ["resume_planted_pickle_with_header", "resume_truncated_checkpoint"])
-def test_the_planted_checkpoints_pass_the_header_and_reach_the_signature_check(tmp_path, name):
-    """The header cases carry mbs.checkpoint's current header (magic, 64 hex characters,
-    newline), so it is the signature check that refuses them, not the header."""
+def test_the_planted_object_array_runs_its_command_when_loaded_with_pickles_allowed(tmp_path):
+    """The planted .npz is a real threat to a reader that allows pickles."""
+    ckpt = tmp_path / "x.h5.ckpt"
+    fa.planted_object_array("EXECUTED")(ckpt, tmp_path)
+    with np.load(ckpt, allow_pickle=True) as npz:
+        npz["plant"]
+    assert (tmp_path / "EXECUTED").exists()
+
+
+@pytest.mark.parametrize("name, refusal", [
+    ("resume_planted_pickle", "not an ffrmbs checkpoint, or damaged"),
+    ("resume_planted_pickle_with_header", "a pickled checkpoint of an older ffrmbs (ffrmbs-checkpoint-2): refused"),
+    ("resume_planted_object_array", "not an ffrmbs checkpoint, or damaged (ValueError: 'Object arrays cannot"),
+    ("resume_truncated_checkpoint", "not an ffrmbs checkpoint, or damaged"),
+])
+def test_the_planted_checkpoints_are_refused_unread(tmp_path, name, refusal):
+    """Each planted or damaged checkpoint of the audit is refused by read_checkpoint, and
+    nothing it holds runs."""
     path, make = [f for f in _case(f"run_{name}").files if f[0] == fa.CKPT][0]
     ckpt = tmp_path / "x.h5.ckpt"
     make(ckpt, tmp_path)
-    with pytest.raises(InputFileError, match="signature does not match"):
+    with pytest.raises(InputFileError) as err:
         read_checkpoint(ckpt)
+    assert refusal in str(err.value)
     assert not (tmp_path / "EXECUTED").exists()
 
 

@@ -53,7 +53,6 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from mbs.checkpoint import MAGIC, SIGNATURE_CHARS
 from validation.harness import cell, write_atomic
 
 KINDS = ("scene", "body", "mesh", "run", "result")
@@ -62,7 +61,7 @@ TIMEOUT = 60.0                  # [s] per case
 MEMORY_LIMIT = 4 << 30          # [bytes] address space per case
 MAX_MESSAGE = 300               # [characters] of a clear message
 ERROR_PREFIX = "ffrmbs: error:"
-FORGED_HEADER = MAGIC + b"0" * SIGNATURE_CHARS + b"\n"   # mbs.checkpoint's header, a forged signature
+PICKLED_HEADER = b"ffrmbs-checkpoint-2\n" + b"0" * 64 + b"\n"   # the older pickled format's, a forged signature
 FAST_RUN = ("--t-end", "0.001", "--no-check", "--no-export")   # the default scene, 100 steps
 OUT = "{case}/out"
 
@@ -205,6 +204,16 @@ def planted_pickle(header: bytes, marker: str):
     """A checkpoint made of ``header`` and a pickle that creates the file ``marker`` beside
     the checkpoint when loaded."""
     return lambda path, shared: path.write_bytes(header + pickle.dumps(_Planted(path.parent / marker)))
+
+
+def planted_object_array(marker: str):
+    """A checkpoint in the current format (an .npz) with a header and an object array
+    whose pickle creates the file ``marker`` beside the checkpoint when loaded."""
+    def build(path, shared):
+        with open(path, "wb") as f:
+            np.savez(f, header=np.frombuffer(b'{"format": "ffrmbs-checkpoint", "format_version": 3}', dtype=np.uint8),
+                     plant=np.array([_Planted(path.parent / marker)], dtype=object))
+    return build
 
 
 # --- the valid inputs every case starts from -------------------------------------------------
@@ -699,10 +708,12 @@ RESUME_CASES = [
     ("resume_without_checkpoint", _resume(RESULT)),
     ("resume_garbage_checkpoint", _resume((*RESULT, (CKPT, text("garbage\n" * 10))))),
     ("resume_empty_checkpoint", _resume((*RESULT, (CKPT, raw(b""))))),
-    ("resume_truncated_checkpoint", _resume((*RESULT, (CKPT, raw(FORGED_HEADER + b"\x80\x05\x95"))))),
+    ("resume_truncated_checkpoint", _resume((*RESULT, (CKPT, raw(b"PK\x03\x04" + b"\x00" * 40))))),
     ("resume_planted_pickle", _resume((*RESULT, (CKPT, planted_pickle(b"", "EXECUTED"))), marker="out/EXECUTED")),
     ("resume_planted_pickle_with_header",
-     _resume((*RESULT, (CKPT, planted_pickle(FORGED_HEADER, "EXECUTED"))), marker="out/EXECUTED")),
+     _resume((*RESULT, (CKPT, planted_pickle(PICKLED_HEADER, "EXECUTED"))), marker="out/EXECUTED")),
+    ("resume_planted_object_array", _resume((*RESULT, (CKPT, planted_object_array("EXECUTED"))),
+                                            marker="out/EXECUTED")),
     ("resume_checkpoint_directory", _resume((*RESULT, (CKPT, folder())))),
 ]
 

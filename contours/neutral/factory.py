@@ -67,6 +67,10 @@ class NeutralContour(Contour):
         the state and the cache.
     """
 
+    #: what update() and the lazy products wrote (:mod:`mbs.state_arrays`)
+    run_state = ("_state", "_span", "T", "_has_u", "_fields_stamp", "_velocity_stamp", "_local_position",
+                 "_position_field", "_velocity_field")
+
     def __init__(self, body, space, nodal_u0, nodal_phi, name, compiled=True):
         super().__init__(body, name)
         self.space = space
@@ -96,7 +100,7 @@ class NeutralContour(Contour):
         self.q_f, self.qdot_f = s[K.Q_AT:K.Q_AT + n_f], s[K.Q_AT + n_f:]
         self.T = None
         self._has_u = False
-        self._fields_current = self._velocity_current = False
+        self._fields_stamp = self._velocity_stamp = -1.0   # the state stamps the products were synced at
 
     def _alloc_kernel_data(self, n_f):
         """The kernels' arrays (P_ū0, P_Φ, state, span cache), the constants of the O(n_f)
@@ -104,6 +108,7 @@ class NeutralContour(Contour):
         ctrl0 = self._local_position.ctrl0
         phi = self.mode_shapes.ctrl if n_f else np.zeros(self.space.ctrl_shape + (0,))
         span = np.full(K.SPAN_KEY + 3 * int(np.prod([d.p + 1 for d in self._directions()])), -1.0)
+        self._span = span
         self.kernel_data = self.space.geometry + (ctrl0, phi, self._state, span)
         P0 = ctrl0.reshape(-1, 3)
         self._box0 = (P0.min(axis=0), P0.max(axis=0))
@@ -161,17 +166,18 @@ class NeutralContour(Contour):
     @property
     def velocity_field(self) -> NeutralNurbsVelocity:
         """The ṙ product, its control points at the state of the last update (if it had u)."""
-        if self._has_u and not self._velocity_current:
+        if self._has_u and self._velocity_stamp != self._state[K.STAMP_AT]:
             self._velocity_field.update(self.v, self.A, self.w, self.local_position, self.qdot_f)
-            self._velocity_current = True
+            self._velocity_stamp = self._state[K.STAMP_AT]
         return self._velocity_field
 
     def _sync_fields(self):
-        """P_ū = P_ū0 + P_Φ q_f and P_r = R + A P_ū over all control points, once per update."""
-        if not self._fields_current:
+        """P_ū = P_ū0 + P_Φ q_f and P_r = R + A P_ū over all control points, once per
+        update (per stamp of the state: whoever writes the state stamps it)."""
+        if self._fields_stamp != self._state[K.STAMP_AT]:
             self._local_position.update(self.q_f)
             self._position_field.update(self.R, self.A, self._local_position)
-            self._fields_current = True
+            self._fields_stamp = self._state[K.STAMP_AT]
 
     def _require_velocity(self):
         if not self._has_u:
@@ -187,7 +193,6 @@ class NeutralContour(Contour):
         self._has_u = u is not None
         if self._has_u:
             K.store_velocity(self._state, v, w, body.elastic_velocities(u))
-        self._fields_current = self._velocity_current = False
 
     def evaluate(self, point, eta, xi=0.0, velocity=False, jacobians=False):
         """Fields at (η, ξ) (see :meth:`Contour.evaluate`); J_T = [1, −A ũ T, A Φ] and
@@ -269,12 +274,14 @@ class Contour1sNeutralFactory(NeutralContour):
     n = the body-frame reference direction ``normal`` (rotated with the body, made
     perpendicular to t1), t2 = n × t1."""
 
+    run_state = NeutralContour.run_state + ("_n_ref",)
+
     def __init__(self, body, space, nodal_u0, nodal_phi, normal, name, compiled=True):
         normal = np.asarray(normal, dtype=float).reshape(3)
         if not np.linalg.norm(normal) > 0:
             raise ModelError(f"{name}: the reference normal must be a nonzero vector, got {normal}")
         self.normal_ref = normal / np.linalg.norm(normal)
-        self._n_ref = np.zeros(3)
+        self._n_ref = np.zeros(3)       # A n̄_ref of the last update
         super().__init__(body, space, nodal_u0, nodal_phi, name, compiled)
 
     def update(self, q, u=None, t=0.0) -> None:

@@ -32,6 +32,8 @@ class NeutralNurbs(ABC):
     ``ctrl`` has shape space.ctrl_shape + (width,).
     """
 
+    run_state = ("ctrl",)       # the control points at the last update (mbs.state_arrays)
+
     def __init__(self, space, width: int):
         self.space = space
         self.ctrl = np.zeros(space.ctrl_shape + (width,))
@@ -97,6 +99,8 @@ class NeutralNurbsPosition(NeutralNurbs):
 
 class NeutralNurbsVelocity(NeutralNurbs):
     """ṙ = v + A (ω̄ × ū + Φ q̇_f), inertial [m/s] (thesis eq. 2.32)."""
+
+    run_state = ("ctrl", "_modal")
 
     def __init__(self, space):
         super().__init__(space, 3)

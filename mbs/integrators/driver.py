@@ -7,9 +7,10 @@ handler) and a progress callback.
 A run compiles the System under its plan into a :class:`~mbs.model.Model` and keeps
 everything that changes in a :class:`~mbs.model.Data` (``t``, ``q``, ``u`` of an
 integrator are Data's); the System is never mutated. A run is resumable at every
-output sample: its whole state — the integrator with its model and data, the sampling
-plan, the samples so far — is one object graph (the integrator and its
-:class:`RunState`), which :func:`resume` continues bit for bit."""
+output sample: a checkpoint holds its state as arrays — the Data, the integrator's own
+state (:meth:`Integrator.collect`), the :class:`RunState` and the samples so far, the
+contours' and contacts' run state — and :meth:`Integrator.run` given that checkpoint
+prepares the same run from its inputs, loads the arrays and continues bit for bit."""
 
 from __future__ import annotations
 
@@ -22,6 +23,7 @@ from threadpoolctl import threadpool_limits
 
 from ffrmbs.errors import ModelError, RunInterrupted, SimulationError
 
+from .. import state_arrays
 from .._kernels import finite_sum
 from ..model import Data, compile_model
 from ..probes import FramePosition, probe
@@ -103,6 +105,7 @@ class Integrator:
     equal steps; step-size controlled integrators override it."""
 
     name = "integrator"
+    run_state = ("steps", "iterations")     # what a checkpoint keeps of the integrator (mbs.state_arrays)
 
     def __init__(self, system):
         self.system = system
@@ -143,6 +146,14 @@ class Integrator:
         self.plan = plan
         self.model = compile_model(self.system, plan, **self.model_options())
         self.data = Data(self.model)
+
+    def collect(self, prefix, arrays: dict, kinds: dict) -> None:
+        """The integrator's own run state (its ``run_state``) under ``prefix/…``."""
+        state_arrays.collect(self, prefix, arrays, kinds)
+
+    def restore(self, prefix, arrays, kinds) -> None:
+        """The state :meth:`collect` saved (after :meth:`start` built the workspaces)."""
+        state_arrays.restore(self, prefix, arrays, kinds)
 
     def model_options(self) -> dict:
         """Options of :func:`mbs.model.compile_model` the integrator fixes (Moreau: θ, solver)."""
@@ -197,7 +208,7 @@ class Integrator:
         raise NotImplementedError
 
     def run(self, q0, u0, t_end, dt, t_out, outputs, energies, breakpoints=(), plan=None,
-            recorder=None, progress=None, contacts=False):
+            recorder=None, progress=None, contacts=False, checkpoint=None):
         """Integrate and sample (see ``System.simulate``). At each breakpoint t_b the
         integration ends at t_b − 1e-12 max(1, t_b) s, safely below t_b despite rounding
         (so loads that jump at t_b act with their left limit), and restarts at t_b with
@@ -216,10 +227,20 @@ class Integrator:
         reads the new rows of ``self.state.result`` and may take a checkpoint),
         ``checkpoint(self)``, ``end(self, status)``. ``progress``: a
         callable (t) after each landing. ``contacts``: also record each contact's state
-        (``Result.contacts``)."""
+        (``Result.contacts``).
+
+        ``checkpoint`` (:class:`mbs.checkpoint.Checkpoint` of this run, taken at an output
+        sample): continue from it — the run is prepared as above from the same inputs,
+        its state loaded from the checkpoint's arrays, and the result (samples before the
+        checkpoint included) equals the uninterrupted run's bit for bit; the recorder
+        gets ``resume(self)``."""
         self.dt = dt
         self.state = self._prepare(q0, u0, t_end, dt, t_out, outputs, energies, breakpoints, plan, contacts)
-        return self._go(recorder, progress, fresh=True)
+        if checkpoint is not None:
+            checkpoint.restore(self)
+            self.state.resumed_at.append(float(self.t))
+            self.state.resumed_steps = self.steps
+        return self._go(recorder, progress, fresh=checkpoint is None)
 
     def _prepare(self, q0, u0, t_end, dt, t_out, outputs, energies, breakpoints, plan, contacts):
         sys = self.system
@@ -359,13 +380,3 @@ class Integrator:
                     rec["normal"][i] = k.n
                 self.contact_force(j, rec["force"][i])
 
-
-def resume(integrator, recorder=None, progress=None):
-    """Continue a run restored from a checkpoint (an integrator whose :class:`RunState` was
-    saved at an output sample) to its end; returns the full :class:`~mbs.result.Result`."""
-    st = integrator.state
-    if st is None:
-        raise ModelError("this integrator has no run to resume")
-    st.resumed_at.append(float(integrator.t))
-    st.resumed_steps = integrator.steps
-    return integrator._go(recorder, progress, fresh=False)

@@ -57,6 +57,7 @@ class GeneralizedAlpha(Integrator):
     """
 
     name = "generalized-alpha"
+    run_state = Integrator.run_state + ("a", "abar", "lam")      # u̇_n, ā_n, λ_n
 
     def __init__(self, system, rho_inf=0.9, tol=1e-10, max_iter=30):
         super().__init__(system)

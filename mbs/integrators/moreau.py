@@ -86,7 +86,7 @@ import numpy as np
 from contact.solver import ProxSolver
 from ffrmbs.errors import ModelError
 
-from .. import stages
+from .. import stages, state_arrays
 from .driver import Integrator, StepFailure, non_finite
 
 TRACE_KEYS = ("t", "dt", "closed", "penetration", "iterations", "residual", "impulse_work", "energy")
@@ -143,6 +143,20 @@ class MoreauTimeStepping(Integrator):
 
     trace_units = TRACE_UNITS
 
+    def collect(self, prefix, arrays, kinds):
+        """The counters and the per-step trace rows so far (``prefix/trace/<key>``)."""
+        super().collect(prefix, arrays, kinds)
+        for key, rows in self.trace().items():
+            arrays[f"{prefix}/trace/{key}"], kinds[f"{prefix}/trace/{key}"] = rows, "array"
+
+    def restore(self, prefix, arrays, kinds):
+        super().restore(prefix, arrays, kinds)
+        if self._trace is not None:
+            self._trace = {key: state_arrays.take(f"{prefix}/trace/{key}", None, arrays, kinds).tolist()
+                           for key in TRACE_KEYS}
+        elif any(key.startswith(f"{prefix}/trace/") for key in kinds):
+            raise state_arrays.StateMismatch("the checkpoint has a trace, this run keeps none")
+
     def trace(self, start=0):
         if self._trace is None:
             return {}
@@ -188,6 +202,7 @@ class AdaptiveMoreauTimeStepping(MoreauTimeStepping):
     """
 
     name = "moreau-adaptive"
+    run_state = MoreauTimeStepping.run_state + ("h_next", "_pen")      # the next step size, the last penetration
 
     def __init__(self, system, atol=1e-6, rtol=1e-4, dt_min=1e-9, gap_tol=None, **options):
         super().__init__(system, **options)

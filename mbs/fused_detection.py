@@ -1,0 +1,139 @@
+"""Fused detection: the contour update and the detection of one contact in one compiled
+call per step (stages 3 and 4 of :mod:`mbs.stages` for the pair kinds that have one).
+
+The Python path of a contact is ``contour.update`` of its two contours (contour stage)
+and :meth:`contact.Contact.locate` (detection stage): a dozen numba calls glued by
+Python. For the pair kinds below :func:`fused_detection` gives an object whose
+:meth:`~PointOnNeutral2s.locate` does both in one kernel
+(:mod:`._fused_detection_kernels`), on the same objects' arrays, so that the contours,
+the contact points, the kinematics (g_N, frame, Jacobian pieces), the search's warm
+start and counters hold afterwards what the Python path leaves there. It returns to the
+Python path whenever the kernel cannot finish the step: no warm start (the first
+search, or the last one found nothing) or Newton from it failed — the Python path then
+searches the coarse grid (:mod:`contact.search`).
+
+Kinds with a fused detection:
+
+* :class:`PointOnNeutral2s`: a point on a point mass (``PointContour``) against a
+  compiled neutral 2s contour (:class:`~contours.neutral.factory.Contour2sNeutralFactory`)
+  of a body on a frame fixed in space, ``ContactKinematicsPointContour2s`` with a
+  compiled ``Contact2sSearch``, any law of :class:`contact.Contact`.
+
+Every other contact keeps the Python path (which stays the reference of the fused ones,
+``tests/test_fused_detection.py``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from contact.contact import Contact
+from contact.kinematics import ContactKinematicsPointContour2s, buffer_layout
+from contact.search import Contact2sSearch
+from contours.neutral.factory import Contour2sNeutralFactory
+from contours.rigid import PointContour
+
+from . import _fused_detection_kernels as K
+
+
+def fused_detection(contact):
+    """The fused detection of ``contact`` (:class:`PointOnNeutral2s`) when its kind has
+    one and its bodies belong to a System, else None (the Python path)."""
+    if PointOnNeutral2s.applies(contact):
+        return PointOnNeutral2s(contact)
+    return None
+
+
+class PointOnNeutral2s:
+    """Stages 3 and 4 of a point on a point mass against a neutral 2s contour on a body
+    at rest (module docstring) in one call of
+    :func:`._fused_detection_kernels.point_on_neutral_2s`.
+
+    Parameters
+    ----------
+    contact : Contact
+        With ``ContactKinematicsPointContour2s`` (:meth:`applies`).
+    """
+
+    @staticmethod
+    def applies(contact) -> bool:
+        """True for a :class:`~contact.Contact` of a point on a point mass against a compiled
+        neutral 2s contour on a body whose frame is fixed in space, searched by a compiled
+        ``Contact2sSearch``, both bodies in a System."""
+        if type(contact) is not Contact:
+            return False
+        k = contact.kinematics
+        if type(k) is not ContactKinematicsPointContour2s:
+            return False
+        point, surface = k.contour1, k.contour2
+        body1, body2 = point.body, surface.body
+        return (type(point) is PointContour and body1 is not None and body1.translation_only
+                and isinstance(surface, Contour2sNeutralFactory) and surface.compiled
+                and max(surface.space.eta.p, surface.space.xi.p) <= K.MAX_DEGREE
+                and body2 is not None and getattr(body2, "frame_at_rest", False)
+                and type(k.search) is Contact2sSearch and k.search.compiled
+                and body1.q_slice is not None and body2.q_slice is not None)
+
+    def __init__(self, contact):
+        self.contact = contact
+        k = self.kinematics = contact.kinematics
+        point, surface = k.contour1, k.contour2
+        self.point, self.surface, self.search = point, surface, k.search
+        self.velocity = not contact.set_valued
+        self.closing_tol = contact.closing_tol
+        body1, body2 = point.body, surface.body
+        knots_e, knots_x, ints, floats, ctrl0, phi, state, span = surface.kernel_data
+        n_f = surface.n_modes
+        itab = np.zeros(K.ITAB_SIZE, dtype=np.int64)
+        itab[K.QP], itab[K.UP] = body1.q_slice.start, body1.u_slice.start
+        itab[K.QF] = body2.q_slice.start + body2._f.start
+        itab[K.UF] = body2.u_slice.start + body2._fu.start
+        itab[K.NF], itab[K.NU1], itab[K.NU2] = n_f, point.nu, surface.nu
+        itab[K.VELOCITY], itab[K.BOX] = self.velocity, contact.margin is not None
+        itab[K.GEOM_AT:K.GEOM_AT + 6] = ints
+        itab[K.KNOTS_E_N], itab[K.KNOTS_X_N] = knots_e.size, knots_x.size
+        itab[K.KIN_AT:K.KIN_AT + 8] = buffer_layout(point.nu, surface.nu)
+        lo0, hi0 = surface._box0
+        ftab = np.concatenate((np.zeros(K.KNOTS_AT), knots_e, knots_x, lo0, hi0, surface._phi_bound.ravel()))
+        ftab[K.MARGIN] = 0.0 if contact.margin is None else contact.margin
+        ftab[K.SIGN] = surface.sign
+        ftab[K.OFFSET_AT:K.OFFSET_AT + 3] = point.frame_ref.u0
+        ftab[K.FLOATS_AT:K.FLOATS_AT + 4] = floats
+        self._itab, self._ftab = itab, ftab
+        self._newton_settings()
+        work = np.zeros(K.work_size(n_f))
+        self._args = (itab, ftab, ctrl0, phi, state, span, point.state, k.point1.buffer, k.point2.buffer, k.buffer,
+                      k.start, k.search.counts, work)
+        self._updates = [(c, c.body.q_slice, c.body.u_slice) for c in (point, surface)]
+
+    def _newton_settings(self):
+        """Newton's step caps and tolerance from the search (NaN tolerance while its
+        length scale is not known: the kernel falls back)."""
+        settings = self.search.newton_settings()
+        if settings is None:
+            self._ftab[K.TOL2] = np.nan
+            return
+        (self._ftab[K.MAX_STEP_E], self._ftab[K.MAX_STEP_X]), self._ftab[K.TOL2], self._itab[K.MAX_ITER] = settings
+
+    def locate(self, q, u, t) -> bool:
+        """Both contours updated at the global (q, u, t) and the contact located, as
+        ``contour.update`` then :meth:`Contact.locate` (the Python path when the kernel
+        falls back): True when closed (g_N <= closing_tol)."""
+        outcome, g_N, gd_N, eta, xi = K.point_on_neutral_2s(q, u, *self._args)
+        self.surface._has_u = True
+        if outcome == K.LOCATED:
+            k = self.kinematics
+            k.active = True
+            k.g_N = g_N
+            if self.velocity:
+                k.gd_N = gd_N
+            k.point2.eta, k.point2.xi = eta, xi
+            return g_N <= self.closing_tol
+        if outcome == K.APART:
+            return False
+        for contour, qs, us in self._updates:
+            contour.update(q[qs], u[us], t)
+        closed = self.contact.locate()
+        if np.isnan(self._ftab[K.TOL2]):
+            self._newton_settings()
+        return closed

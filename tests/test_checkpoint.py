@@ -1,0 +1,304 @@
+"""Checkpoints are the run's state as arrays (mbs.checkpoint, mbs.state_arrays): a run
+stopped at an output sample and continued from its checkpoint — the scene built afresh,
+the arrays loaded into it — gives the uninterrupted run's result bit for bit, for every
+integrator, with contacts closed at the checkpoint; a checkpoint of another run, a
+damaged file and a pickle are refused with one line, and nothing in the file runs.
+
+The oracle is the uninterrupted run of the same scene in the same process, its result
+arrays and its result file compared byte for byte."""
+
+from __future__ import annotations
+
+import pickle
+import zipfile
+
+import h5py
+import numpy as np
+import pytest
+
+from ffrmbs.errors import InputFileError, RunInterrupted
+from ffrmbs_app.scenes import point_mass_beam as pmb
+from mbs import FlexibleBodyFFR, Joint, System
+from mbs import state_arrays
+from mbs.checkpoint import read_checkpoint
+from mbs.integrators import driver
+from mbs.result_file import ResultRecorder
+
+
+# --- scenes ---------------------------------------------------------------------------------
+
+def beam_on_mass(modes=20, law="impact", contour="2s"):
+    """The default scene (setup A): a point mass falling onto the clamped beam."""
+    scene = pmb.build(modes=modes, law=law, contour=contour)
+    return scene.system, scene.outputs()
+
+
+def pendulum(modes=4):
+    """The default beam as a free FFR body pinned at its frame origin under gravity (a
+    joint: λ)."""
+    system = System(gravity=(0.0, -9.81, 0.0))
+    beam = system.add(FlexibleBodyFFR(pmb.default_beam_data(), modes=modes, name="beam"))
+    system.add(Joint.revolute(system.ground, beam.origin, axis=(0.0, 0.0, 1.0)))
+    tip = beam.node(int(np.argmax(beam.data.u0[:, 0])), name="tip")
+    return system, {"tip": tip}
+
+
+CASES = {   # name: (scene, integrator options, t_end [s], dt [s], samples, stop at [s], contacts closed there)
+    "moreau": (beam_on_mass, dict(integrator="moreau", trace=True), 0.016, 1e-5, 161, 0.0125, True),
+    "moreau-theta-1-band-penalty": (lambda: beam_on_mass(law="penalty", contour="band"),
+                                    dict(integrator="moreau", trace=True, theta=1.0), 0.016, 1e-5, 161, 0.0132,
+                                    True),
+    "moreau-adaptive": (beam_on_mass, dict(integrator="moreau-adaptive", trace=True, atol=1e-7),
+                        0.016, 1e-4, 161, 0.0125, True),
+    "generalized-alpha": (pendulum, dict(integrator="generalized-alpha"), 0.02, 1e-3, 21, 0.01, False),
+    "rk4": (pendulum, dict(integrator="rk4"), 0.004, 2e-5, 21, 0.002, False),
+}
+
+
+def simulate(case, path, stop_at=None, checkpoint=None, modes=None):
+    """Run ``case`` recording to ``path``; with ``stop_at`` [s] stop at the first output
+    sample from then on (a checkpoint is taken there); with ``checkpoint`` continue it."""
+    make, options, t_end, dt, n_out, *_ = CASES[case]
+    system, outputs = make() if modes is None else make(modes=modes)
+
+    def progress(t):
+        if stop_at is not None and t >= stop_at:
+            driver.request_stop("test")
+
+    driver.clear_stop()
+    try:
+        return system.simulate(t_end, dt, t_out=np.linspace(0.0, t_end, n_out), outputs=outputs, energies=True,
+                               contacts=bool(system.contacts), progress=progress, checkpoint=checkpoint,
+                               recorder=ResultRecorder(path, checkpoint_every=None), **options)
+    finally:
+        driver.clear_stop()
+
+
+def datasets(path) -> dict:
+    found = {}
+    with h5py.File(path, "r") as f:
+        f.visititems(lambda name, obj: found.__setitem__(name, obj[()]) if isinstance(obj, h5py.Dataset) else None)
+    return found
+
+
+def assert_same_bits(a, b):
+    assert sorted(a) == sorted(b)
+    for name in a:
+        x, y = np.asarray(a[name]), np.asarray(b[name])
+        assert x.dtype == y.dtype and x.shape == y.shape and x.tobytes() == y.tobytes(), f"{name} differs"
+
+
+def result_arrays(res) -> dict:
+    arrays = {"t": res.t, "q": res.q, "u": res.u}
+    arrays.update({f"outputs/{k}": v for k, v in res.outputs.items()})
+    arrays.update({f"energy/{k}": v for k, v in res.energy.items()})
+    arrays.update({f"trace/{k}": v for k, v in res.trace.items()})
+    arrays.update({f"contacts/{c}/{k}": v for c, rec in res.contacts.items() for k, v in rec.items()})
+    return arrays
+
+
+COUNTERS = ("steps", "newton_iterations", "closed_contacts", "solver_iterations", "max_penetration",
+            "pruned_contacts", "rejected_steps", "forced_steps", "smallest_dt", "largest_dt")
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory):
+    """{case: (uninterrupted result, its file, the checkpoint, resumed result, its file)}."""
+    out = {}
+    for case in CASES:
+        d = tmp_path_factory.mktemp(case)
+        whole = simulate(case, d / "whole.h5")
+        with pytest.raises(RunInterrupted):
+            simulate(case, d / "cut.h5", stop_at=CASES[case][5])
+        kept = d / "kept.h5.ckpt"            # the run removes its checkpoint when it completes
+        kept.write_bytes((d / "cut.h5.ckpt").read_bytes())
+        ckpt = read_checkpoint(kept)
+        resumed = simulate(case, d / "cut.h5", checkpoint=ckpt)
+        out[case] = whole, d / "whole.h5", ckpt, resumed, d / "cut.h5"
+    return out
+
+
+@pytest.mark.parametrize("case", list(CASES))
+def test_a_resumed_run_equals_the_uninterrupted_one_bit_for_bit(runs, case):
+    whole, whole_file, ckpt, resumed, resumed_file = runs[case]
+    closed = ckpt.arrays["data/closed"]
+    assert bool(closed.any()) == CASES[case][6], "the checkpoint is taken with the contact closed"
+    assert 0 < ckpt.arrays["run/recorded"] < len(whole.t)
+    assert_same_bits(result_arrays(whole), result_arrays(resumed))
+    assert_same_bits(datasets(whole_file), datasets(resumed_file))
+    for key in COUNTERS:
+        assert whole.stats.get(key) == resumed.stats.get(key), key
+    assert resumed.stats["resumed_at"] == [float(ckpt.arrays["data/t"])]
+
+
+def test_a_checkpoint_holds_only_plain_arrays(runs):
+    """Every entry a numeric, boolean or text array: nothing that needs code to build."""
+    ckpt = runs["moreau"][2]
+    with zipfile.ZipFile(ckpt.path) as z:
+        assert all(i.compress_type == zipfile.ZIP_STORED for i in z.infolist())
+    for name, value in ckpt.arrays.items():
+        assert value.dtype.kind in "biufU", name
+    assert {"data/q", "data/u", "data/lam_prev", "integrator/trace/energy", "contour/1/_state",
+            "contact/0/kinematics/start", "result/outputs/y"} <= set(ckpt.arrays)
+
+
+def test_the_contour_and_search_state_is_in_the_checkpoint(runs):
+    """The run state that lives in objects: the contour's state vector (R, A, q_f, …)
+    equals the body state at the last midpoint, and the warm start of the search is a
+    point of the contour's domain."""
+    ckpt = runs["moreau"][2]
+    eta, xi = ckpt.arrays["contact/0/kinematics/start"]
+    assert 0.0 <= eta <= 1.0 and 0.0 <= xi <= 1.0
+    state = ckpt.arrays["contour/1/_state"]
+    modes = 20
+    assert np.array_equal(state[-2 * modes:-modes], ckpt.arrays["data/q_m"][:modes])
+
+
+# --- refusals --------------------------------------------------------------------------------
+
+def _resume_error(case, ckpt, tmp_path, **kw):
+    with pytest.raises(InputFileError) as err:
+        simulate(case, tmp_path / "other.h5", checkpoint=ckpt, **kw)
+    message = str(err.value)
+    assert "\n" not in message and str(ckpt.path) in message
+    return message
+
+
+def test_a_checkpoint_of_another_mode_count_is_refused(runs, tmp_path):
+    message = _resume_error("moreau", runs["moreau"][2], tmp_path, modes=10)
+    assert "a checkpoint of another run: its bodies" in message and "restart the run" in message
+
+
+def test_a_checkpoint_of_another_integrator_is_refused(runs, tmp_path):
+    ckpt = runs["generalized-alpha"][2]
+    message = _resume_error("rk4", ckpt, tmp_path)
+    assert "its integrator is '\"generalized-alpha\"'" in message
+
+
+def test_an_array_of_the_wrong_shape_is_refused(runs, tmp_path):
+    ckpt = runs["moreau"][2]
+    edited = read_checkpoint(ckpt.path)
+    edited.arrays["data/lam_prev"] = np.zeros(7)
+    message = _resume_error("moreau", edited, tmp_path)
+    assert "data/lam_prev has shape (7,) float64, this run's (1,) float64" in message
+
+
+def test_a_missing_array_is_refused(runs, tmp_path):
+    edited = read_checkpoint(runs["moreau"][2].path)
+    del edited.arrays["contact/0/kinematics/search/_G"]
+    assert "contact/0/kinematics/search/_G is missing" in _resume_error("moreau", edited, tmp_path)
+
+
+@pytest.mark.parametrize("magic", [b"ffrmbs-checkpoint-1\n", b"ffrmbs-checkpoint-2\n" + b"0" * 64 + b"\n"])
+def test_an_old_pickled_checkpoint_is_refused_unread(tmp_path, magic):
+    marker = tmp_path / "marker"
+    ckpt = tmp_path / "x.h5.ckpt"
+    ckpt.write_bytes(magic + pickle.dumps(_Plant(marker)))
+    with pytest.raises(InputFileError, match=r"a pickled checkpoint of an older ffrmbs \(ffrmbs-checkpoint-[12]"
+                                             r"\): refused unread"):
+        read_checkpoint(ckpt)
+    assert not marker.exists()
+
+
+class _Plant:
+    """A pickle that, once loaded, creates the file ``marker`` (the stand-in of os.system)."""
+
+    def __init__(self, marker):
+        self.marker = marker
+
+    def __reduce__(self):
+        return type(self.marker).touch, (self.marker,)
+
+
+@pytest.mark.parametrize("where", ["plain pickle", "object array in an npz"])
+def test_a_planted_pickle_is_refused_and_runs_nothing(tmp_path, where):
+    marker = tmp_path / "marker"
+    ckpt = tmp_path / "x.h5.ckpt"
+    if where == "plain pickle":
+        ckpt.write_bytes(pickle.dumps(_Plant(marker)))
+    else:
+        with open(ckpt, "wb") as f:
+            np.savez(f, header=np.frombuffer(b'{"format": "ffrmbs-checkpoint"}', dtype=np.uint8),
+                     plant=np.array([_Plant(marker)], dtype=object))
+    with pytest.raises(InputFileError, match="not an ffrmbs checkpoint, or damaged"):
+        read_checkpoint(ckpt)
+    assert not marker.exists()
+
+
+@pytest.mark.parametrize("damage", ["cut in half", "one byte changed", "empty", "text"])
+def test_a_damaged_checkpoint_is_one_clear_line(runs, tmp_path, damage):
+    data = runs["moreau"][2].path.read_bytes()
+    ckpt = tmp_path / "x.h5.ckpt"
+    if damage == "cut in half":
+        data = data[:len(data) // 2]
+    elif damage == "one byte changed":
+        with zipfile.ZipFile(runs["moreau"][2].path) as z:
+            info = z.getinfo("data/q.npy")
+        at = info.header_offset + 30 + len(info.filename) + len(info.extra) + info.file_size - 3   # inside q's data
+        data = data[:at] + bytes([data[at] ^ 0xFF]) + data[at + 1:]
+    elif damage == "empty":
+        data = b""
+    else:
+        data = b"garbage\n" * 10
+    ckpt.write_bytes(data)
+    with pytest.raises(InputFileError) as err:
+        read_checkpoint(ckpt)
+    message = str(err.value)
+    assert "\n" not in message and "x.h5.ckpt" in message and "checkpoint" in message
+
+
+def test_a_directory_as_checkpoint_is_refused(tmp_path):
+    (tmp_path / "x.h5.ckpt").mkdir()
+    with pytest.raises(InputFileError, match="not a regular file"):
+        read_checkpoint(tmp_path / "x.h5.ckpt")
+
+
+# --- the codec ---------------------------------------------------------------------------------
+
+class _Thing:
+    run_state = ("x", "n", "flag", "h", "start", "nothing", "inner", "view_base")
+
+    def __init__(self):
+        self.x, self.n, self.flag, self.h, self.start, self.nothing = 1.5, np.int64(3), True, None, (0.25, 0.5), None
+        self.inner = _Inner()
+        self.view_base = np.zeros(4)
+        self.view = self.view_base[1:3]        # a view that must stay one after a restore
+
+
+class _Inner:
+    run_state = ("a",)
+
+    def __init__(self):
+        self.a = np.arange(3.0)
+
+
+def test_state_arrays_round_trip_keeps_types_and_views():
+    saved = _Thing()
+    saved.x, saved.n, saved.flag, saved.h, saved.start = 2.5, 7, False, 1e-3, (0.125, 0.75)
+    saved.inner.a[:] = [4.0, 5.0, 6.0]
+    saved.view_base[:] = [1.0, 2.0, 3.0, 4.0]
+    arrays, kinds = {}, {}
+    state_arrays.collect(saved, "thing", arrays, kinds)
+    assert kinds == {"thing/x": "float", "thing/n": "int", "thing/flag": "bool", "thing/h": "float",
+                     "thing/start": "tuple", "thing/nothing": "none", "thing/inner/a": "array",
+                     "thing/view_base": "array"}
+    fresh = _Thing()
+    state_arrays.restore(fresh, "thing", arrays, kinds)
+    assert (fresh.x, fresh.n, fresh.flag, fresh.h, fresh.start, fresh.nothing) == (2.5, 7, False, 1e-3, (0.125, 0.75),
+                                                                                  None)
+    assert type(fresh.n) is int and type(fresh.flag) is bool and type(fresh.x) is float
+    assert np.array_equal(fresh.inner.a, [4.0, 5.0, 6.0])
+    assert np.array_equal(fresh.view, [2.0, 3.0]) and np.shares_memory(fresh.view, fresh.view_base)
+
+
+def test_state_arrays_refuse_what_does_not_fit():
+    arrays, kinds = {}, {}
+    state_arrays.collect(_Thing(), "thing", arrays, kinds)
+    arrays["thing/inner/a"] = np.zeros(5)
+    with pytest.raises(state_arrays.StateMismatch, match=r"thing/inner/a has shape \(5,\) float64, this run's "
+                                                         r"\(3,\) float64"):
+        state_arrays.restore(_Thing(), "thing", arrays, kinds)
+    arrays["thing/inner/a"] = np.zeros(3)
+    arrays["thing/n"] = np.array(1.5)
+    with pytest.raises(state_arrays.StateMismatch, match="thing/n is not a int"):
+        state_arrays.restore(_Thing(), "thing", arrays, kinds)
