@@ -164,17 +164,24 @@ def quat_matrix_into(q, k, A):
 
 
 @njit(cache=True)
+def elastic_row(K, D, damped, q_f, qd_f, a):
+    """Row a of K q_f + D q̇_f (the elastic and damping forces, thesis eq. 2.36, with
+    their sign reversed), summed in a fixed order."""
+    n = q_f.shape[0]
+    acc = 0.0
+    for b in range(n):
+        acc += K[a, b] * q_f[b]
+    if damped:
+        for b in range(n):
+            acc += D[a, b] * qd_f[b]
+    return acc
+
+
+@njit(cache=True)
 def elastic_h_into(K, D, damped, q_f, qd_f, h):
     """h = −(K q_f + D q̇_f) (n_f,): the elastic and damping forces (thesis eq. 2.36)."""
-    n = q_f.shape[0]
-    for a in range(n):
-        acc = 0.0
-        for b in range(n):
-            acc += K[a, b] * q_f[b]
-        if damped:
-            for b in range(n):
-                acc += D[a, b] * qd_f[b]
-        h[a] = -acc
+    for a in range(q_f.shape[0]):
+        h[a] = -elastic_row(K, D, damped, q_f, qd_f, a)
 
 
 @njit(cache=True)
@@ -186,15 +193,8 @@ def ffr_free_mass_and_h(q, u, mass, I1, S_bar, I_kl, I_bar, S_kl, M_ff, S_skew, 
     q_f = q[7:]
     qd_f = u[6:]
     ffr_mass_qv_into(A, u[3:6], q_f, qd_f, mass, I1, S_bar, I_kl, I_bar, S_kl, M_ff, S_skew, G, M, h)
-    n = q_f.shape[0]
-    for a in range(n):
-        acc = 0.0
-        for b in range(n):
-            acc += K[a, b] * q_f[b]
-        if damped:
-            for b in range(n):
-                acc += D[a, b] * qd_f[b]
-        h[6 + a] -= acc
+    for a in range(q_f.shape[0]):
+        h[6 + a] -= elastic_row(K, D, damped, q_f, qd_f, a)
 
 
 @njit(cache=True)
@@ -215,13 +215,7 @@ def ffr_prescribed_mass_and_h(A, w, a_R, wd, q, u, mass, I1, S_bar, I_kl, I_bar,
         for k in range(3):
             s += Mb[6 + a, 3 + k] * wd[k]
         acc -= s
-        e = 0.0
-        for b in range(n):
-            e += K[a, b] * q[b]
-        if damped:
-            for b in range(n):
-                e += D[a, b] * u[b]
-        h[a] = acc - e
+        h[a] = acc - elastic_row(K, D, damped, q, u, a)
         for b in range(n):
             M[a, b] = Mb[6 + a, 6 + b]
 
