@@ -412,8 +412,9 @@ def linear_bodies_h(rows, KD, force, q, u, h):
     - ``ELASTIC_DAMPED`` (3): h = −(K q_f + D q̇_f),
 
     with K = KD[0], D = KD[1] (nu, nu), read on each block's diagonal block, force (nu,).
-    The sums run in the order of :func:`elastic_h_into` and :func:`point_masses_h` (the
-    references the tests compare), so the result is the same to the bit."""
+    The rows are :func:`elastic_row`'s, as in :func:`elastic_h_into`, and the constant
+    force is :func:`point_masses_h`'s (the references the tests compare): the same to the
+    bit."""
     for k in range(rows.shape[0]):
         a, b, kind = rows[k, 0], rows[k, 1], rows[k, 2]
         if kind == 0:
@@ -423,14 +424,8 @@ def linear_bodies_h(rows, KD, force, q, u, h):
             for i in range(a, b):
                 h[i] = 0.0 + force[i]
         else:
-            for i in range(a, b):
-                acc = 0.0
-                for j in range(a, b):
-                    acc += KD[0, i, j] * q[j]
-                if kind == 3:
-                    for j in range(a, b):
-                        acc += KD[1, i, j] * u[j]
-                h[i] = -acc
+            for i in range(b - a):
+                h[a + i] = -elastic_row(KD[0, a:b, a:b], KD[1, a:b, a:b], kind == 3, q[a:b], u[a:b], i)
 
 
 @njit(cache=True)
