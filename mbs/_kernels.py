@@ -424,8 +424,9 @@ def linear_bodies_h(rows, KD, force, q, u, h):
             for i in range(a, b):
                 h[i] = 0.0 + force[i]
         else:
+            K_b, D_b, q_b, u_b = KD[0, a:b, a:b], KD[1, a:b, a:b], q[a:b], u[a:b]   # views made once
             for i in range(b - a):
-                h[a + i] = -elastic_row(KD[0, a:b, a:b], KD[1, a:b, a:b], kind == 3, q[a:b], u[a:b], i)
+                h[a + i] = -elastic_row(K_b, D_b, kind == 3, q_b, u_b, i)
 
 
 @njit(cache=True)

@@ -46,36 +46,33 @@ def cholesky_into(A, L):
 
 
 @njit(cache=True)
+def cho_solve_rows(L, lo, hi, B, X, c):
+    """Column c of X = (L Lᵀ)⁻¹ B on the rows [lo, hi) of one diagonal block of L (no
+    view is made: per-block slices cost numba a view each, which a many-body block
+    solve pays per body); ``X`` may be ``B``."""
+    for i in range(lo, hi):
+        s = B[i, c]
+        for k in range(lo, i):
+            s -= L[i, k] * X[k, c]
+        X[i, c] = s / L[i, i]
+    for i in range(hi - 1, lo - 1, -1):
+        s = X[i, c]
+        for k in range(i + 1, hi):
+            s -= L[k, i] * X[k, c]
+        X[i, c] = s / L[i, i]
+
+
+@njit(cache=True)
 def cho_solve_vector(L, b, x):
     """x = (L Lᵀ)⁻¹ b for b, x (n,); ``x`` may be ``b``."""
-    n = L.shape[0]
-    for i in range(n):
-        s = b[i]
-        for k in range(i):
-            s -= L[i, k] * x[k]
-        x[i] = s / L[i, i]
-    for i in range(n - 1, -1, -1):
-        s = x[i]
-        for k in range(i + 1, n):
-            s -= L[k, i] * x[k]
-        x[i] = s / L[i, i]
+    cho_solve_rows(L, 0, L.shape[0], b.reshape(-1, 1), x.reshape(-1, 1), 0)
 
 
 @njit(cache=True)
 def cho_solve_matrix(L, B, X):
     """X = (L Lᵀ)⁻¹ B for B, X (n, m), column by column; ``X`` may be ``B``."""
-    n = L.shape[0]
     for c in range(B.shape[1]):
-        for i in range(n):
-            s = B[i, c]
-            for k in range(i):
-                s -= L[i, k] * X[k, c]
-            X[i, c] = s / L[i, i]
-        for i in range(n - 1, -1, -1):
-            s = X[i, c]
-            for k in range(i + 1, n):
-                s -= L[k, i] * X[k, c]
-            X[i, c] = s / L[i, i]
+        cho_solve_rows(L, 0, L.shape[0], B, X, c)
 
 
 def cho_solve_into(L, b, x):
@@ -104,11 +101,7 @@ def block_cholesky_into(A, blocks, L):
 def block_cho_solve_vector(L, blocks, idle, b, x):
     """x = A⁻¹ b block by block (L from :func:`block_cholesky_into`), zero on the rows
     ``idle`` outside every block; b, x (n,), ``x`` may be ``b``."""
-    for k in range(blocks.shape[0]):
-        lo, hi = blocks[k, 0], blocks[k, 1]
-        cho_solve_vector(L[lo:hi, lo:hi], b[lo:hi], x[lo:hi])
-    for i in idle:
-        x[i] = 0.0
+    block_cho_solve_matrix(L, blocks, idle, b.reshape(-1, 1), x.reshape(-1, 1))
 
 
 @njit(cache=True)
@@ -116,7 +109,10 @@ def block_cho_solve_matrix(L, blocks, idle, B, X):
     """X = A⁻¹ B column by column (:func:`block_cho_solve_vector`); B, X (n, m), ``X``
     may be ``B``."""
     for c in range(B.shape[1]):
-        block_cho_solve_vector(L, blocks, idle, B[:, c], X[:, c])
+        for k in range(blocks.shape[0]):
+            cho_solve_rows(L, blocks[k, 0], blocks[k, 1], B, X, c)
+        for i in idle:
+            X[i, c] = 0.0
 
 
 @njit(cache=True)

@@ -354,7 +354,7 @@ def check_penalty(model, data, factor, dt):
 
 def contact_set(model, data):
     """The ContactSet of the joints and the closed contacts, built once per closed set."""
-    key = tuple(data.closed_idx[:data.n_closed].tolist()) if data.n_closed != 1 else data.closed_idx[0].item()
+    key = tuple(data.closed_idx[:data.n_closed].tolist()) if data.n_closed != 1 else int(data.closed_idx[0])
     cs = data.contact_sets.get(key)
     if cs is None:
         laws = [Bilateral(model.n_c)] if model.n_c else []
