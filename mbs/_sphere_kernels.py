@@ -22,6 +22,8 @@ from __future__ import annotations
 
 from numba import njit
 
+from ._stage_kernels import live_contacts
+
 POINT, AT_REST, CALLED = 0, 1, 2
 INTS_AT = 3     # ints: n_s, n_p, width, then kind, at, n_reach (n_s each), contact, sphere1, sphere2 (n_p each)
 
@@ -64,11 +66,13 @@ def prune_pairs(contact, sphere1, sphere2, margin, centres, radii, live, closed)
 
 
 @njit(cache=True)
-def prune(q, ints, floats, centres, radii, live, closed):
+def prune(q, ints, floats, centres, radii, live, closed, live_idx):
     """:func:`sphere_states` then :func:`prune_pairs` in one call, their arrays views of
     ``ints`` (n_s, n_p, width, then kind, at, n_reach, contact, sphere1, sphere2) and
     ``floats`` (offset (n_s, 3), radius0, reach (n_s, width), margin) — the layout of
-    :class:`mbs.bounding_spheres.SphereTable`. Returns the number pruned."""
+    :class:`mbs.bounding_spheres.SphereTable`; then the indices of the live contacts into
+    ``live_idx`` (:func:`mbs._stage_kernels.live_contacts`). Returns (the number pruned,
+    the number live)."""
     n, n_p, width = ints[0], ints[1], ints[2]
     o = INTS_AT
     kind, at, n_reach = ints[o:o + n], ints[o + n:o + 2 * n], ints[o + 2 * n:o + 3 * n]
@@ -79,4 +83,5 @@ def prune(q, ints, floats, centres, radii, live, closed):
     reach = floats[4 * n:(4 + width) * n].reshape(n, width)
     margin = floats[(4 + width) * n:(4 + width) * n + n_p]
     sphere_states(q, kind, at, offset, radius0, reach, n_reach, centres, radii)
-    return prune_pairs(contact, sphere1, sphere2, margin, centres, radii, live, closed)
+    pruned = prune_pairs(contact, sphere1, sphere2, margin, centres, radii, live, closed)
+    return pruned, live_contacts(live, live_idx)

@@ -155,15 +155,15 @@ class SphereTable:
         for s in self.at_rest:
             centres[s] = self.spheres[s](q, t)[0]
 
-    def prune(self, q, t, centres, radii, live, closed) -> int:
+    def prune(self, q, t, centres, radii, live, closed, live_idx) -> tuple:
         """Every prunable contact live or not at (q, t) (:func:`._sphere_kernels.prune`:
-        :func:`~._sphere_kernels.sphere_states`, then :func:`~._sphere_kernels.prune_pairs`);
-        ``centres`` (n_s, 3), ``radii`` (n_s,) the spheres' workspaces. Returns the
-        number pruned."""
+        :func:`~._sphere_kernels.sphere_states`, then :func:`~._sphere_kernels.prune_pairs`),
+        the live contacts' indices into ``live_idx``; ``centres`` (n_s, 3), ``radii``
+        (n_s,) the spheres' workspaces. Returns (the number pruned, the number live)."""
         for s in self.called:
             centre, radii[s] = self.spheres[s](q, t)
             centres[s] = centre
-        return K.prune(q, self.ints, self.floats, centres, radii, live, closed)
+        return K.prune(q, self.ints, self.floats, centres, radii, live, closed, live_idx)
 
 
 def _blocks(sizes):

@@ -217,8 +217,8 @@ class Data:
         self.w_N = np.zeros(nu)             # a penalty contact's W_N
         # contacts
         self.live = np.ones(n, dtype=bool)
-        self.live_idx = np.zeros(n, dtype=np.intp)             # the live contacts, n_live of them
-        self.n_live = 0
+        self.live_idx = np.arange(n, dtype=np.intp)            # the live contacts, n_live of them (all
+        self.n_live = n                                        # unless a planned run prunes)
         self.contour_idx = np.zeros(len(model.contours), dtype=np.intp)   # contours of live contacts
         self.closed = np.zeros(n, dtype=bool)
         self.force_N = np.zeros(n)

@@ -76,8 +76,9 @@ def contours(model, data, dt):
         if not data.spheres_started:
             model.spheres.start(q, t, data.sphere_centres, data.sphere_radii)
             data.spheres_started = True
-        data.stats["pruned_contacts"] += model.spheres.prune(q, t, data.sphere_centres, data.sphere_radii, live,
-                                                             data.closed)
+        pruned, data.n_live = model.spheres.prune(q, t, data.sphere_centres, data.sphere_radii, live, data.closed,
+                                                  data.live_idx)
+        data.stats["pruned_contacts"] += pruned
     n_contours = K.contours_in_use(model.owner_at, model.owners, live, data.contour_idx) if model.owners.size else 0
     for j in range(n_contours):
         contour, owners, qs, us = model.contours[data.contour_idx[j]]
@@ -85,7 +86,6 @@ def contours(model, data, dt):
             contour.update(None, None, t)
         else:
             contour.update(q[qs], u[us], t)
-    data.n_live = K.live_contacts(live, data.live_idx)
 
 
 def detect(model, data, dt):

@@ -60,10 +60,12 @@ def test_sphere_table_prunes_as_the_sphere_callables(seed):
     centres, radii = np.zeros((len(table.spheres), 3)), np.zeros(len(table.spheres))
     live, closed = np.ones(len(contacts), dtype=bool), np.ones(len(contacts), dtype=bool)
     table.start(q, 0.0, centres, radii)
-    pruned = table.prune(q, 0.0, centres, radii, live, closed)
+    live_idx = np.full(len(contacts), -1, dtype=np.intp)
+    pruned, n_live = table.prune(q, 0.0, centres, radii, live, closed, live_idx)
     ref = reference_prune(contacts, q, 0.0)
     assert live.tolist() == [ref[i] for i in range(len(contacts))]
     assert pruned == sum(not v for v in ref.values())
+    assert live_idx[:n_live].tolist() == [i for i in range(len(contacts)) if ref[i]]
     assert not closed[~live].any() and closed[live].all()
     for s, sphere in enumerate(table.spheres):
         c, r = sphere(q, 0.0)

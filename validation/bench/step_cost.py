@@ -7,7 +7,10 @@ and planning included, compilation excluded — every case runs once untimed fir
 - ``default``: the default scene (setup A of :mod:`ffrmbs_app.scenes.point_mass_beam`,
   20 clamped modes, 2s contour, Moreau θ = ½, Δt = 1e-5 s, 0.1 s, 101 samples);
 - ``far pairs N``: the same with N more point masses flying away from the beam, each in
-  a contact with its surface that never closes (per-step cost flat in far-apart pairs);
+  a contact with its surface that never closes, and ``far bodies N``: the same point
+  masses without contacts. The cost of the far pairs themselves is the difference of the
+  two (the rest is the N bodies' own velocity and position updates); the target: per-step
+  cost flat in far-apart pairs;
 - ``free moreau`` / ``free gen-alpha``: the report's free-flying beam (the
   ``ffr_free_flight`` case, Exudyn's free-flight comparison), 10 free-free modes, full
   FFR equations (plan off), h = 1e-3 s, 1 s; Exudyn's ``ObjectFFRFreducedOrder`` with
@@ -56,6 +59,7 @@ def cases(t_end) -> list[dict]:
     default = {"kind": "default", "t_end": t_end, "dt": DT}
     return ([{"name": "default", **default}]
             + [{"name": f"far pairs {n}", **default, "far_pairs": n} for n in FAR_PAIRS]
+            + [{"name": f"far bodies {FAR_PAIRS[-1]}", **default, "far_pairs": FAR_PAIRS[-1], "contacts": False}]
             + [{"name": "free moreau", "kind": "free", "integrator": "moreau", "dt": FREE_DT, "modes": FREE_MODES},
                {"name": "free gen-alpha", "kind": "free", "integrator": "generalized-alpha", "dt": FREE_DT,
                 "modes": FREE_MODES}])
@@ -144,9 +148,12 @@ def benchmark(rounds, repeats, t_end, baseline=BASELINE, log=print) -> dict:
     for name, target in TARGETS_US.items():
         us = by[name]["us_this"]
         verdicts.append(f"target ({name} ≤ {target:g} µs per step): {us:.1f} µs — {'met' if us <= target else 'NOT met'}")
-    worst = max(abs(by[f"far pairs {n}"]["us_this"] / by["default"]["us_this"] - 1.0) for n in FAR_PAIRS)
-    verdicts.append(f"target (per-step cost flat within {FLAT_TOL:.0%} up to {FAR_PAIRS[-1]} far-apart pairs): "
-                    f"largest deviation {worst:.1%} — {'met' if worst <= FLAT_TOL else 'NOT met'}")
+    n = FAR_PAIRS[-1]
+    pairs = (by[f"far pairs {n}"]["us_this"] - by[f"far bodies {n}"]["us_this"]) / by["default"]["us_this"]
+    whole = by[f"far pairs {n}"]["us_this"] / by["default"]["us_this"] - 1.0
+    verdicts.append(f"target (per-step cost flat within {FLAT_TOL:.0%} in the number of far-apart pairs, up to {n}): "
+                    f"the {n} pairs add {pairs:.1%} of the default step (their {n} bodies another "
+                    f"{whole - pairs:.1%}) — {'met' if abs(pairs) <= FLAT_TOL else 'NOT met'}")
     header = (f"Per-step cost, median of {rounds} rounds x {repeats} runs, this checkout and baseline {baseline} "
               f"alternately in separate processes" + (f"; baseline: {why_not}" if why_not else "")
               + ("" if exudyn is not None else "; Exudyn: not installed (pip install '.[peers]')"))

@@ -31,10 +31,11 @@ def point_mass_beam():
     return pmb
 
 
-def default_scene(t_end, far_pairs=0):
+def default_scene(t_end, far_pairs=0, contacts=True):
     """(system, outputs) of setup A, 20 modes, with ``far_pairs`` extra point masses
-    flying away from the beam 1 m apart, each in a unilateral contact with the beam's
-    surface that never closes (their contours never come within the broad phase)."""
+    flying away from the beam 1 m apart, each (with ``contacts``) in a unilateral
+    contact with the beam's surface that never closes (their contours never come within
+    the broad phase)."""
     from contact import Contact, ContactKinematicsPointContour2s, UnilateralNewtonImpact
     from contours import PointContour
     from mbs import PointMass
@@ -45,14 +46,15 @@ def default_scene(t_end, far_pairs=0):
     surface = scene.contact.kinematics.contour2
     for k in range(far_pairs):
         mass = system.add(PointMass(0.1, position=(0.0, 2.0 + k, 0.0), velocity=(0.0, 0.1, 0.0), name=f"far{k}"))
-        system.add(Contact(ContactKinematicsPointContour2s(PointContour(mass.point), surface),
-                           UnilateralNewtonImpact(0.0), name=f"far contact {k}"))
+        if contacts:
+            system.add(Contact(ContactKinematicsPointContour2s(PointContour(mass.point), surface),
+                               UnilateralNewtonImpact(0.0), name=f"far contact {k}"))
     return system, scene.outputs()
 
 
-def run_default(t_end, dt, far_pairs=0):
+def run_default(t_end, dt, far_pairs=0, contacts=True):
     """(wall s, steps, v_y(T)) of the default scene by Moreau, 101 output samples."""
-    system, outputs = default_scene(t_end, far_pairs)
+    system, outputs = default_scene(t_end, far_pairs, contacts)
     start = time.perf_counter()
     res = system.simulate(t_end, dt, integrator="moreau", theta=0.5, t_out=np.linspace(0.0, t_end, 101),
                           outputs=outputs)
@@ -86,7 +88,7 @@ def measure(spec: dict) -> dict:
     cases = {}
     for case in spec["cases"]:
         if case["kind"] == "default":
-            call = lambda c=case: run_default(c["t_end"], c["dt"], c.get("far_pairs", 0))  # noqa: E731
+            call = lambda c=case: run_default(c["t_end"], c["dt"], c.get("far_pairs", 0), c.get("contacts", True))  # noqa: E731
         else:
             call = lambda c=case: run_free(c["integrator"], c["dt"], c["modes"])  # noqa: E731
         call()                                     # compile or load the numba cache
