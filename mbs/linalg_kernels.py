@@ -46,20 +46,43 @@ def cholesky_into(A, L):
 
 
 @njit(cache=True)
+def row_dot(A, i, x, lo, hi):
+    """Σ_{k=lo}^{hi−1} A[i, k] x[k], summed in four interleaved partial sums (k mod 4)
+    added pairwise at the end: the fixed summation order of every row product of the
+    step's kernels. One running sum would chain every addition on the one before (a
+    latency-bound loop, several times slower for rows of hundreds of entries); four
+    independent ones overlap."""
+    s0 = s1 = s2 = s3 = 0.0
+    k = lo
+    while k + 3 < hi:
+        s0 += A[i, k] * x[k]
+        s1 += A[i, k + 1] * x[k + 1]
+        s2 += A[i, k + 2] * x[k + 2]
+        s3 += A[i, k + 3] * x[k + 3]
+        k += 4
+    while k < hi:
+        s0 += A[i, k] * x[k]
+        k += 1
+    return (s0 + s1) + (s2 + s3)
+
+
+@njit(cache=True)
 def cho_solve_rows(L, lo, hi, B, X, c):
-    """Column c of X = (L Lᵀ)⁻¹ B on the rows [lo, hi) of one diagonal block of L (no
-    view is made: per-block slices cost numba a view each, which a many-body block
-    solve pays per body); ``X`` may be ``B``."""
+    """Column c of X = (L Lᵀ)⁻¹ B on the rows [lo, hi) of one diagonal block of a
+    C-ordered L: L y = b by rows (:func:`row_dot` along L's rows), then Lᵀ x = y by
+    columns of Lᵀ, i.e. again along L's rows (x_i = y_i / L_ii, then y_k −= L_ik x_i for
+    k < i), so that both sweeps read L contiguously (a strided sweep costs a large body
+    block — hundreds of modes — several times the arithmetic). No view is made (per-block
+    slices cost numba a view each, which a many-body block solve would pay per body);
+    ``X`` may be ``B``."""
+    x = X[:, c]
     for i in range(lo, hi):
-        s = B[i, c]
-        for k in range(lo, i):
-            s -= L[i, k] * X[k, c]
-        X[i, c] = s / L[i, i]
+        X[i, c] = (B[i, c] - row_dot(L, i, x, lo, i)) / L[i, i]
     for i in range(hi - 1, lo - 1, -1):
-        s = X[i, c]
-        for k in range(i + 1, hi):
-            s -= L[k, i] * X[k, c]
-        X[i, c] = s / L[i, i]
+        x = X[i, c] / L[i, i]
+        X[i, c] = x
+        for k in range(lo, i):
+            X[k, c] -= L[i, k] * x
 
 
 @njit(cache=True)
