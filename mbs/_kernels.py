@@ -20,8 +20,6 @@ import math
 import numpy as np
 from numba import njit
 
-from .linalg_kernels import row_dot
-
 
 @njit(cache=True)
 def ffr_mass_qv_into(A, w, q_f, qd_f, mass, I1, S_bar, I_kl, I_bar, S_kl, M_ff, S_skew, G, M, Q):
@@ -168,11 +166,14 @@ def quat_matrix_into(q, k, A):
 @njit(cache=True)
 def elastic_row(K, D, damped, q_f, qd_f, a):
     """Row a of K q_f + D q̇_f (the elastic and damping forces, thesis eq. 2.36, with
-    their sign reversed), each product by :func:`~mbs.linalg_kernels.row_dot`."""
+    their sign reversed), summed in a fixed order."""
     n = q_f.shape[0]
-    acc = row_dot(K, a, q_f, 0, n)
+    acc = 0.0
+    for b in range(n):
+        acc += K[a, b] * q_f[b]
     if damped:
-        acc += row_dot(D, a, qd_f, 0, n)
+        for b in range(n):
+            acc += D[a, b] * qd_f[b]
     return acc
 
 

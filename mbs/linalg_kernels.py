@@ -14,6 +14,8 @@ import math
 
 from numba import njit
 
+SHORT_ROW = 32          # rows (blocks) shorter than this: one running sum, dot-form sweeps
+
 
 @njit(cache=True)
 def cholesky_into(A, L):
@@ -47,11 +49,12 @@ def cholesky_into(A, L):
 
 @njit(cache=True)
 def row_dot(A, i, x, lo, hi):
-    """Σ_{k=lo}^{hi−1} A[i, k] x[k], summed in four interleaved partial sums (k mod 4)
-    added pairwise at the end: the fixed summation order of every row product of the
-    step's kernels. One running sum would chain every addition on the one before (a
-    latency-bound loop, several times slower for rows of hundreds of entries); four
-    independent ones overlap."""
+    """Σ_{k=lo}^{hi−1} A[i, k] x[k] in four interleaved partial sums (k mod 4) added
+    pairwise at the end: the summation order of the long row products (SHORT_ROW
+    entries or more) of the step's kernels. One running sum chains every addition on the
+    one before (a latency-bound loop, several times slower for rows of hundreds of
+    entries); four independent ones overlap, but cost more than they save on short rows,
+    which the callers sum in one running sum."""
     s0 = s1 = s2 = s3 = 0.0
     k = lo
     while k + 3 < hi:
@@ -69,20 +72,38 @@ def row_dot(A, i, x, lo, hi):
 @njit(cache=True)
 def cho_solve_rows(L, lo, hi, B, X, c):
     """Column c of X = (L Lᵀ)⁻¹ B on the rows [lo, hi) of one diagonal block of a
-    C-ordered L: L y = b by rows (:func:`row_dot` along L's rows), then Lᵀ x = y by
-    columns of Lᵀ, i.e. again along L's rows (x_i = y_i / L_ii, then y_k −= L_ik x_i for
-    k < i), so that both sweeps read L contiguously (a strided sweep costs a large body
-    block — hundreds of modes — several times the arithmetic). No view is made (per-block
-    slices cost numba a view each, which a many-body block solve would pay per body);
-    ``X`` may be ``B``."""
+    C-ordered L (no view is made: per-block slices cost numba a view each, which a
+    many-body block solve would pay per body); ``X`` may be ``B``. A block of SHORT_ROW
+    rows or more is solved along L's rows in both sweeps — L y = b by :func:`row_dot`,
+    Lᵀ x = y as x_i = y_i / L_ii, then y_k −= L_ik x_i for k < i — so that a body of
+    hundreds of modes reads L contiguously and without one long chain of additions; a
+    smaller block in two dot-form sweeps with one running sum each."""
+    if hi - lo >= SHORT_ROW:
+        cho_solve_long_rows(L, lo, hi, B, X, c)
+        return
+    for i in range(lo, hi):
+        s = B[i, c]
+        for k in range(lo, i):
+            s -= L[i, k] * X[k, c]
+        X[i, c] = s / L[i, i]
+    for i in range(hi - 1, lo - 1, -1):
+        s = X[i, c]
+        for k in range(i + 1, hi):
+            s -= L[k, i] * X[k, c]
+        X[i, c] = s / L[i, i]
+
+
+@njit(cache=True, inline="never")
+def cho_solve_long_rows(L, lo, hi, B, X, c):
+    """:func:`cho_solve_rows` of a block of SHORT_ROW rows or more, along L's rows."""
     x = X[:, c]
     for i in range(lo, hi):
         X[i, c] = (B[i, c] - row_dot(L, i, x, lo, i)) / L[i, i]
     for i in range(hi - 1, lo - 1, -1):
-        x = X[i, c] / L[i, i]
-        X[i, c] = x
+        xi = X[i, c] / L[i, i]
+        X[i, c] = xi
         for k in range(lo, i):
-            X[k, c] -= L[i, k] * x
+            X[k, c] -= L[i, k] * xi
 
 
 @njit(cache=True)
