@@ -5,8 +5,8 @@ Usage::
     python3 -m validation.bench [--out out/bench] [--quick] [--only NAME[,NAME]]
     ffrmbs bench [--out out/bench] [--quick] [--only NAME[,NAME]]
 
-``--quick`` runs each benchmark at its coarse settings (about 30 s in all here, against
-about 8 minutes in full with a fresh body cache); ``--only`` picks benchmarks by name
+``--quick`` runs each benchmark at its coarse settings (about 40 s in all here, against
+about 4 minutes in full with the meshes cached, 8 with a fresh body cache); ``--only`` picks benchmarks by name
 (comma-separated or repeated). Writes ``DIR/<name>.json`` per benchmark (its whole
 document) and ``DIR/summary.json``: the machine, the options and per benchmark its status (``ok``, ``skipped`` — a peer code is not installed, ``not
 available`` — the module is not written yet, ``failed``), wall seconds, target verdicts,
