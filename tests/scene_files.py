@@ -1,4 +1,4 @@
-"""Pieces of TOML scene files shared by the scene-reader tests (test_scene_toml.py,
+"""Pieces of TOML scene files shared by the scene-reader tests (test_scene_reader.py,
 test_fuzz_readers.py)."""
 
 # Three bodies, one of each kind: "beam" (3 modes of the body file body/body.h5 beside
