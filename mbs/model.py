@@ -7,15 +7,16 @@ what is fixed for the run — the bodies integrated and those the plan solves ap
 (:class:`~mbs.equations.Equations`) and body stage, whether the iteration matrix
 M̂ = M + θΔt D + θ²Δt² K is constant, the contours to update and the contacts owning
 each, and the contact table (kinds, dimensions, closing tolerances, margins, the
-bounding spheres of prunable pairs, the rows of each contact's impulses). The System
-is never mutated.
+bounding spheres of prunable pairs, the rows of each contact's impulses, the compiled
+detection of the pairs that have one, :mod:`mbs.fused_detection`). The System is never
+mutated.
 
-:class:`Data` holds everything that changes during a run as preallocated arrays: t, q,
-u, the midpoint state (t_m, q_m), the increment du, h, M, the tangents K, D, M̂ and its
+:class:`Data` holds everything the stages change as preallocated arrays: t, q, u, the
+midpoint state (t_m, q_m), the increment du, h, M, the tangents K, D, M̂ and its
 Cholesky factors (one per step size of a constant M̂), u_free, the contact flags (live,
-closed), penalty normal forces, the bounding spheres of a planned run, the closed set, the buffers of W (nu, m), M̂⁻¹W, the
-Delassus matrix G (m, m), ξ_free, γ⁻, the gap-closing term, Λ and γ⁺ for the largest
-possible closed set, the warm starts (Λ of the last step per contact and for the
+closed), penalty normal forces, the bounding spheres of a planned run, the closed set,
+the buffers of W (nu, m), M̂⁻¹W, the Delassus matrix G (m, m), ξ_free, γ⁻, the
+gap-closing term, Λ and γ⁺ for the largest possible closed set, the warm starts (Λ of the last step per contact and for the
 joints), counters and the record of the last step. The contours' states and the
 searches' warm starts stay in the contour and contact-kinematics objects (their own
 preallocated arrays), which the contour and detection stages update.

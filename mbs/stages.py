@@ -31,7 +31,7 @@ its :class:`~mbs.model.Data` that reads the arrays the previous stages wrote:
 
 Why the θ-method, the gap-closing term and the explicit penalty check:
 :mod:`mbs.integrators.moreau`. A stage that cannot complete the step raises
-:class:`~mbs.integrators.driver.StepFailure`. With the Gauss–Seidel solver and bodies
+:class:`~mbs.step_failure.StepFailure`. With the Gauss–Seidel solver and bodies
 the body stage writes in place (point masses, FFR bodies on a fixed frame), a steady
 step allocates no numpy array.
 """
