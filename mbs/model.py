@@ -16,8 +16,9 @@ midpoint state (t_m, q_m), the increment du, h, M, the tangents K, D, M̂ and it
 Cholesky factors (one per step size of a constant M̂), u_free, the contact flags (live,
 closed), penalty normal forces, the bounding spheres of a planned run, the closed set,
 the buffers of W (nu, m), M̂⁻¹W, the Delassus matrix G (m, m), ξ_free, γ⁻, the
-gap-closing term, Λ and γ⁺ for the largest possible closed set, the warm starts (Λ of the last step per contact and for the
-joints), counters and the record of the last step. The contours' states and the
+gap-closing term, Λ and γ⁺ for the largest possible closed set, the warm starts (Λ of
+the last step per contact and for the joints), counters and the record of the last
+step. The contours' states and the
 searches' warm starts stay in the contour and contact-kinematics objects (their own
 preallocated arrays), which the contour and detection stages update.
 
