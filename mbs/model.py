@@ -18,9 +18,9 @@ closed), penalty normal forces, the bounding spheres of a planned run, the close
 the buffers of W (nu, m), M̂⁻¹W, the Delassus matrix G (m, m), ξ_free, γ⁻, the
 gap-closing term, Λ and γ⁺ for the largest possible closed set, the warm starts (Λ of
 the last step per contact and for the joints), counters and the record of the last
-step. The contours' states and the
-searches' warm starts stay in the contour and contact-kinematics objects (their own
-preallocated arrays), which the contour and detection stages update.
+step. The contours' states and the searches' warm starts stay in the contour and
+contact-kinematics objects (their own preallocated arrays), which the contour and
+detection stages update.
 
 A checkpoint (:mod:`mbs.checkpoint`) holds every array and scalar of Data
 (:meth:`Data.collect`, :meth:`Data.restore`) but its caches, rebuilt on demand from the
