@@ -17,7 +17,7 @@
 The integrator updates every contour once per step before ``locate``
 (:mod:`mbs.stages`).
 
-Broad phase (:mod:`contact.broad_phase`): ``detect`` first compares the two contours'
+Broad phase (:mod:`contact.broad_phase`): ``locate`` first compares the two contours'
 bounding boxes, each grown by ``margin`` [m]; only overlapping pairs reach the search.
 The margin must exceed the deepest penetration the scene can produce in one step (a
 point below a flat contour lies outside its unpadded box); the default is a tenth of
@@ -46,7 +46,9 @@ class ContactElement:
     ``kinematics``, ``law``; ``set_valued`` (rows in the contact problem) and
     ``unilateral``; ``dim`` (rows of Λ when set-valued); ``bodies()`` and ``contours()``;
     ``locate()`` (True when closed, after the contours were updated); ``jacobian(out)``
-    (W (nu, dim) of a closed set-valued contact); ``penetration`` [m]."""
+    (W (nu, dim) of a closed set-valued contact). Whether a contact is closed, and a
+    single-valued law's force, are the run's (:class:`mbs.model.Data`), not the
+    contact's."""
 
     set_valued: bool
     unilateral: bool
@@ -64,7 +66,7 @@ class Contact(ContactElement):
     ``friction`` only with a single-valued normal law."""
 
     unilateral = True
-    run_state = ("closed", "force_N", "box1", "box2", "kinematics")     # (mbs.state_arrays)
+    run_state = ("box1", "box2", "kinematics")     # (mbs.state_arrays)
 
     def __init__(self, kinematics: ContactKinematics, law, friction=None, name="contact", margin="auto",
                  closing_tol=1e-12):
@@ -76,8 +78,6 @@ class Contact(ContactElement):
                              "normal law; use UnilateralCoulombContact for set-valued friction")
         self.kinematics, self.law, self.friction, self.name = kinematics, law, friction, name
         self.dim = law.dim if self.set_valued else 0
-        self.closed = False
-        self.force_N = 0.0
         if not closing_tol >= 0.0:
             raise ModelError(f"{name}: closing_tol must be >= 0 [m], got {closing_tol!r}")
         self.closing_tol = float(closing_tol)
@@ -86,11 +86,6 @@ class Contact(ContactElement):
             raise ModelError(f"{name}: margin must be >= 0 [m], 'auto' or None, got {margin!r}")
         self.margin = None if self.margin is None else float(self.margin)
         self.box1, self.box2 = np.zeros((2, 3)), np.zeros((2, 3))     # broad-phase workspaces
-
-    @property
-    def penetration(self) -> float:
-        """max(0, −g_N) [m] at the last detection."""
-        return max(0.0, -self.kinematics.g_N) if self.closed else 0.0
 
     def locate(self) -> bool:
         """Locate the contact on the updated contours: False when the broad phase (the
@@ -102,27 +97,23 @@ class Contact(ContactElement):
             return False
         return bool(k.update(velocity=not self.set_valued, jacobians=True)) and k.g_N <= self.closing_tol
 
-    def detect(self) -> bool:
-        """:meth:`locate`, the result kept in :attr:`closed`."""
-        self.closed = self.locate()
-        return self.closed
-
     def jacobian(self, out) -> None:
         """W (nu, dim) = [W_N] or [W_N, W_T] of the closed contact into ``out``."""
         self.kinematics.fill_W(out)
 
-    def add_forces(self, h) -> None:
-        """Single-valued law: h += W_N F_N (+ W_T F_T) at the located contact, body block
-        by body block."""
+    def add_forces(self, h) -> float:
+        """Single-valued law at the located, closed contact: h += W_N F_N (+ W_T F_T),
+        body block by body block; returns F_N [N]."""
         k = self.kinematics
-        self.force_N = float(self.law.force(k.g_N, k.gd_N)) if self.closed else 0.0
-        if self.force_N == 0.0:
-            return
-        F_T = self.friction.force(k.gd_T, self.force_N) if self.friction is not None else None
+        force_N = float(self.law.force(k.g_N, k.gd_N))
+        if force_N == 0.0:
+            return 0.0
+        F_T = self.friction.force(k.gd_T, force_N) if self.friction is not None else None
         for s, w_N, w_T in k.local_blocks():
-            h[s] += self.force_N * w_N
+            h[s] += force_N * w_N
             if F_T is not None:
                 h[s] += w_T @ F_T
+        return force_N
 
 
 def _single_valued(law) -> bool:
@@ -151,19 +142,11 @@ class CurveConstraint(ContactElement):
         if not isinstance(kinematics, PointOnCurveConstraint):
             raise ModelError(f"{name}: needs PointOnCurveConstraint kinematics")
         self.kinematics, self.law, self.name = kinematics, Bilateral(2), name
-        self.closed = False
-
-    penetration = 0.0
 
     def locate(self) -> bool:
         """Locate the point on the curve; ModelError when it left the curve's domain."""
         if not self.kinematics.update(velocity=False, jacobians=True):
             raise ModelError(f"{self.name}: the point left the curve's domain")
-        return True
-
-    def detect(self) -> bool:
-        """:meth:`locate`, the result kept in :attr:`closed`."""
-        self.closed = self.locate()
         return True
 
     def jacobian(self, out) -> None:

@@ -121,7 +121,7 @@ def constraints(model, data, dt):
     problem (W, M̂⁻¹W, G, ξ_free, γ⁻, closing) of the joints and closed contacts."""
     for i in model.single_valued:
         if data.live[i]:
-            data.force_N[i] = add_penalty_force(model.contacts[i], data.closed[i], data.h)
+            data.force_N[i] = model.contacts[i].add_forces(data.h) if data.closed[i] else 0.0
     factor = iteration_factor(model, data, dt)
     if model.penalty:
         check_penalty(model, data, factor, dt)
@@ -224,21 +224,6 @@ def step(model, data, dt):
 
 
 # --- pieces of the stages -------------------------------------------------------------
-def add_penalty_force(contact, closed, h) -> float:
-    """A single-valued law at its located contact: h += W_N F_N (+ W_T F_T) body block by
-    body block; returns F_N [N] (0 when open)."""
-    k = contact.kinematics
-    force_N = float(contact.law.force(k.g_N, k.gd_N)) if closed else 0.0
-    if force_N == 0.0:
-        return 0.0
-    F_T = contact.friction.force(k.gd_T, force_N) if contact.friction is not None else None
-    for s, w_N, w_T in k.local_blocks():
-        h[s] += force_N * w_N
-        if F_T is not None:
-            h[s] += w_T @ F_T
-    return force_N
-
-
 def iteration_factor(model, data, dt):
     """The Cholesky factor of M̂ = M + θΔt D + θ²Δt² K at (t_m, q_m) on the active rows
     (Fortran order); for a constant M̂ the factor of this step size, computed once (steps

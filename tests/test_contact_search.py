@@ -241,7 +241,7 @@ def test_contact_searches_only_pairs_the_broad_phase_keeps():
         mass = PointMass(1.0, position=(0.0, 0.0, z))
         kin = ContactKinematicsPointContour2s(PointContour(mass.point), ball)
         contact = Contact(kin, UnilateralNewtonImpact(0.0), **kw)
-        contact.detect()
+        contact.locate()
         return kin.search.coarse_searches + kin.search.newton_solves
 
     assert Contact(ContactKinematicsPointContour2s(PointContour(ground_frame()), ball),
