@@ -63,8 +63,7 @@ import h5py
 import numpy as np
 
 from ffrmbs.errors import FfrmbsError, InputFileError, OutputFileError, os_reason
-from mbs.result_file import FORMAT, FORMAT_VERSION, damaged_result_file
-from preprocess.inputfiles import regular_file
+from mbs.result_file import attribute, damaged_result_file, open_result_file
 
 MARKER = ".ffrmbs-export"
 POINT_BODY_VELOCITY = ("PointMass", "RigidBody")   # kinds whose u[:3] is Ṙ (world) [m/s]
@@ -75,41 +74,13 @@ _CHUNK_VALUES = 3_000_000      # floats per block of samples held at once (~24 M
 # --------------------------------------------------------------------------- reading
 
 
-def _attr(obj, name, default=None):
-    """An HDF5 attribute as a Python str/number (bytes decoded), or ``default``."""
-    value = obj.attrs.get(name, default)
-    if isinstance(value, bytes):
-        value = value.decode("utf-8", "replace")
-    elif isinstance(value, np.generic):
-        value = value.item()
-    return value
-
-
 @contextmanager
 def open_result(path):
-    """Open an ffrmbs result file read-only and check that it is one.
-
-    Yields the ``h5py.File``. Raises :class:`InputFileError` (path, None, fault) when the
-    file is missing or not a regular file (never opened then:
-    :func:`preprocess.inputfiles.regular_file`), not HDF5, not of format ``ffrmbs-result``
-    version 1, or has no ``/t``, and when reading it fails inside the ``with`` block (a
-    damaged file: :func:`mbs.result_file.damaged_result_file`).
-    """
-    path = regular_file(path)
-    try:
-        f = h5py.File(path, "r")
-    except OSError as exc:
-        raise InputFileError(path, None, f"not an HDF5 file ({exc})") from None
-    with f, damaged_result_file(path):
-        fmt = _attr(f, "format")
-        if fmt != FORMAT:
-            raise InputFileError(path, None, f"not an ffrmbs result file (format attribute {fmt!r}, "
-                                             f"expected {FORMAT!r})")
-        version = _attr(f, "format_version")
-        if version != FORMAT_VERSION:
-            raise InputFileError(path, None, f"result format version {version!r} is not supported "
-                                             f"(this ffrmbs reads version {FORMAT_VERSION})")
-        if "t" not in f and _attr(f, "status") == "running":
+    """Open an ffrmbs result file read-only (:func:`mbs.result_file.open_result_file`: a
+    regular HDF5 file of the result format and version, reading faults as
+    InputFileError) that holds samples: a one-dimensional ``/t``. Yields the ``h5py.File``."""
+    with open_result_file(path) as f:
+        if "t" not in f and attribute(f, "status") == "running":
             raise InputFileError(path, None, "no samples written yet (the run has just started)")
         t = _dataset(f, "t", path)
         if t.ndim != 1:
@@ -359,7 +330,7 @@ def _plan(f, path, bodies):
             entry.update(samples=_surface_samples, u0=np.asarray(u0[...], dtype=float),
                          phi=np.asarray(phi[...], dtype=float), triangles=tri_a, nodes=nodes)
         else:
-            kind = _attr(g, "kind", "")
+            kind = attribute(g, "kind", "")
             u = g.get("u")
             velocity = kind in POINT_BODY_VELOCITY and isinstance(u, h5py.Dataset) \
                 and u.ndim == 2 and u.shape[1] >= 3

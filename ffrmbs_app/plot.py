@@ -23,7 +23,8 @@ from pathlib import Path
 import numpy as np
 
 from ffrmbs.errors import FfrmbsError, InputFileError, OutputFileError, os_reason
-from ffrmbs_app.export import _attr, _check_shape, _dataset, _group, open_result
+from ffrmbs_app.export import _check_shape, _dataset, _group, open_result
+from mbs.result_file import attribute
 
 COMPONENTS = ("x", "y", "z")
 SUBPLOT_HEIGHT = 2.4   # [in] per subplot
@@ -50,16 +51,16 @@ def default_names(f) -> list[str]:
 
 
 def _title(f, path, n) -> str:
-    scene = _attr(f, "scene") or Path(path).stem
+    scene = attribute(f, "scene") or Path(path).stem
     parts = [str(scene)]
-    integrator = _attr(f, "integrator")
-    dt = _attr(f, "dt")
+    integrator = attribute(f, "integrator")
+    dt = attribute(f, "dt")
     run = ", ".join(x for x in (str(integrator) if integrator else "",
                                 f"Δt = {dt:g} s" if isinstance(dt, (int, float)) else "") if x)
     if run:
         parts.append(run)
     title = " — ".join(parts)
-    status = _attr(f, "status", "") or ""
+    status = attribute(f, "status", "") or ""
     if status != "complete":
         t_last = float(f["t"][n - 1]) if n else 0.0
         if status.startswith("failed"):
@@ -71,7 +72,7 @@ def _title(f, path, n) -> str:
 
 def _unit(ds, default="") -> str:
     """" [<unit>]" from the dataset's ``units`` (or ``unit``) attribute, else ``default``."""
-    unit = _attr(ds, "units") or _attr(ds, "unit") or default
+    unit = attribute(ds, "units") or attribute(ds, "unit") or default
     return f" [{unit}]" if unit else ""
 
 

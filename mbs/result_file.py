@@ -481,21 +481,49 @@ def per_sample(name) -> bool:
     return not name.startswith("trace/") and "/surface/" not in name
 
 
+def attribute(obj, name, default=None):
+    """An HDF5 attribute of ``obj`` as a Python str/number (bytes decoded), or ``default``."""
+    value = obj.attrs.get(name, default)
+    if isinstance(value, bytes):
+        value = value.decode("utf-8", "replace")
+    elif isinstance(value, np.generic):
+        value = value.item()
+    return value
+
+
+@contextlib.contextmanager
+def open_result_file(path):
+    """Open the result file ``path`` read-only and check that it is one; yields the
+    ``h5py.File``. InputFileError (path, None, fault) when it is missing or not a regular
+    file (never opened then: :func:`preprocess.inputfiles.regular_file`), not HDF5, not of
+    format ``ffrmbs-result`` version :data:`FORMAT_VERSION`, and when reading fails inside
+    the block (:func:`damaged_result_file`)."""
+    path = regular_file(path)
+    try:
+        f = h5py.File(path, "r")
+    except OSError as exc:
+        raise InputFileError(path, None, f"not an HDF5 file ({exc})") from None
+    with f, damaged_result_file(path):
+        fmt = attribute(f, "format")
+        if fmt != FORMAT:
+            raise InputFileError(path, None, f"not an ffrmbs result file (format attribute {fmt!r}, "
+                                             f"expected {FORMAT!r})")
+        version = attribute(f, "format_version")
+        if version != FORMAT_VERSION:
+            raise InputFileError(path, None, f"result format version {version!r} is not supported "
+                                             f"(this ffrmbs reads version {FORMAT_VERSION})")
+        yield f
+
+
 def load_result(path) -> tuple[Result, dict]:
     """The samples of a result file as a :class:`~mbs.result.Result` (q, u assembled from
     the bodies' datasets) and the file's attributes (JSON ones decoded).
 
     A file cut short (a killed run) may hold more rows in some per-sample datasets than
     in others; every one is read up to the shortest, and the trace up to its shortest key.
-    A path that is missing or not a regular file is an InputFileError and never opened
-    (:func:`preprocess.inputfiles.regular_file`).
+    A file that is not a result file is an InputFileError (:func:`open_result_file`).
     """
-    path = regular_file(path)
-    try:
-        f = h5py.File(path, "r")
-    except OSError as exc:
-        raise InputFileError(path, None, f"not a readable HDF5 file ({exc})") from None
-    with f, damaged_result_file(path):
+    with open_result_file(path) as f:
         return _read(f, path)
 
 
@@ -526,8 +554,6 @@ def _raised_by_a_reader(exc) -> bool:
 
 def _read(f, path) -> tuple[Result, dict]:
     """The body of :func:`load_result` on the open file ``f``."""
-    if f.attrs.get("format") != FORMAT:
-        raise InputFileError(path, None, "not an ffrmbs result file (attribute format missing)")
     attrs = {k: (json.loads(v) if k in ("options", "versions", "inputs", "summary", "stats") else v)
              for k, v in f.attrs.items()}
     n = min((d.shape[0] for name, d in datasets(f) if per_sample(name)), default=0)
