@@ -430,6 +430,34 @@ def linear_bodies_h(rows, KD, force, q, u, h):
 
 
 @njit(cache=True)
+def linear_bodies_energy(rows, M, K, force, q, u):
+    """Kinetic plus potential energy [J] of the bodies of :func:`linear_bodies_h`'s rows
+    (no left-out ones): ½ uᵀ M u over each body's block of the constant mass matrix M
+    (nu, nu) (thesis eq. 2.43 with the frame at rest; ½ m |u|² for a point mass), the
+    elastic energy ½ q_fᵀ K q_f of the ``ELASTIC`` rows and −forceᵀ q (gravity, −m g·r)
+    of the ``CONSTANT_FORCE`` rows. Numpy reference: ``System.kinetic_energy`` plus
+    ``System.potential_energy`` (equal to rounding)."""
+    kinetic = 0.0
+    elastic = 0.0
+    gravity = 0.0
+    for k in range(rows.shape[0]):
+        a, b, kind = rows[k, 0], rows[k, 1], rows[k, 2]
+        for i in range(a, b):
+            s = 0.0
+            for j in range(a, b):
+                s += M[i, j] * u[j]
+            kinetic += u[i] * s
+            if kind == CONSTANT_FORCE:
+                gravity -= force[i] * q[i]
+            else:
+                s = 0.0
+                for j in range(a, b):
+                    s += K[i, j] * q[j]
+                elastic += q[i] * s
+    return 0.5 * kinetic + 0.5 * elastic + gravity
+
+
+@njit(cache=True)
 def additive_advance(q, u, step, out):
     """out = q + step · u (n,) [step: s], q and u of the same length (bodies whose
     q ⊕ Δu = q + Δu: point masses, FFR bodies on a prescribed frame); ``out`` may be

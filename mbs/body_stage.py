@@ -106,6 +106,7 @@ class BodyStage:
         self._flat = self.additive and sum(b.nq for b in self.bodies) == self.nu     # q and u row for row
         self.linear_rows, self.linear_KD, self.linear_force = self._linear_table()
         self.linear = self.linear_rows is not None
+        self.linear_M = self._linear_mass() if self.linear and not self.idle else None
 
     def _linear_table(self):
         """The rows (k, 3) (first row, end row, kind), coefficients KD (2, nu, nu) and
@@ -135,6 +136,23 @@ class BodyStage:
                 KD[1, a:e, a:e] = linear[1]
             rows.append((a, e, K.ELASTIC if linear[1] is None else K.ELASTIC_DAMPED))
         return np.array(rows, dtype=np.int64).reshape(-1, 3), KD, force
+
+    def _linear_mass(self):
+        """The constant mass matrix (nu, nu) of the linear bodies (their blocks at the
+        initial state), for :meth:`energy`."""
+        M = np.zeros((self.nu, self.nu))
+        for b in self.bodies:
+            M[b.u_slice, b.u_slice] = b.mass_matrix(b.q_init)
+        return M
+
+    def energy(self, q, u):
+        """Kinetic plus potential energy [J] in one kernel
+        (:func:`mbs._kernels.linear_bodies_energy`) when every body is linear, none is
+        left out and no force element acts (then the energy is the bodies' and gravity's
+        alone); else None (the caller sums the bodies' and links' own energies)."""
+        if self.linear_M is None:
+            return None
+        return K.linear_bodies_energy(self.linear_rows, self.linear_M, self.linear_KD[0], self.linear_force, q, u)
 
     @classmethod
     def of_equations(cls, equations) -> "BodyStage":

@@ -544,3 +544,37 @@ def test_stage_calls_allocate_no_numpy_array(data, data_60):
         assert left == 0
         peaks.append(peak)
     assert peaks[0] == peaks[1]
+
+
+@pytest.mark.parametrize("damped", [False, True])
+def test_linear_energy_is_the_systems_energy(data, damped):
+    """Frame-fixed FFR bodies and point masses, no gravity and no links: the one-kernel
+    energy equals the System's sum of the bodies' kinetic and elastic energies on random
+    states; with gravity (on the FFR body too) or a link there is no one-kernel energy."""
+    rng = np.random.default_rng(11)
+    options = {"rayleigh": (0.1, 1e-4)} if damped else {}
+    system = System()
+    system.add(FlexibleBodyFFR(data, N_F, frame=PrescribedFrameMotion.fixed(), **options))
+    for k in range(3):
+        system.add(PointMass(0.2 + k, position=(k, 0.0, 0.0)))
+    stage = BodyStage.of_equations(system.equations())
+    for _ in range(5):
+        q, u = rng.normal(size=system.nq), rng.normal(size=system.nu)
+        ref = system.kinetic_energy(0.0, q, u) + system.potential_energy(0.0, q)
+        assert abs(stage.energy(q, u) - ref) <= 1e-13 * abs(ref)
+    heavy = System(gravity=(0.0, -9.81, 0.0))
+    heavy.add(FlexibleBodyFFR(data, N_F, frame=PrescribedFrameMotion.fixed()))
+    heavy.add(PointMass(1.0))
+    assert BodyStage.of_equations(heavy.equations()).energy(*heavy.initial_state()) is None
+
+
+def test_linear_energy_of_point_masses_under_gravity():
+    """Point masses alone under gravity: ½ m |u|² − m g·r summed, as the System sums it."""
+    rng = np.random.default_rng(12)
+    system = System(gravity=(0.3, -9.81, 1.0))
+    for k in range(3):
+        system.add(PointMass(0.5 + k))
+    stage = BodyStage.of_equations(system.equations())
+    q, u = rng.normal(size=system.nq), rng.normal(size=system.nu)
+    ref = system.kinetic_energy(0.0, q, u) + system.potential_energy(0.0, q)
+    assert abs(stage.energy(q, u) - ref) <= 1e-13 * abs(ref)

@@ -133,8 +133,11 @@ class MoreauTimeStepping(Integrator):
                               "(a contact tunnelled, or a penalty stiffness is too soft for the load)")
         super().accepted(h)
         if self._trace is not None:
-            sys = self.system
-            energy = sys.kinetic_energy(self.t, self.q, self.u) + sys.potential_energy(self.t, self.q)
+            data = self.data
+            energy = self.model.body_stage.energy(data.q, data.u)
+            if energy is None:
+                sys = self.system
+                energy = sys.kinetic_energy(data.t, data.q, data.u) + sys.potential_energy(data.t, data.q)
             if not math.isfinite(energy):
                 raise non_finite(self.t, self.steps, "energy")
             for key, value in zip(TRACE_KEYS, (self.t, h, *last, energy)):
