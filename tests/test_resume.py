@@ -19,7 +19,7 @@ from mbs.result_file import load_result
 
 pytestmark = pytest.mark.slow   # seconds each: left out of the fast subset (-m "not slow")
 
-RUN = [sys.executable, "-m", "ffrmbs_app.cli", "run", "--no-check", "--no-export", "--t-end", "0.6"]
+RUN = [sys.executable, "-m", "ffrmbs_app.cli", "run", "--no-check", "--no-export", "--t-end", "2"]
 ENV = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
 
 
