@@ -3,15 +3,26 @@
 Built-in bodies (OpenCASCADE kernel, meshed with tetrahedra of order 1 or 2):
 
 * :func:`box` — a cuboid ``[0, lx] x [0, ly] x [0, lz]``, e.g. the report's
-  1 x 1 x 5 m beam (report Sec. 5.1, Table 1).
+  1 x 1 x 5 m beam (report Sec. 5.1, Table 1); structured with ``divisions``.
 * :func:`stepped_beam` — our reading of the thesis's "complex beam" (thesis
   Sec. 5.1, Fig. 5.1, Listing 4.1); see its docstring.
+* :func:`cylinder`, :func:`spherical_cap`, :func:`grooved_block` — curved surfaces
+  with exact equations, for contours fitted to unstructured face patches.
 
-Every built-in body carries node groups for its six bounding faces, named
-``x0, x1, y0, y1, z0, z1`` (nodes on the plane x = min, x = max, ...), and
-``body`` (all nodes), found on the mesh nodes with a tolerance relative to the
-body's own size (:func:`bounding_face_groups`), so at any scale. Meshing is
-single-threaded so that it is deterministic.
+Every built-in body carries node groups for its bounding faces, named
+``x0, x1, y0, y1, z0, z1`` (nodes on the plane x = min, x = max, ...; only the planes
+that are faces of the body), and ``body`` (all nodes), found on the mesh nodes with a
+tolerance relative to the body's own size (:func:`bounding_face_groups`), so at any
+scale. The curved bodies also name their faces and edges as gmsh physical groups
+(``lateral``, ``groove``, ``rim0``, ...), which become node groups: the nodes of that
+surface's or curve's mesh, mid-edge nodes included. Meshing is single-threaded so that
+it is deterministic.
+
+Order 2 is gmsh's own second-order meshing: each mid-edge node is placed on the
+geometry the edge lies on (``Mesh.SecondOrderLinear`` = 0), so a curved face's nodes
+lie on the exact CAD surface, not on the straight chord between the corners; on flat
+faces and inside the body they are the edges' midpoints. Curved elements are checked
+for inversion at their nodes and repaired or refused (:func:`_repair_curved_elements`).
 
 Before gmsh meshes, the mesh is estimated from the model's volume and mesh size and
 refused over the limits of :mod:`preprocess.limits` (``check_limits=False`` lifts them).
@@ -304,7 +315,7 @@ def box(lx, ly, lz, mesh_size, order=2, divisions=None, check_limits=True) -> Me
     ``mesh_size`` is then ignored and may be None). The vertices then lie on the grid
     ``x_i = i lx / nx`` (i = 0..nx), likewise in y and z, so every face's nodes form a
     regular grid: (n_a + 1) x (n_b + 1) levels for order 1, (2 n_a + 1) x (2 n_b + 1)
-    with the straight mid-edge nodes of order 2 — the node matrix O of thesis eq. 3.24
+    with the mid-edge nodes of order 2 (the edges' midpoints on the flat faces) — the node matrix O of thesis eq. 3.24
     (see :func:`contours.node_grid.node_matrix`).
 
     ``check_limits``: a mesh estimated over the limits of :mod:`preprocess.limits` is a
@@ -406,10 +417,7 @@ def spherical_cap(radius, height, mesh_size, order=2, check_limits=True) -> Mesh
 
     ``check_limits`` as for :func:`box`.
     """
-    fe.check_positive("cap radius", radius)
-    fe.check_positive("cap height", height)
-    if not height < 2 * radius:
-        raise ModelError(f"cap height must be below twice the radius ({2 * radius:g}), not {height!r}")
+    check_cap_dimensions(radius, height)
 
     def groups(gmsh):
         _physical_groups(gmsh, 2, lambda tag: "cap" if gmsh.model.getType(2, tag) == "Sphere" else "base",
@@ -418,6 +426,25 @@ def spherical_cap(radius, height, mesh_size, order=2, check_limits=True) -> Mesh
     polar = math.asin((radius - height) / radius)     # latitude of the cutting plane
     return _mesh_occ("spherical_cap", lambda occ: occ.addSphere(0, 0, 0, radius, angle1=polar), mesh_size, order,
                      check_limits=check_limits, groups=groups, planes=("z0",))
+
+
+def check_cap_dimensions(radius, height) -> None:
+    """ModelError unless the radius and height of :func:`spherical_cap` are positive and
+    finite, height < 2 radius."""
+    fe.check_positive("cap radius", radius)
+    fe.check_positive("cap height", height)
+    if not height < 2 * radius:
+        raise ModelError(f"cap height must be below twice the radius ({2 * radius:g}), not {height!r}")
+
+
+def check_groove_dimensions(lx, ly, lz, radius) -> None:
+    """ModelError unless the dimensions of :func:`grooved_block` are positive and finite,
+    radius < min(ly/2, lz)."""
+    for name, length in (("block length lx", lx), ("block length ly", ly), ("block length lz", lz),
+                         ("groove radius", radius)):
+        fe.check_positive(name, length)
+    if not radius < min(ly / 2, lz):
+        raise ModelError(f"groove radius must be below min(ly/2, lz) = {min(ly / 2, lz):g}, not {radius!r}")
 
 
 def grooved_block(lx, ly, lz, radius, mesh_size, order=2, check_limits=True) -> Mesh:
@@ -435,11 +462,7 @@ def grooved_block(lx, ly, lz, radius, mesh_size, order=2, check_limits=True) -> 
 
     ``check_limits`` as for :func:`box`.
     """
-    for name, length in (("block length lx", lx), ("block length ly", ly), ("block length lz", lz),
-                         ("groove radius", radius)):
-        fe.check_positive(name, length)
-    if not radius < min(ly / 2, lz):
-        raise ModelError(f"groove radius must be below min(ly/2, lz) = {min(ly / 2, lz):g}, not {radius!r}")
+    check_groove_dimensions(lx, ly, lz, radius)
 
     def build(occ):
         block = occ.addBox(0, 0, 0, lx, ly, lz)
