@@ -315,8 +315,8 @@ def box(lx, ly, lz, mesh_size, order=2, divisions=None, check_limits=True) -> Me
     ``mesh_size`` is then ignored and may be None). The vertices then lie on the grid
     ``x_i = i lx / nx`` (i = 0..nx), likewise in y and z, so every face's nodes form a
     regular grid: (n_a + 1) x (n_b + 1) levels for order 1, (2 n_a + 1) x (2 n_b + 1)
-    with the mid-edge nodes of order 2 (the edges' midpoints on the flat faces) — the node matrix O of thesis eq. 3.24
-    (see :func:`contours.node_grid.node_matrix`).
+    with the mid-edge nodes of order 2 (the edges' midpoints, the faces being flat) — the
+    node matrix O of thesis eq. 3.24 (see :func:`contours.node_grid.node_matrix`).
 
     ``check_limits``: a mesh estimated over the limits of :mod:`preprocess.limits` is a
     ModelError before meshing.
@@ -472,7 +472,7 @@ def grooved_block(lx, ly, lz, radius, mesh_size, order=2, check_limits=True) -> 
         def face(tag):
             if gmsh.model.getType(2, tag) == "Cylinder":
                 return "groove"
-            return "bottom" if abs(_centre(gmsh, 2, tag)[2]) <= PLANE_RTOL * max(lx, ly, lz) else None
+            return "bottom" if gmsh.model.getBoundingBox(2, tag)[5] < lz / 2 else None   # top z below lz/2
 
         _physical_groups(gmsh, 2, face, ("groove", "bottom"))
 

@@ -84,9 +84,9 @@ def builtin_shape(spec: str):
 
 def structured_divisions(text: str) -> tuple:
     """The divisions (nx, ny, nz) of ``--structured NX,NY,NZ``: three whole numbers >= 1,
-    element edges along x, y, z; a ModelError otherwise."""
+    element edges along x, y, z, given as text; a ModelError otherwise."""
     try:
-        divisions = tuple(int(v) for v in text.split(","))
+        divisions = tuple(int(v) for v in str(text).split(","))
     except ValueError:
         divisions = ()
     if len(divisions) != 3 or min(divisions) < 1:
