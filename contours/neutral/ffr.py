@@ -17,6 +17,7 @@ from scipy.spatial import cKDTree
 from ffrmbs.errors import ModelError
 from contours.nurbs import Interpolation1D, SurfaceInterpolation
 
+from ..fitting import SMOOTHING, surface_fit
 from ..node_grid import check_node_matrix, node_line, node_matrix
 from .factory import Contour1sNeutralFactory, Contour2sNeutralFactory
 from .products import NeutralNurbsLocalPosition, NeutralNurbsModeShapes, NeutralNurbsPosition, NeutralNurbsVelocity
@@ -79,44 +80,71 @@ class Contour1sNeutralFFR(_FFRProducts, Contour1sNeutralFactory):
 
 
 class Contour2sNeutralFFR(_FFRProducts, Contour2sNeutralFactory):
-    """A surface through a structured patch of nodes of an FFR body (thesis Fig. 3.4).
+    """A surface on a patch of nodes of an FFR body (thesis Fig. 3.4).
+
+    A structured patch (a node grid, thesis eq. 3.24) is interpolated exactly; any other
+    face group of the body's surface — an unstructured tet4 or tet10 mesh — is fitted by
+    least squares (:mod:`contours.fitting`): its nodes are mapped onto the unit square
+    (periodic in η for a closed band), and the control points of ū0 and of every mode
+    shape are F ū0 and F Φ with one fitting matrix F, so the per-step update is the same.
 
     Parameters
     ----------
     body : FlexibleBodyFFR
     nodes : str or (k_eta, k_xi) int
-        A node-group name of the body file (a planar structured patch, ordered
-        automatically, see :func:`contours.node_grid.node_matrix`) or the node matrix O
-        (eq. 3.24) itself.
+        A node-group name of the body file or the node matrix O (eq. 3.24) itself. A group
+        that is a planar structured grid is ordered automatically
+        (:func:`contours.node_grid.node_matrix`) and interpolated; any other group is fitted.
     extra_rows : int
-        With a group: rows of coplanar surface nodes added beyond each side of the patch
+        Grid route: rows of coplanar surface nodes added beyond each side of the patch
         where complete rows exist (thesis Sec. 3.2.2: better tangents near the boundary).
     degree : int or (int, int)
     closed : bool or (bool, bool)
-        Periodic in η and/or ξ.
+        Grid route: periodic in η and/or ξ. A fitted patch is periodic in η exactly when
+        it is a closed band (two boundary loops).
     method : "chord" or "centripetal"
+        Grid route: the parametrization of the node grid.
     outward : None, +1 or -1
         Sign of t_η × t_ξ pointing out of the material; None decides it from the body's
         nodes behind the patch.
+    control_points : None, int or (int, int)
+        Distinct control points per direction of a fitted patch (None: knot spans of about
+        two node spacings, :func:`contours.fitting.default_control_points`). Given with a
+        group, the group is fitted even if it is a grid.
+    smoothing : float
+        Dimensionless thin-plate weight of the fit (:mod:`contours.fitting.bspline_fit`).
     compiled : bool
         Span-local numba evaluation (default) or the reference route
         (:class:`~contours.neutral.factory.NeutralContour`).
+
+    Attributes
+    ----------
+    nodes : the node matrix O (grid route) or the patch's node indices (k,) (fitted).
+    fit, patch : the :class:`~contours.fitting.SurfaceFit` and
+        :class:`~contours.fitting.SurfacePatch` of a fitted patch, else None.
     """
 
     def __init__(self, body, nodes, extra_rows=0, degree=3, closed=False, method="chord",
-                 outward=None, name="neutral 2s", compiled=True):
+                 outward=None, name="neutral 2s", compiled=True, control_points=None, smoothing=SMOOTHING):
         data = body.data
+        self.fit = self.patch = None
         if isinstance(nodes, str):
-            candidates = data.surface_nodes if data.surface_triangles is not None else None
-            O = node_matrix(data.u0, body.node_group(nodes), extra_rows, candidates)
+            group = body.node_group(nodes)
+            O = None if control_points is not None else _grid_or_none(data, group, extra_rows)
+            if O is None:
+                self.fit, self.patch = surface_fit(data.u0, data.surface_triangles, group, control_points,
+                                                   degree, smoothing, f"{name}: node group {nodes!r}")
         else:
             O = check_node_matrix(nodes, data.n_nodes)
-        self.nodes = O
-        grid = data.u0[O]
-        interp = SurfaceInterpolation.from_grid(grid, as_pair(degree, "degree"), as_pair(closed, "closed"), method)
-        phi = body.phi_nodes[O]
-        super().__init__(body, SurfaceSpace(interp), grid, phi, 1 if outward is None else outward, name,
-                         compiled)
+        if O is None:
+            self.nodes = self.patch.nodes
+            space = SurfaceSpace(self.fit)
+        else:
+            self.nodes = O
+            space = SurfaceSpace(SurfaceInterpolation.from_grid(data.u0[O], as_pair(degree, "degree"),
+                                                                as_pair(closed, "closed"), method))
+        super().__init__(body, space, data.u0[self.nodes], body.phi_nodes[self.nodes],
+                         1 if outward is None else outward, name, compiled)
         if outward is None:
             self.sign = self._outward_sign()
 
@@ -137,3 +165,13 @@ class Contour2sNeutralFFR(_FFRProducts, Contour2sNeutralFactory):
         if abs(depth.mean()) <= 1e-9 * np.abs(depth).max(initial=0.0) or not depth.any():
             raise ModelError(f"{self.name}: cannot tell the material side of the patch; give outward=+1 or -1")
         return 1.0 if depth.mean() < 0 else -1.0
+
+
+def _grid_or_none(data, group, extra_rows):
+    """The node matrix O of a planar structured ``group`` (eq. 3.24), or None when the
+    group is not one (then it is fitted)."""
+    candidates = data.surface_nodes if data.surface_triangles is not None else None
+    try:
+        return node_matrix(data.u0, group, extra_rows, candidates)
+    except ModelError:
+        return None
