@@ -21,8 +21,8 @@ node indices are 0-based rows of ``u0``.
 
 Walking convention of :func:`node_path` (deterministic): a closed walk starts at the
 smallest node index and goes first to the smaller of its two neighbours; an open walk
-starts at the end nearer the body-frame origin (given ``u0``; equal distances within
-1e-12 of the body's size, or no ``u0``: the end with the smaller index).
+starts at the end nearer the body-frame origin (given ``u0``; distances equal within
+1e-12 x the largest coordinate, or no ``u0``: the end with the smaller index).
 
 Orientation convention of O (deterministic; a right-handed frame is not guaranteed):
 the grid's two in-plane line directions t_eta, t_xi are unit vectors, each signed so
@@ -291,7 +291,7 @@ def node_line(u0, start, direction, nodes=None, tol=None) -> np.ndarray:
     return idx[np.argsort(t, kind="stable")]
 
 
-def surface_half_edges(surface_triangles) -> np.ndarray:
+def _half_edges(surface_triangles) -> np.ndarray:
     """The edges of the surface triangles as node pairs (E, 2), each as often as it occurs.
 
     ``surface_triangles`` is (T, 3) for tet4 (corners c0, c1, c2) or (T, 6) for tet10
@@ -317,7 +317,8 @@ def node_path(surface_triangles, nodes, u0=None, name="node group") -> tuple[np.
     Parameters
     ----------
     surface_triangles : (T, 3) tet4 or (T, 6) tet10 surface triangles of the body
-        (:func:`surface_half_edges`; e.g. ``body.data.surface_triangles``).
+        (e.g. ``body.data.surface_triangles``; tet10 edges are walked
+        corner – mid-edge node – corner).
     nodes : node indices of the group (any order; duplicates are ignored).
     u0 : (N, 3) undeformed node positions [m], optional: picks the start of an open walk.
     name : how the group is named in error messages (e.g. ``"node group 'rim0'"``).
@@ -336,7 +337,7 @@ def node_path(surface_triangles, nodes, u0=None, name="node group") -> tuple[np.
     — fewer than 2 nodes, a node not on the surface, a node with no or with 3 or more
     neighbours, several disconnected pieces — is a ModelError naming the fault.
     """
-    edges = surface_half_edges(surface_triangles)
+    edges = _half_edges(surface_triangles)
     group = np.unique(np.asarray(nodes, dtype=np.int64).reshape(-1))
     if len(group) < 2:
         raise ModelError(f"{name} is not a line of surface nodes: it has {len(group)} node(s), a line needs at least 2")
@@ -351,10 +352,10 @@ def node_path(surface_triangles, nodes, u0=None, name="node group") -> tuple[np.
                          f"the body's surface (e.g. node {int(off[0])})")
     local = -np.ones(n, dtype=np.int64)
     local[group] = np.arange(len(group))
-    ends = local[edges]
-    ends = ends[(ends >= 0).all(axis=1) & (ends[:, 0] != ends[:, 1])]
+    links = local[edges]
+    links = links[(links >= 0).all(axis=1)]                      # surface edges inside the group
     k = len(group)
-    adjacency = sp.coo_matrix((np.ones(len(ends)), (ends[:, 0], ends[:, 1])), shape=(k, k)).tocsr()
+    adjacency = sp.coo_matrix((np.ones(len(links)), (links[:, 0], links[:, 1])), shape=(k, k)).tocsr()
     adjacency = ((adjacency + adjacency.T) > 0).tocsr()          # undirected, each edge once
     degree = np.diff(adjacency.indptr)
     if degree.max() > 2:
@@ -386,8 +387,8 @@ def node_path(surface_triangles, nodes, u0=None, name="node group") -> tuple[np.
 
 def _open_start(ends, group, u0):
     """Local index of the start of an open walk: of the two ``ends`` (local indices into
-    ``group``) the one nearer the origin; ties (within 1e-12 of the body's size) or no
-    u0: the one with the smaller node index."""
+    ``group``) the one nearer the origin; ties (within 1e-12 x the largest coordinate
+    of u0) or no u0: the one with the smaller node index."""
     if u0 is None:
         return int(ends[0])
     u0 = _positions(u0)

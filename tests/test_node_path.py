@@ -17,7 +17,7 @@ from mbs import FlexibleBodyFFR
 from preprocess import Material, build_body
 from validation.bench.common import moving_state
 
-from gmsh_parts import BOX, LENGTH, RADIUS, box_mesh, cylinder_mesh
+from gmsh_parts import BOX, RADIUS, box_mesh, cylinder_mesh
 
 STEEL = Material(7800.0, 2.1e11, 0.3)
 MESHES = [(1, True), (2, True), (2, False)]          # (order, tet10 mid-edge nodes on the CAD curve)
