@@ -4,9 +4,10 @@
 The products interpolate, on the undeformed node grid of the body file, the local
 position ū = ū0 + Φ q_f and the mode shapes Φ once (thesis Table 4.1); position,
 velocity and J_T = [1, −A ũ T, A Φ] (thesis Sec. 3.2.2) follow by control-point
-combinations. Nodes come from a body-file node group (structured-grid detection,
-:func:`contours.node_grid.node_matrix`), an explicit node matrix O (eq. 3.24) or a line
-of nodes.
+combinations. Nodes come from a body-file node group (2s: structured-grid detection,
+:func:`contours.node_grid.node_matrix`; 1s: a walk along the surface edges,
+:func:`contours.node_grid.node_path`), an explicit node matrix O (eq. 3.24) or list,
+or a straight line of nodes.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from ffrmbs.errors import ModelError
 from contours.nurbs import Interpolation1D, SurfaceInterpolation
 
 from ..fitting import SMOOTHING, surface_fit
-from ..node_grid import check_node_matrix, node_line, node_matrix
+from ..node_grid import check_node_matrix, node_line, node_matrix, node_path
 from .factory import Contour1sNeutralFactory, Contour2sNeutralFactory
 from .products import NeutralNurbsLocalPosition, NeutralNurbsModeShapes, NeutralNurbsPosition, NeutralNurbsVelocity
 from .space import CurveSpace, SurfaceSpace, as_pair
@@ -46,15 +47,22 @@ class Contour1sNeutralFFR(_FFRProducts, Contour1sNeutralFactory):
     Parameters
     ----------
     body : FlexibleBodyFFR
-    nodes : (k,) int
-        0-based node indices in curve order (see :meth:`along_line`).
+    nodes : str or (k,) int
+        A node-group name of the body file — a feature edge or any line of surface
+        nodes of any tet4/tet10 mesh (e.g. a gmsh physical curve: a box edge, a pulley
+        rim), ordered by walking the body's surface edges
+        (:func:`contours.node_grid.node_path`, whose module docstring gives the start
+        and direction) — or 0-based node indices in curve order (see
+        :meth:`along_line`).
     normal : (3,)
         Reference normal in the body frame (e.g. (0, 1, 0) for a band on top of a beam
         along x); it rotates with the body and is made perpendicular to the tangent.
     degree : int
         NURBS degree (3: C²).
-    closed : bool
-        Periodic curve (the last node connects back to the first).
+    closed : bool or None
+        Periodic curve (the last node connects back to the first). None: a group's walk
+        decides (a cycle of surface edges gives a closed curve, a path an open one),
+        a list is open. Given with a group, it must agree with the walk (ModelError).
     method : "chord" or "centripetal"
         Parametrization of the undeformed nodes (thesis eq. 3.19–3.21).
     compiled : bool
@@ -62,13 +70,32 @@ class Contour1sNeutralFFR(_FFRProducts, Contour1sNeutralFactory):
         (:class:`~contours.neutral.factory.NeutralContour`).
     """
 
-    def __init__(self, body, nodes, normal, degree=3, closed=False, method="chord", name="neutral 1s",
+    def __init__(self, body, nodes, normal, degree=3, closed=None, method="chord", name="neutral 1s",
                  compiled=True):
-        nodes = check_node_matrix(np.asarray(nodes).reshape(1, -1), body.data.n_nodes)[0]
+        if isinstance(nodes, str):
+            nodes, closed = self._walk(body, nodes, closed, name)
+        else:
+            nodes = check_node_matrix(np.asarray(nodes).reshape(1, -1), body.data.n_nodes)[0]
+            closed = bool(closed)
         self.nodes = nodes
         interp = Interpolation1D.from_points(body.data.u0[nodes], degree, closed, method)
         phi = body.phi_nodes[nodes]
         super().__init__(body, CurveSpace(interp), body.data.u0[nodes], phi, normal, name, compiled)
+
+    @staticmethod
+    def _walk(body, group, closed, name):
+        """(ordered nodes, closed) of the node group ``group`` walked along the surface
+        edges; ``closed`` (None or a bool) checked against the walk."""
+        data = body.data
+        if data.surface_triangles is None:
+            raise ModelError(f"{name}: the body file of {body.name!r} holds no surface triangles, so node group "
+                             f"{group!r} cannot be walked; give the nodes as an ordered list")
+        path, cycle = node_path(data.surface_triangles, body.node_group(group), data.u0, f"node group {group!r}")
+        if closed is not None and bool(closed) != cycle:
+            shape = "a closed loop" if cycle else "an open line with two ends"
+            raise ModelError(f"{name}: closed={bool(closed)} but node group {group!r} is {shape} of surface "
+                             f"edges; omit closed (it follows the walk) or give {cycle}")
+        return path, cycle
 
     @classmethod
     def along_line(cls, body, start, direction, normal, nodes=None, **kw):
