@@ -11,10 +11,18 @@ sorted line of nodes.
   group ``'y1'`` of :func:`preprocess.geometry.box` meshed with ``divisions``) and
   return O, optionally extended by rows of nodes beyond the boundary.
 * :func:`node_line` — the nodes on a straight line, sorted along it.
+* :func:`node_path` — the nodes of a feature edge or any line of surface nodes of an
+  unstructured mesh (a gmsh physical curve: a box edge, a cylinder's rim), ordered by
+  walking the edges of the body's surface triangles; open or closed.
 * :func:`check_node_matrix` — validate an explicitly given O.
 
 All positions are undeformed body-frame node positions ``u0`` of shape (N, 3) in m;
 node indices are 0-based rows of ``u0``.
+
+Walking convention of :func:`node_path` (deterministic): a closed walk starts at the
+smallest node index and goes first to the smaller of its two neighbours; an open walk
+starts at the end nearer the body-frame origin (given ``u0``; distances equal within
+1e-12 x the largest coordinate, or no ``u0``: the end with the smaller index).
 
 Orientation convention of O (deterministic; a right-handed frame is not guaranteed):
 the grid's two in-plane line directions t_eta, t_xi are unit vectors, each signed so
@@ -29,11 +37,13 @@ follow z, both increasing.
 from __future__ import annotations
 
 import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from ffrmbs.errors import ModelError
 
-__all__ = ["node_matrix", "node_line", "check_node_matrix"]
+__all__ = ["node_matrix", "node_line", "node_path", "check_node_matrix"]
 
 
 def _positions(u0):
@@ -279,6 +289,114 @@ def node_line(u0, start, direction, nodes=None, tol=None) -> np.ndarray:
             f"{start.tolist()} along {d.tolist()}; need at least 2")
     idx, t = idx[on], t[on]
     return idx[np.argsort(t, kind="stable")]
+
+
+def _half_edges(surface_triangles) -> np.ndarray:
+    """The edges of the surface triangles as node pairs (E, 2), each as often as it occurs.
+
+    ``surface_triangles`` is (T, 3) for tet4 (corners c0, c1, c2) or (T, 6) for tet10
+    (corners, then the mid-edge nodes m01, m12, m20 of (c0, c1), (c1, c2), (c2, c0)); a
+    tet10 edge is split at its mid-edge node into the half-edges c–m and m–c, so the
+    mid-edge nodes are nodes of the graph like the corners.
+    """
+    tri = np.asarray(surface_triangles)
+    if tri.ndim != 2 or tri.shape[1] not in (3, 6) or not np.issubdtype(tri.dtype, np.integer):
+        raise ModelError(f"surface triangles must be an integer array (T, 3) or (T, 6), not {tri.dtype} {tri.shape}")
+    if tri.shape[1] == 3:
+        pairs = ((0, 1), (1, 2), (2, 0))
+    else:
+        pairs = ((0, 3), (3, 1), (1, 4), (4, 2), (2, 5), (5, 0))
+    return np.concatenate([tri[:, [a, b]] for a, b in pairs]).astype(np.int64)
+
+
+def node_path(surface_triangles, nodes, u0=None, name="node group") -> tuple[np.ndarray, bool]:
+    """Order the nodes of a feature edge (or any line of surface nodes) of an unstructured
+    mesh by walking the edges of the surface triangles; for 1D contours (thesis Sec. 3.2.2,
+    whose node lines are ordered by hand).
+
+    Parameters
+    ----------
+    surface_triangles : (T, 3) tet4 or (T, 6) tet10 surface triangles of the body
+        (e.g. ``body.data.surface_triangles``; tet10 edges are walked
+        corner – mid-edge node – corner).
+    nodes : node indices of the group (any order; duplicates are ignored).
+    u0 : (N, 3) undeformed node positions [m], optional: picks the start of an open walk.
+    name : how the group is named in error messages (e.g. ``"node group 'rim0'"``).
+
+    Returns
+    -------
+    (path, closed): path is an int64 array (k,) holding every node of the group once, in
+    walking order; closed is True when the group is a cycle (the last node joins the
+    first) and False for an open path. Start and direction follow the module docstring:
+    closed — the smallest index first, then the smaller of its two neighbours; open —
+    the end nearer the origin of the body frame (ties, or no u0: the smaller index).
+
+    The graph is the surface edges (tet10: half-edges) whose two ends are both in the
+    group. It must be a simple path (two nodes with one neighbour in the group, the
+    others with two) or a simple cycle (every node with two neighbours); anything else
+    — fewer than 2 nodes, a node not on the surface, a node with no or with 3 or more
+    neighbours, several disconnected pieces — is a ModelError naming the fault.
+    """
+    edges = _half_edges(surface_triangles)
+    group = np.unique(np.asarray(nodes, dtype=np.int64).reshape(-1))
+    if len(group) < 2:
+        raise ModelError(f"{name} is not a line of surface nodes: it has {len(group)} node(s), a line needs at least 2")
+    if group[0] < 0:
+        raise ModelError(f"{name}: node index {int(group[0])} is negative")
+    n = int(max(edges.max(initial=-1), group[-1])) + 1
+    on_surface = np.zeros(n, dtype=bool)
+    on_surface[edges[:, 0]] = True
+    off = group[~on_surface[group]]
+    if off.size:
+        raise ModelError(f"{name} is not a line of surface nodes: {off.size} of its {len(group)} nodes are not on "
+                         f"the body's surface (e.g. node {int(off[0])})")
+    local = -np.ones(n, dtype=np.int64)
+    local[group] = np.arange(len(group))
+    links = local[edges]
+    links = links[(links >= 0).all(axis=1)]                      # surface edges inside the group
+    k = len(group)
+    adjacency = sp.coo_matrix((np.ones(len(links)), (links[:, 0], links[:, 1])), shape=(k, k)).tocsr()
+    adjacency = ((adjacency + adjacency.T) > 0).tocsr()          # undirected, each edge once
+    degree = np.diff(adjacency.indptr)
+    if degree.max() > 2:
+        i = int(np.argmax(degree > 2))
+        raise ModelError(f"{name} is not a line of surface nodes: node {int(group[i])} has {int(degree[i])} "
+                         f"neighbours in the group along surface edges (a branching or a face, not an edge)")
+    if degree.min() == 0:
+        i = int(np.argmin(degree))
+        raise ModelError(f"{name} is not a line of surface nodes: node {int(group[i])} has no neighbour in the "
+                         f"group along surface edges (an isolated node)")
+    n_pieces, _ = connected_components(adjacency, directed=False)
+    if n_pieces > 1:
+        raise ModelError(f"{name} is not a line of surface nodes: it falls into {n_pieces} disconnected pieces "
+                         f"(give one connected edge)")
+    closed = bool(degree.min() == 2)
+    current = 0 if closed else _open_start(np.flatnonzero(degree == 1), group, u0)
+    previous = -1
+    path = np.empty(k, dtype=np.int64)
+    for step in range(k):
+        path[step] = current
+        around = adjacency.indices[adjacency.indptr[current]:adjacency.indptr[current + 1]]
+        if closed and step == 0:
+            following = int(around.min())            # the smaller neighbour (local order = index order)
+        else:
+            following = int(around[0] if around[0] != previous else around[-1])
+        previous, current = current, following
+    return group[path], closed
+
+
+def _open_start(ends, group, u0):
+    """Local index of the start of an open walk: of the two ``ends`` (local indices into
+    ``group``) the one nearer the origin; ties (within 1e-12 x the largest coordinate
+    of u0) or no u0: the one with the smaller node index."""
+    if u0 is None:
+        return int(ends[0])
+    u0 = _positions(u0)
+    distance = np.linalg.norm(u0[group[ends]], axis=1)
+    size = float(np.abs(u0).max())
+    if abs(distance[0] - distance[1]) <= 1e-12 * size:
+        return int(ends[0])
+    return int(ends[np.argmin(distance)])
 
 
 def check_node_matrix(O, n_nodes) -> np.ndarray:

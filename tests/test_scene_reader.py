@@ -3,6 +3,7 @@ errors that name the file, the line and the key."""
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -22,6 +23,7 @@ from mbs import (DistributedForce, FlexibleBodyFFR, Force, Joint, NodalForces, P
 from preprocess import Material, build_body, read_body, write_body
 from preprocess.geometry import box
 
+from gmsh_parts import LENGTH, RADIUS, cylinder_mesh
 from scene_files import BODIES
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "scenes"
@@ -575,3 +577,104 @@ def test_nothing_is_built_when_a_late_entry_is_wrong(body_dir, sink_text, monkey
     path.write_text(sink_text)
     read_scene(path)
     assert made.count("FlexibleBodyFFR") == 2 and "SpringDamper" in made      # the counting works
+
+
+# --- 1s contours on a feature edge of an unstructured mesh (issue 20) ------------------------------
+
+RIM = """\
+[scene]
+t_end = 0.02
+dt = 1e-4
+n_out = 3
+gravity = [0.0, 0.0, -9.81]
+
+[[body]]
+name = "cylinder"
+kind = "flexible"
+source = "rim/body.h5"
+modes = 3
+frame = "fixed"
+
+[[body]]
+name = "ball"
+kind = "point_mass"
+mass = 0.01
+position = [X, 0.0, Z]
+velocity = [0.0, 0.0, -0.2]
+
+[[contact]]
+name = "on the rim"
+contour1 = { kind = "sphere", body = "ball", radius = BALL }
+contour2.kind = "band"
+contour2.body = "cylinder"
+contour2.nodes = "rim1"
+contour2.normal = [0.0, 0.0, 1.0]
+contour2.degree = 4
+contour2.width = 0.01
+law = "impact"
+
+[outputs]
+ball = { body = "ball" }
+"""
+
+
+@pytest.fixture(scope="module")
+def rim_scene(tmp_path_factory):
+    """A steel cylinder (radius 50 mm, length 100 mm, unstructured tet4, 3 free-free modes,
+    frame fixed) and a ball of radius 5 mm falling at 0.2 m/s from 1 mm above the band on
+    its top rim ``rim1`` (a gmsh physical curve), 2 mm inside the rim. Returns (the scene
+    file's text, its path, the rest height of the ball's centre [m]). The same body without
+    its surface triangles is written to ``bare/``."""
+    directory = tmp_path_factory.mktemp("rim")
+    data = build_body(cylinder_mesh(0.02, 1), Material(7800.0, 2.1e11, 0.3), n_modes=3)
+    write_body(directory / "rim", data)
+    write_body(directory / "bare", dataclasses.replace(data, surface_triangles=None))    # no surface to walk
+    ball = 0.005
+    rest = LENGTH + ball
+    text = (RIM.replace("X", repr(RADIUS - 0.002)).replace("Z", repr(rest + 1e-3))
+            .replace("BALL", repr(ball)))
+    path = directory / "rim.toml"
+    path.write_text(text)
+    return text, path, rest
+
+
+def test_band_on_an_unstructured_rim_catches_a_ball(rim_scene):
+    """The group ``rim1`` is walked into a closed band; the ball lands on it (at about 5 ms)
+    and rests at the height of a sphere on the flat top face, one radius above z = LENGTH
+    (the band is exact in that plane; the steel deflects by nanometres), within the
+    impact step's travel v·Δt (Moreau closes the contact at the midpoint of the step,
+    after up to one step of penetration); free fall would have taken it 2 mm below."""
+    _, path, rest = rim_scene
+    scene = read_scene(path)
+    (contact,) = scene.system.contacts
+    band = contact.kinematics.contour2
+    assert isinstance(band, FlexibleBand) and band.neutral.space.eta.interp.closed
+    result = simulate(scene, scene.outputs, scene.t_end, scene.n_out)
+    z = result["ball"][:, 2]
+    free_fall = rest + 1e-3 - 0.2 * scene.t_end - 0.5 * 9.81 * scene.t_end ** 2
+    assert free_fall < rest - 2e-3
+    v_impact = np.hypot(0.2, np.sqrt(2.0 * 9.81 * 1e-3))
+    assert z[-1] == pytest.approx(rest, abs=v_impact * scene.dt)
+    assert z[-1] == pytest.approx(z[-2], abs=1e-9)                     # at rest from t = 10 ms
+
+
+@pytest.mark.parametrize("old, new, fragment, line", [
+    ('contour2.nodes = "rim1"', 'contour2.nodes = "base"',
+     "contact 'on the rim': contour2 (band): node group 'base' is not a line of surface nodes: node",
+     'contour2.nodes = "base"'),
+    ('source = "rim/body.h5"', 'source = "bare/body.h5"',
+     "contact 'on the rim': contour2 (band): body 'cylinder' has no surface triangles in its body file, so node "
+     "group 'rim1' cannot be ordered", 'contour2.nodes = "rim1"'),
+    ('contour2.width = 0.01', 'contour2.width = 0.01\ncontour2.closed = false',
+     "contact 'on the rim': contour2 (band): 'closed = false' but node group 'rim1' is a closed loop of surface "
+     "edges: omit 'closed'", "contour2.closed = false"),
+])
+def test_faults_of_an_edge_group_name_their_key(rim_scene, old, new, fragment, line):
+    text, path, _ = rim_scene
+    fault = path.with_name("rim-fault.toml")
+    assert text.count(old) == 1
+    fault.write_text(text.replace(old, new))
+    with pytest.raises(InputFileError) as info:
+        read_scene(fault)
+    assert fragment in info.value.fault
+    assert fault.read_text().splitlines()[info.value.line - 1] == line

@@ -4,9 +4,10 @@
 The products interpolate, on the undeformed node grid of the body file, the local
 position ū = ū0 + Φ q_f and the mode shapes Φ once (thesis Table 4.1); position,
 velocity and J_T = [1, −A ũ T, A Φ] (thesis Sec. 3.2.2) follow by control-point
-combinations. Nodes come from a body-file node group (structured-grid detection,
-:func:`contours.node_grid.node_matrix`), an explicit node matrix O (eq. 3.24) or a line
-of nodes.
+combinations. Nodes come from a body-file node group (2s: structured-grid detection,
+:func:`contours.node_grid.node_matrix`; 1s: a walk along the surface edges,
+:func:`contours.node_grid.node_path`), an explicit node matrix O (eq. 3.24) or list,
+or a straight line of nodes.
 """
 
 from __future__ import annotations
@@ -17,7 +18,8 @@ from scipy.spatial import cKDTree
 from ffrmbs.errors import ModelError
 from contours.nurbs import Interpolation1D, SurfaceInterpolation
 
-from ..node_grid import check_node_matrix, node_line, node_matrix
+from ..fitting import SMOOTHING, surface_fit
+from ..node_grid import check_node_matrix, node_line, node_matrix, node_path
 from .factory import Contour1sNeutralFactory, Contour2sNeutralFactory
 from .products import NeutralNurbsLocalPosition, NeutralNurbsModeShapes, NeutralNurbsPosition, NeutralNurbsVelocity
 from .space import CurveSpace, SurfaceSpace, as_pair
@@ -45,15 +47,22 @@ class Contour1sNeutralFFR(_FFRProducts, Contour1sNeutralFactory):
     Parameters
     ----------
     body : FlexibleBodyFFR
-    nodes : (k,) int
-        0-based node indices in curve order (see :meth:`along_line`).
+    nodes : str or (k,) int
+        A node-group name of the body file — a feature edge or any line of surface
+        nodes of any tet4/tet10 mesh (e.g. a gmsh physical curve: a box edge, a pulley
+        rim), ordered by walking the body's surface edges
+        (:func:`contours.node_grid.node_path`, whose module docstring gives the start
+        and direction) — or 0-based node indices in curve order (see
+        :meth:`along_line`).
     normal : (3,)
         Reference normal in the body frame (e.g. (0, 1, 0) for a band on top of a beam
         along x); it rotates with the body and is made perpendicular to the tangent.
     degree : int
         NURBS degree (3: C²).
-    closed : bool
-        Periodic curve (the last node connects back to the first).
+    closed : bool or None
+        Periodic curve (the last node connects back to the first). None: a group's walk
+        decides (a cycle of surface edges gives a closed curve, a path an open one),
+        a list is open. Given with a group, it must agree with the walk (ModelError).
     method : "chord" or "centripetal"
         Parametrization of the undeformed nodes (thesis eq. 3.19–3.21).
     compiled : bool
@@ -61,13 +70,32 @@ class Contour1sNeutralFFR(_FFRProducts, Contour1sNeutralFactory):
         (:class:`~contours.neutral.factory.NeutralContour`).
     """
 
-    def __init__(self, body, nodes, normal, degree=3, closed=False, method="chord", name="neutral 1s",
+    def __init__(self, body, nodes, normal, degree=3, closed=None, method="chord", name="neutral 1s",
                  compiled=True):
-        nodes = check_node_matrix(np.asarray(nodes).reshape(1, -1), body.data.n_nodes)[0]
+        if isinstance(nodes, str):
+            nodes, closed = self._walk(body, nodes, closed, name)
+        else:
+            nodes = check_node_matrix(np.asarray(nodes).reshape(1, -1), body.data.n_nodes)[0]
+            closed = bool(closed)
         self.nodes = nodes
         interp = Interpolation1D.from_points(body.data.u0[nodes], degree, closed, method)
         phi = body.phi_nodes[nodes]
         super().__init__(body, CurveSpace(interp), body.data.u0[nodes], phi, normal, name, compiled)
+
+    @staticmethod
+    def _walk(body, group, closed, name):
+        """(ordered nodes, closed) of the node group ``group`` walked along the surface
+        edges; ``closed`` (None or a bool) checked against the walk."""
+        data = body.data
+        if data.surface_triangles is None:
+            raise ModelError(f"{name}: the body file of {body.name!r} holds no surface triangles, so node group "
+                             f"{group!r} cannot be walked; give the nodes as an ordered list")
+        path, cycle = node_path(data.surface_triangles, body.node_group(group), data.u0, f"node group {group!r}")
+        if closed is not None and bool(closed) != cycle:
+            shape = "a closed loop" if cycle else "an open line with two ends"
+            raise ModelError(f"{name}: closed={bool(closed)} but node group {group!r} is {shape} of surface "
+                             f"edges; omit closed (it follows the walk) or give {cycle}")
+        return path, cycle
 
     @classmethod
     def along_line(cls, body, start, direction, normal, nodes=None, **kw):
@@ -79,44 +107,71 @@ class Contour1sNeutralFFR(_FFRProducts, Contour1sNeutralFactory):
 
 
 class Contour2sNeutralFFR(_FFRProducts, Contour2sNeutralFactory):
-    """A surface through a structured patch of nodes of an FFR body (thesis Fig. 3.4).
+    """A surface on a patch of nodes of an FFR body (thesis Fig. 3.4).
+
+    A structured patch (a node grid, thesis eq. 3.24) is interpolated exactly; any other
+    face group of the body's surface — an unstructured tet4 or tet10 mesh — is fitted by
+    least squares (:mod:`contours.fitting`): its nodes are mapped onto the unit square
+    (periodic in η for a closed band), and the control points of ū0 and of every mode
+    shape are F ū0 and F Φ with one fitting matrix F, so the per-step update is the same.
 
     Parameters
     ----------
     body : FlexibleBodyFFR
     nodes : str or (k_eta, k_xi) int
-        A node-group name of the body file (a planar structured patch, ordered
-        automatically, see :func:`contours.node_grid.node_matrix`) or the node matrix O
-        (eq. 3.24) itself.
+        A node-group name of the body file or the node matrix O (eq. 3.24) itself. A group
+        that is a planar structured grid is ordered automatically
+        (:func:`contours.node_grid.node_matrix`) and interpolated; any other group is fitted.
     extra_rows : int
-        With a group: rows of coplanar surface nodes added beyond each side of the patch
+        Grid route: rows of coplanar surface nodes added beyond each side of the patch
         where complete rows exist (thesis Sec. 3.2.2: better tangents near the boundary).
     degree : int or (int, int)
     closed : bool or (bool, bool)
-        Periodic in η and/or ξ.
+        Grid route: periodic in η and/or ξ. A fitted patch is periodic in η exactly when
+        it is a closed band (two boundary loops).
     method : "chord" or "centripetal"
+        Grid route: the parametrization of the node grid.
     outward : None, +1 or -1
         Sign of t_η × t_ξ pointing out of the material; None decides it from the body's
         nodes behind the patch.
+    control_points : None, int or (int, int)
+        Distinct control points per direction of a fitted patch (None: knot spans of about
+        two node spacings, :func:`contours.fitting.default_control_points`). Given with a
+        group, the group is fitted even if it is a grid.
+    smoothing : float
+        Dimensionless thin-plate weight of the fit (:mod:`contours.fitting.bspline_fit`).
     compiled : bool
         Span-local numba evaluation (default) or the reference route
         (:class:`~contours.neutral.factory.NeutralContour`).
+
+    Attributes
+    ----------
+    nodes : the node matrix O (grid route) or the patch's node indices (k,) (fitted).
+    fit, patch : the :class:`~contours.fitting.SurfaceFit` and
+        :class:`~contours.fitting.SurfacePatch` of a fitted patch, else None.
     """
 
     def __init__(self, body, nodes, extra_rows=0, degree=3, closed=False, method="chord",
-                 outward=None, name="neutral 2s", compiled=True):
+                 outward=None, name="neutral 2s", compiled=True, control_points=None, smoothing=SMOOTHING):
         data = body.data
+        self.fit = self.patch = None
         if isinstance(nodes, str):
-            candidates = data.surface_nodes if data.surface_triangles is not None else None
-            O = node_matrix(data.u0, body.node_group(nodes), extra_rows, candidates)
+            group = body.node_group(nodes)
+            O = None if control_points is not None else _grid_or_none(data, group, extra_rows)
+            if O is None:
+                self.fit, self.patch = surface_fit(data.u0, data.surface_triangles, group, control_points,
+                                                   degree, smoothing, f"{name}: node group {nodes!r}")
         else:
             O = check_node_matrix(nodes, data.n_nodes)
-        self.nodes = O
-        grid = data.u0[O]
-        interp = SurfaceInterpolation.from_grid(grid, as_pair(degree, "degree"), as_pair(closed, "closed"), method)
-        phi = body.phi_nodes[O]
-        super().__init__(body, SurfaceSpace(interp), grid, phi, 1 if outward is None else outward, name,
-                         compiled)
+        if O is None:
+            self.nodes = self.patch.nodes
+            space = SurfaceSpace(self.fit)
+        else:
+            self.nodes = O
+            space = SurfaceSpace(SurfaceInterpolation.from_grid(data.u0[O], as_pair(degree, "degree"),
+                                                                as_pair(closed, "closed"), method))
+        super().__init__(body, space, data.u0[self.nodes], body.phi_nodes[self.nodes],
+                         1 if outward is None else outward, name, compiled)
         if outward is None:
             self.sign = self._outward_sign()
 
@@ -137,3 +192,13 @@ class Contour2sNeutralFFR(_FFRProducts, Contour2sNeutralFactory):
         if abs(depth.mean()) <= 1e-9 * np.abs(depth).max(initial=0.0) or not depth.any():
             raise ModelError(f"{self.name}: cannot tell the material side of the patch; give outward=+1 or -1")
         return 1.0 if depth.mean() < 0 else -1.0
+
+
+def _grid_or_none(data, group, extra_rows):
+    """The node matrix O of a planar structured ``group`` (eq. 3.24), or None when the
+    group is not one (then it is fitted)."""
+    candidates = data.surface_nodes if data.surface_triangles is not None else None
+    try:
+        return node_matrix(data.u0, group, extra_rows, candidates)
+    except ModelError:
+        return None

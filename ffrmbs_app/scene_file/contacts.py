@@ -12,6 +12,7 @@ import numpy as np
 from contact import (BILATERAL_KINEMATICS, LAWS, PAIR_KINEMATICS, Bilateral, RegularizedCoulombFriction, connect,
                      make_law)
 from contours import CONTOURS
+from contours.node_grid import node_path
 from ffrmbs.errors import ModelError
 
 from .frames import Env, body_of, frame_of, nodes_of
@@ -162,13 +163,13 @@ class ContactReader:
         if line and not np.linalg.norm(direction) > 0:
             c.fail("direction", "'direction' must be a nonzero direction")
         nodes = nodes_of(self.bodies, c, "nodes", name, required=not line)
+        closed = c.get("closed")
         if not line and isinstance(nodes, str):
-            c.fail("nodes", "a node group has no order: give 'start' and 'direction' (the nodes on that "
-                            "line), or 'nodes' as the ordered list of node indices")
+            nodes, closed = self._walk(c, name, nodes, closed)
         normal = c.get("normal")
         if not np.linalg.norm(normal) > 0:
             c.fail("normal", "'normal' must be a nonzero direction")
-        options = dict(degree=c.get("degree"), closed=c.get("closed"), method=c.get("method"))
+        options = dict(degree=c.get("degree"), closed=closed, method=c.get("method"))
         extra = tuple(c.get(key) for key in CONTOUR[kind] if key not in CONTOUR["1s"])    # width, offset / radius
         curve_class, cls = CONTOURS["1s"], CONTOURS[kind]
 
@@ -179,6 +180,26 @@ class ContactReader:
             return curve if kind == "1s" else cls(curve, *extra)
 
         return make
+
+    def _walk(self, c: Table, name, group, closed):
+        """(ordered nodes, closed) of node group ``group`` of body ``name``, walked along the
+        body's surface edges (:func:`contours.node_grid.node_path`); a given ``closed``
+        must agree with the walk."""
+        data = self.bodies[name].data
+        if data.surface_triangles is None:
+            c.fail("nodes", f"body {name!r} has no surface triangles in its body file, so node group {group!r} "
+                            "cannot be ordered: give 'start' and 'direction' (the nodes on that line), or 'nodes' "
+                            "as the ordered list of node indices")
+        try:
+            path, cycle = node_path(data.surface_triangles, data.node_groups[group], data.u0,
+                                    f"node group {group!r}")
+        except ModelError as exc:
+            c.fail("nodes", f"{exc}; give 'start' and 'direction', or 'nodes' as the ordered list of node indices")
+        if closed is not None and closed != cycle:
+            shape = "a closed loop" if cycle else "an open line with two ends"
+            c.fail("closed", f"'closed = {str(closed).lower()}' but node group {group!r} is {shape} of surface "
+                             f"edges: omit 'closed' (it follows the group) or set it to {str(cycle).lower()}")
+        return path, cycle
 
     def _node_matrix(self, c: Table, name):
         """A node-group name, or the node matrix O (rows of node indices, equal lengths >= 2)."""

@@ -162,11 +162,16 @@ Gravity is ``[scene] gravity``.
   matrix O as a list of rows. ``degree`` and ``closed`` take one value or a pair
   (η, ξ). ``outward`` is +1 or -1. Omitted, it is found from the body.
 - ``{ kind = "1s" | "band" | "cylinder", body, start, direction, nodes, normal,
-  degree = 3, closed = false, method = "chord", width, offset = 0, radius }``: a
+  degree = 3, closed, method = "chord", width, offset = 0, radius }``: a
   :class:`contours.Contour1sNeutralFFR`. It runs through the nodes on the line
   through ``start`` [m] along ``direction`` (within ``nodes``, a group or a list,
-  if given). Without ``start`` and ``direction``, ``nodes`` is the ordered list of
-  nodes. ``normal`` *req.* is the reference normal in the body frame. "band" (a
+  if given). Without ``start`` and ``direction``, ``nodes`` is a node group that
+  forms an edge of surface nodes on any tet4/tet10 mesh (e.g. a gmsh physical
+  curve: a box edge, a pulley rim), ordered by walking the body's surface edges
+  (:func:`contours.node_grid.node_path`), or the ordered list of nodes.
+  ``closed`` follows the walk when absent (a loop gives a closed curve; given, it
+  must agree); for a list or a line it defaults to false. ``normal`` *req.* is the
+  reference normal in the body frame. "band" (a
   :class:`contours.FlexibleBand`) takes ``width`` *req.* [m] and ``offset`` [m].
   "cylinder" (a :class:`contours.FlexibleCylinder`) takes ``radius`` *req.* [m].
 - ``{ kind = "plane", <frame>, normal = [0, 0, 1], size = 1 }``: a
@@ -423,11 +428,14 @@ CONTACT = {
     "margin": Key("special", "auto", unit="m", doc='a length >= 0, "auto" or "off"'),
 }
 _KIND = Key("choice", choices=())      # the kind of a contour: checked against CONTOUR1_KINDS or CONTOUR2_KINDS
-_NEUTRAL = {"degree": Key("integer", 3, low=1), "closed": Key("boolean", False),
+_NEUTRAL = {"degree": Key("integer", 3, low=1),
             "method": Key("choice", "chord", choices=("chord", "centripetal"))}
 _CURVE = {"kind": _KIND, "body": FRAME["body"], "start": _vector(REQUIRED, "m"),
-          "direction": _vector(REQUIRED), "nodes": Key("special", None, doc="a node group or a list of nodes"),
-          "normal": _vector(REQUIRED), **_NEUTRAL}
+          "direction": _vector(REQUIRED),
+          "nodes": Key("special", None, doc="a node group (an edge of surface nodes, or with start and direction "
+                                            "any group) or the ordered list of nodes"),
+          "normal": _vector(REQUIRED), **_NEUTRAL,
+          "closed": Key("boolean", None, doc="from the walk of an edge group when absent, else false")}
 CONTOUR = {
     "point": {"kind": _KIND, **FRAME},
     "sphere": {"kind": _KIND, **FRAME, "radius": _length(low=0.0, strict=True)},
