@@ -249,3 +249,20 @@ def test_patch_errors():
     holed = SurfacePatch(points, tri, np.setdiff1d(top, [a, b]))
     with pytest.raises(ModelError, match="3 boundary loops"):
         holed.topology()
+
+
+# --- the validation case, quick mode ----------------------------------------------------
+
+@pytest.mark.slow
+def test_geometry_case_rows_converge(tmp_path):
+    from case_rows import quick_rows_by_case, select
+    from validation.cases import contour_fit_geometry as case
+
+    rows = quick_rows_by_case(tmp_path, [case])[case.NAME]
+    assert len(rows) == len(case.SURFACES) * len(case.SIZES[True])
+    for row in select(rows, surface="plate"):
+        assert row["error"] < 1e-12 and row["mode_node_max"] < 0.01
+    for name in ("cylinder", "cap"):
+        coarse, fine = (select(rows, surface=name, mesh_size=h)[0] for h in case.SIZES[True])
+        assert fine["error"] < coarse["error"] and fine["normal_inner_max_deg"] < coarse["normal_inner_max_deg"]
+        assert fine["patch_nodes"] > coarse["patch_nodes"]
