@@ -11,6 +11,7 @@ Subcommands
 ``bench``       every benchmark in one process: tables, target verdicts, JSON (validation.bench)
 ``plot``        outputs, energy and contacts of a result file against time, as a PNG (ffrmbs_app.plot)
 ``export``      a result file to ParaView: deformed surfaces over time, .pvd + .vtu (ffrmbs_app.export)
+``contour``     a 2s contour fitted to a face group of a body: fit report, PNG, .vtu (ffrmbs_app.contour_report)
 
 Progress bars (preprocessing stages, export) are drawn on stderr only when it is a
 terminal; ``FFRMBS_PROGRESS=1`` forces them on, ``FFRMBS_PROGRESS=0`` off (ffrmbs_app.progress).
@@ -177,6 +178,21 @@ def cmd_export(args):
     print(f"wrote {pvd} (open it in ParaView: File > Open, Apply, then play)")
 
 
+def cmd_contour(args):
+    """Fit a 2s contour to a face group of a body; print the fit report, write a PNG and
+    ParaView files (:mod:`ffrmbs_app.contour_report`)."""
+    from preprocess.bodyfiles import read_body
+
+    from ffrmbs_app.contour_report import fit_group, parse_control_points, parse_smoothing, write_contour_files
+
+    control_points = parse_control_points(args.control_points)
+    smoothing = parse_smoothing(args.smoothing)
+    gf = fit_group(read_body(args.body), args.group, control_points, smoothing, source=args.body)
+    print(gf.describe())
+    print(gf.report.text())
+    print("wrote " + ", ".join(str(p) for p in write_contour_files(gf, args.out)))
+
+
 def _percent(share) -> str:
     """``share`` (a fraction) as a percentage for an argparse help text (% escaped)."""
     return f"{share:.0%}".replace("%", "%%")
@@ -276,6 +292,20 @@ def build_parser():
     export.add_argument("--body", action="append", metavar="NAME", help="only this body (repeatable)")
     export.add_argument("--compress", action="store_true", help="zlib-compress the .vtu files (smaller, slower)")
     export.set_defaults(func=cmd_export)
+
+    contour = sub.add_parser("contour", help="fit a 2s contour to a face group of a body: fit report, a PNG of "
+                                             "the deviation, ParaView .vtu files")
+    contour.add_argument("body", help="body directory or body.h5 (as for ffrmbs info)")
+    contour.add_argument("group", help="a node group of the body's surface (ffrmbs info lists them)")
+    contour.add_argument("--control-points", metavar="N|NE,NX",
+                         help="distinct control points per direction, >= 4 (default: a knot span of about two "
+                              "node spacings)")
+    contour.add_argument("--smoothing", metavar="S", help="dimensionless thin-plate weight of the fit, >= 0 "
+                                                          "(default 1e-6)")
+    contour.add_argument("--out", type=output_dir, default="ffrmbs-contour",
+                         help="output directory (default: ffrmbs-contour); GROUP-fit.png, GROUP-fit.vtu and "
+                              "GROUP-contour.vtu in it are replaced")
+    contour.set_defaults(func=cmd_contour)
     return p
 
 
