@@ -15,7 +15,8 @@ files stay inside the directory):
 
 * ``G-fit.png`` — the patch's FE surface triangles coloured by the mid-point distance
   |S(η_m, ξ_m) − x_m| of each triangle, the contour's knot lines (η and ξ constant at the
-  knots: the boundaries of its polynomial pieces) drawn over it, equal axis scales;
+  knots: the boundaries of its polynomial pieces; every k-th of them when there are over
+  :data:`MAX_LINES`) drawn over it, equal axis scales;
 * ``G-fit.vtu`` — the FE surface triangles of the patch (VTK ``triangle``, or
   ``triangle6`` for tet10 bodies) with point data ``deviation`` = |S(η_i, ξ_i) − x_i| [m],
   ``eta``, ``xi`` (the node's parameters) and ``node`` (FE node number), and cell data
@@ -229,9 +230,12 @@ def fit_figure(gf: GroupFit):
     cmap = colormaps["viridis"]
     ax.add_collection3d(Poly3DCollection(patch.points[patch.linear], facecolors=cmap(norm(colour)),
                                          edgecolors=(0, 0, 0, 0.15), linewidths=0.3, zorder=1))
+    legend = []
     for direction, other, column in ((gf.fit.eta, gf.fit.xi, 0), (gf.fit.xi, gf.fit.eta, 1)):
         values = knot_values(direction)
-        values = values[::max(1, math.ceil(values.size / MAX_LINES))]
+        stride = max(1, math.ceil(values.size / MAX_LINES))
+        values = values[::stride]
+        legend.append(("eta white" if column == 0 else "xi black") + (f" (every {stride})" if stride > 1 else ""))
         along = samples(other)
         if other.closed:
             along = np.append(along, 1.0)
@@ -254,7 +258,7 @@ def fit_figure(gf: GroupFit):
     bar.set_label(f"mid-point distance of the contour from the FE surface [{unit}]")
     ne, nx = report.control_points
     fig.suptitle(f"node group {gf.group!r}: fitted 2s contour, {ne} x {nx} control points "
-                 f"(knot lines: eta white, xi black)\n"
+                 f"(knot lines: {', '.join(legend)})\n"
                  f"distance to the FE surface [{unit}]: nodes max {geometry['node_max'] / scale:.3g}, "
                  f"RMS {geometry['node_rms'] / scale:.3g}; mid-points max {geometry['mid_max'] / scale:.3g}, "
                  f"RMS {geometry['mid_rms'] / scale:.3g}", fontsize=10)

@@ -150,6 +150,7 @@ def test_closed_band_on_a_cylinder(tmp_path, capsys):
     code, text, err = run(capsys, "contour", tmp_path / "cyl", "side", "--out", tmp_path / "o")
     assert code == 0, err
     assert "a closed band, periodic in eta" in text
+    assert meshio.read(tmp_path / "o" / "side-fit.vtu").cells[0].type == "triangle"
     contour = meshio.read(tmp_path / "o" / "side-contour.vtu")
     ne, nx = (np.unique(contour.point_data[k]).size for k in ("eta", "xi"))
     assert len(contour.cells[0].data) == ne * (nx - 1)                # closed in eta: ne quads around
