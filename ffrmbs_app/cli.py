@@ -211,11 +211,11 @@ def build_parser():
                           "a .msh or .inp mesh keeps its own order")
     pre.add_argument("--mesh-size", type=float, help="maximum element size, input units (built-in geometries "
                                                      "and .geo files; default: half the smallest dimension of "
-                                                     "a built-in geometry)")
+                                                     "a built-in geometry, 5 for stepped-beam)")
     pre.add_argument("--structured", metavar="NX,NY,NZ",
-                     help="box:LX,LY,LZ only: a structured (transfinite) mesh with NX, NY, NZ elements along "
-                          "x, y, z instead of --mesh-size; every face's nodes then form a grid (exact "
-                          "contour interpolation)")
+                     help="box:LX,LY,LZ only: a structured (transfinite) mesh of NX x NY x NZ cells along x, y, z "
+                          "(6 tetrahedra each) instead of --mesh-size; every face's nodes then form a grid "
+                          "(exact contour interpolation)")
     pre.add_argument("--out", type=output_dir, required=True, help="output directory")
     pre.add_argument("--no-limits", action="store_true",
                      help=f"mesh and solve even when the mesh is estimated over {mesh_limits.MAX_NODES:.0e} nodes "
