@@ -146,8 +146,11 @@ class ContactReader:
                 if outward not in (1, -1):
                     c.fail("outward", f"'outward' must be 1 or -1, got {outward}")
 
+            fitting = dict(control_points=_pair(c, "control_points", int) if c.has("control_points") else None,
+                           smoothing=c.get("smoothing"))
+
             def make(env):
-                return cls(env.bodies[name], nodes, extra, degree, closed, method, outward)
+                return cls(env.bodies[name], nodes, extra, degree, closed, method, outward, **fitting)
 
         else:   # 1s, band, cylinder: on a 1s neutral curve
             make = self._curve(c, kind)
