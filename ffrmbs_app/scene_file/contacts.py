@@ -172,7 +172,8 @@ class ContactReader:
         normal = c.get("normal")
         if not np.linalg.norm(normal) > 0:
             c.fail("normal", "'normal' must be a nonzero direction")
-        options = dict(degree=c.get("degree"), closed=closed, method=c.get("method"))
+        options = dict(degree=c.get("degree"), closed=closed, method=c.get("method"),
+                       control_points=c.get("control_points"), smoothing=c.get("smoothing"))
         extra = tuple(c.get(key) for key in CONTOUR[kind] if key not in CONTOUR["1s"])    # width, offset / radius
         curve_class, cls = CONTOURS["1s"], CONTOURS[kind]
 

@@ -178,7 +178,9 @@ Gravity is ``[scene] gravity``.
   curve: a box edge, a pulley rim), ordered by walking the body's surface edges
   (:func:`contours.node_grid.node_path`), or the ordered list of nodes.
   ``closed`` follows the walk when absent (a loop gives a closed curve; given, it
-  must agree); for a list or a line it defaults to false. ``normal`` *req.* is the
+  must agree); for a list or a line it defaults to false. The curve interpolates
+  the ordered nodes; with ``control_points`` (a count >= 2) it is a least-squares
+  fit to them instead (``smoothing``, 1e-6). ``normal`` *req.* is the
   reference normal in the body frame. "band" (a
   :class:`contours.FlexibleBand`) takes ``width`` *req.* [m] and ``offset`` [m].
   "cylinder" (a :class:`contours.FlexibleCylinder`) takes ``radius`` *req.* [m].
@@ -444,7 +446,10 @@ _CURVE = {"kind": _KIND, "body": FRAME["body"], "start": _vector(REQUIRED, "m"),
           "nodes": Key("special", None, doc="a node group (an edge of surface nodes, or with start and direction "
                                             "any group) or the ordered list of nodes"),
           "normal": _vector(REQUIRED), **_NEUTRAL,
-          "closed": Key("boolean", None, doc="from the walk of an edge group when absent, else false")}
+          "closed": Key("boolean", None, doc="from the walk of an edge group when absent, else false"),
+          "control_points": Key("integer", None, low=2, doc="absent: interpolate the nodes; a count: fit them "
+                                                            "by least squares"),
+          "smoothing": Key("number", SMOOTHING, low=0.0, doc="the fit's weight of the curvature energy")}
 CONTOUR = {
     "point": {"kind": _KIND, **FRAME},
     "sphere": {"kind": _KIND, **FRAME, "radius": _length(low=0.0, strict=True)},
