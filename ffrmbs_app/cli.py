@@ -77,7 +77,8 @@ def _stage(label, fn, *args, announce_in=None, on_start=None, **kwargs):
     return out
 
 
-def _preprocess(spec, modes, clamp, units, density, young, poisson, order, mesh_size, out, check_limits=True):
+def _preprocess(spec, modes, clamp, units, density, young, poisson, order, mesh_size, out, check_limits=True,
+                structured=None):
     from preprocess.bodyfiles import write_body
     from preprocess.pipeline import Material, build_body, check_n_modes, mesh_source, mesh_statistics
 
@@ -87,9 +88,9 @@ def _preprocess(spec, modes, clamp, units, density, young, poisson, order, mesh_
     check_n_modes(modes)                                # these here, the mesh options by mesh_source
     with stage_bar(4 if out is not None else 3, "preprocess") as bar:
         mesh = _stage(f"meshing {spec}", mesh_source, spec, order, mesh_size, check_limits,
-                      announce_in="announce", on_start=lambda: bar.stage("meshing"))
+                      announce_in="announce", on_start=lambda: bar.stage("meshing"), structured=structured)
         write(mesh_statistics(mesh), sys.stdout)
-        params = dict(input=spec, mesh_size=mesh_size)
+        params = dict(input=spec, mesh_size=mesh_size, structured=structured)
         body = build_body(mesh, material, modes, clamp=clamp, units=units, params=params, log=_log,
                           progress=bar.stage, check_limits=check_limits)
         if out is not None:
@@ -101,7 +102,8 @@ def _preprocess(spec, modes, clamp, units, density, young, poisson, order, mesh_
 
 def cmd_preprocess(args):
     _preprocess(args.input, args.modes, None if args.free else args.clamp, args.units,
-                args.density, args.young, args.poisson, args.order, args.mesh_size, args.out, not args.no_limits)
+                args.density, args.young, args.poisson, args.order, args.mesh_size, args.out, not args.no_limits,
+                args.structured)
 
 
 def cmd_info(args):
@@ -200,6 +202,7 @@ def _percent(share) -> str:
 
 def build_parser():
     from preprocess import limits as mesh_limits
+    from preprocess.pipeline import BUILTINS
 
     from ffrmbs_app import limits as run_limits
 
@@ -209,7 +212,7 @@ def build_parser():
 
     pre = sub.add_parser("preprocess", help="mesh -> FE model -> modes -> body files")
     pre.add_argument("input", help="mesh file (.geo, .msh, .inp) or built-in geometry: "
-                                   "box:LX,LY,LZ or stepped-beam")
+                                   f"{', '.join(BUILTINS[:-1])} or {BUILTINS[-1]} (input units)")
     pre.add_argument("--modes", type=int, required=True, help="number of elastic modes")
     bc = pre.add_mutually_exclusive_group(required=True)
     bc.add_argument("--clamp", metavar="GROUP", help="clamp this node group (e.g. z0)")
@@ -223,7 +226,12 @@ def build_parser():
                      help="tet4 (1) or tet10 (2) elements for a built-in geometry or a .geo file (default 2); "
                           "a .msh or .inp mesh keeps its own order")
     pre.add_argument("--mesh-size", type=float, help="maximum element size, input units (built-in geometries "
-                                                     "and .geo files)")
+                                                     "and .geo files; default: half the smallest dimension of "
+                                                     "a built-in geometry, 5 for stepped-beam)")
+    pre.add_argument("--structured", metavar="NX,NY,NZ",
+                     help="box:LX,LY,LZ only: a structured (transfinite) mesh of NX x NY x NZ cells along x, y, z "
+                          "(6 tetrahedra each) instead of --mesh-size; every face's nodes then form a grid "
+                          "(exact contour interpolation)")
     pre.add_argument("--out", type=output_dir, required=True, help="output directory")
     pre.add_argument("--no-limits", action="store_true",
                      help=f"mesh and solve even when the mesh is estimated over {mesh_limits.MAX_NODES:.0e} nodes "

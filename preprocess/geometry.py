@@ -3,15 +3,26 @@
 Built-in bodies (OpenCASCADE kernel, meshed with tetrahedra of order 1 or 2):
 
 * :func:`box` — a cuboid ``[0, lx] x [0, ly] x [0, lz]``, e.g. the report's
-  1 x 1 x 5 m beam (report Sec. 5.1, Table 1).
+  1 x 1 x 5 m beam (report Sec. 5.1, Table 1); structured with ``divisions``.
 * :func:`stepped_beam` — our reading of the thesis's "complex beam" (thesis
   Sec. 5.1, Fig. 5.1, Listing 4.1); see its docstring.
+* :func:`cylinder`, :func:`spherical_cap`, :func:`grooved_block` — curved surfaces
+  with exact equations, for contours fitted to unstructured face patches.
 
-Every built-in body carries node groups for its six bounding faces, named
-``x0, x1, y0, y1, z0, z1`` (nodes on the plane x = min, x = max, ...), and
-``body`` (all nodes), found on the mesh nodes with a tolerance relative to the
-body's own size (:func:`bounding_face_groups`), so at any scale. Meshing is
-single-threaded so that it is deterministic.
+Every built-in body carries node groups for its bounding faces, named
+``x0, x1, y0, y1, z0, z1`` (nodes on the plane x = min, x = max, ...; only the planes
+that are faces of the body), and ``body`` (all nodes), found on the mesh nodes with a
+tolerance relative to the body's own size (:func:`bounding_face_groups`), so at any
+scale. The curved bodies also name their faces and edges as gmsh physical groups
+(``lateral``, ``groove``, ``rim0``, ...), which become node groups: the nodes of that
+surface's or curve's mesh, mid-edge nodes included. Meshing is single-threaded so that
+it is deterministic.
+
+Order 2 is gmsh's own second-order meshing: each mid-edge node is placed on the
+geometry the edge lies on (``Mesh.SecondOrderLinear`` = 0), so a curved face's nodes
+lie on the exact CAD surface, not on the straight chord between the corners; on flat
+faces and inside the body they are the edges' midpoints. Curved elements are checked
+for inversion at their nodes and repaired or refused (:func:`_repair_curved_elements`).
 
 Before gmsh meshes, the mesh is estimated from the model's volume and mesh size and
 refused over the limits of :mod:`preprocess.limits` (``check_limits=False`` lifts them).
@@ -32,7 +43,7 @@ import numpy as np
 from ffrmbs.errors import InputFileError, ModelError, quote
 from preprocess import fe, limits
 from preprocess.inputfiles import include_tree, regular_file
-from preprocess.mesh import Mesh, canonical_mesh
+from preprocess.mesh import GMSH_TET10, Mesh, canonical_mesh
 
 _GMSH_TET = {1: 4, 2: 11}  # gmsh element type numbers of tet4 and tet10
 PLANE_RTOL = 1e-9          # a node on a bounding plane: within this x the body's size
@@ -70,7 +81,8 @@ def mesh_from_gmsh_model(gmsh, source) -> Mesh:
     for order, etype in _GMSH_TET.items():
         _, nodes = gmsh.model.mesh.getElementsByType(etype)
         if len(nodes):
-            blocks.append(index[nodes.astype(np.int64)].reshape(-1, 4 if order == 1 else 10))
+            tets = index[nodes.astype(np.int64)].reshape(-1, 4 if order == 1 else 10)
+            blocks.append(tets if order == 1 else tets[:, GMSH_TET10])
     if len(blocks) != 1:
         fault = "no tetrahedra in the mesh" if not blocks else "mixed tet4 and tet10 elements"
         raise InputFileError(source, None, fault)
@@ -79,7 +91,7 @@ def mesh_from_gmsh_model(gmsh, source) -> Mesh:
         name = gmsh.model.getPhysicalName(dim, tag) or f"{dim}:{tag}"
         node_tags, _ = gmsh.model.mesh.getNodesForPhysicalGroup(dim, tag)
         groups[name] = index[node_tags.astype(np.int64)]
-    return canonical_mesh(points, blocks[0], groups, source)
+    return canonical_mesh(points, blocks[0], groups, source, mid_nodes_in_order=True)
 
 
 def _generate(gmsh, order, mesh_size, source, check_limits=True, n_elements=None):
@@ -99,10 +111,48 @@ def _generate(gmsh, order, mesh_size, source, check_limits=True, n_elements=None
         else:
             estimate, what = limits.from_elements(n_elements, order, volume, extent), str(source)
         limits.check(estimate, what)
-    gmsh.option.setNumber("Mesh.SecondOrderLinear", 1)  # straight mid-edge nodes
+    gmsh.option.setNumber("Mesh.SecondOrderLinear", 0)  # mid-edge nodes on the geometry
     gmsh.model.mesh.generate(3)
     if order == 2:
         gmsh.model.mesh.setOrder(2)
+        _repair_curved_elements(gmsh, source)
+
+
+def _repair_curved_elements(gmsh, source):
+    """Make the curved tet10 of the current mesh valid, or a ModelError.
+
+    A tetrahedron whose mid-edge nodes were moved onto a curved surface may fold over
+    (its Jacobian determinant det J changes sign inside it), e.g. where the surface
+    bends by more than an element is thick. det J is evaluated at the ten nodes of each
+    element (:func:`inverted_elements`); if any element is inverted, gmsh's elastic
+    analogy (``HighOrderElastic``) moves the inner high-order nodes — those on the
+    geometry stay — and the elements are checked again. (gmsh's ``HighOrder``
+    optimizer can abort the process on failure, so it is not used.)"""
+    mesh = gmsh.model.mesh
+    local_nodes = mesh.getElementProperties(_GMSH_TET[2])[4]
+
+    def inverted():
+        _, det, _ = mesh.getJacobians(_GMSH_TET[2], local_nodes)
+        return inverted_elements(det.reshape(-1, 10))
+
+    if inverted().size:
+        mesh.optimize("HighOrderElastic")
+        bad = inverted()
+        if bad.size:
+            tags, nodes = mesh.getElementsByType(_GMSH_TET[2])
+            corner = mesh.getNode(int(nodes[10 * bad[0]]))[0]
+            raise ModelError(f"{source}: {bad.size} of {len(tags)} second-order tetrahedra are inverted by "
+                             f"placing their mid-edge nodes on the curved geometry (the first has a corner at "
+                             f"({', '.join(f'{v:g}' for v in corner)})); use a smaller mesh size or order 1")
+
+
+def inverted_elements(det) -> np.ndarray:
+    """Indices of the elements whose Jacobian determinants ``det`` (E, n) — det J at
+    n points of each element — are not all of one strict sign: a sign change or zero
+    means the element's map folds over (inverted or degenerate), whatever its
+    orientation."""
+    det = np.asarray(det, dtype=float)
+    return np.flatnonzero(~(np.all(det > 0, axis=1) | np.all(det < 0, axis=1)))
 
 
 def model_volume(gmsh) -> float:
@@ -209,19 +259,49 @@ def _set_transfinite_box(gmsh, divisions):
         gmsh.model.mesh.setTransfiniteVolume(tag)
 
 
-def _mesh_occ(name, build, mesh_size, order, divisions=None, check_limits=True) -> Mesh:
+def _mesh_occ(name, build, mesh_size, order, divisions=None, check_limits=True, groups=None,
+              planes=("x0", "x1", "y0", "y1", "z0", "z1")) -> Mesh:
+    """Mesh the OpenCASCADE model made by ``build(occ)``; ``groups(gmsh)`` (after the
+    model is synchronized) adds its physical groups, which become node groups; the
+    bounding-plane groups named in ``planes`` (:func:`bounding_face_groups`) and
+    ``body`` are added to them."""
     source = f"<builtin {name}>"
     with gmsh_session() as gmsh:
         gmsh.model.add(name)
         build(gmsh.model.occ)
         gmsh.model.occ.synchronize()
+        if groups is not None:
+            groups(gmsh)
         if divisions is not None:
             _set_transfinite_box(gmsh, divisions)
         _generate(gmsh, order, mesh_size, source, check_limits,   # structured: 6 tetrahedra per cell
                   None if divisions is None else 6 * math.prod(divisions))
         mesh = mesh_from_gmsh_model(gmsh, source)
-    mesh.node_groups.update(bounding_face_groups(mesh.points))
+    mesh.node_groups.update({name: nodes for name, nodes in bounding_face_groups(mesh.points).items()
+                             if name in planes or name == "body"})
     return mesh
+
+
+def _physical_groups(gmsh, dim, name_of, expected):
+    """One named physical group per name that ``name_of(tag)`` (a name, or None for
+    none) gives the model's entities of dimension ``dim``. A ModelError if a name in
+    ``expected`` found no entity (OpenCASCADE made another shape than expected)."""
+    tags = {}
+    for _, tag in gmsh.model.getEntities(dim):
+        name = name_of(tag)
+        if name is not None:
+            tags.setdefault(name, []).append(tag)
+    missing = sorted(set(expected) - set(tags))
+    if missing:
+        raise ModelError(f"built-in {gmsh.model.getCurrent()}: no {dim}-d entity for the group(s) "
+                         f"{', '.join(missing)} (OpenCASCADE made another shape)")
+    for name, members in tags.items():
+        gmsh.model.setPhysicalName(dim, gmsh.model.addPhysicalGroup(dim, members), name)
+
+
+def _centre(gmsh, dim, tag):
+    """Centre of mass (3,) of the entity (dim, tag) of the OpenCASCADE model."""
+    return np.array(gmsh.model.occ.getCenterOfMass(dim, tag))
 
 
 def box(lx, ly, lz, mesh_size, order=2, divisions=None, check_limits=True) -> Mesh:
@@ -235,8 +315,8 @@ def box(lx, ly, lz, mesh_size, order=2, divisions=None, check_limits=True) -> Me
     ``mesh_size`` is then ignored and may be None). The vertices then lie on the grid
     ``x_i = i lx / nx`` (i = 0..nx), likewise in y and z, so every face's nodes form a
     regular grid: (n_a + 1) x (n_b + 1) levels for order 1, (2 n_a + 1) x (2 n_b + 1)
-    with the straight mid-edge nodes of order 2 — the node matrix O of thesis eq. 3.24
-    (see :func:`contours.node_grid.node_matrix`).
+    with the mid-edge nodes of order 2 (the edges' midpoints, the faces being flat) — the
+    node matrix O of thesis eq. 3.24 (see :func:`contours.node_grid.node_matrix`).
 
     ``check_limits``: a mesh estimated over the limits of :mod:`preprocess.limits` is a
     ModelError before meshing.
@@ -290,3 +370,110 @@ def stepped_beam(mesh_size, order=2, l=95.0, h1=10.0, h2=34.2, w1=20.0, w2=9.74,
         occ.fuse([(3, a)], [(3, b)])
 
     return _mesh_occ("stepped_beam", build, mesh_size, order, check_limits=check_limits)
+
+
+def cylinder(radius, length, mesh_size, order=2, check_limits=True) -> Mesh:
+    """Solid circular cylinder x² + y² <= radius², 0 <= z <= length, meshed with
+    tetrahedra of maximum size ``mesh_size`` (lengths in any one unit).
+
+    Node groups (the nodes of each surface's or curve's mesh, mid-edge nodes included,
+    which order 2 places on the exact surface): ``lateral`` — the closed curved surface
+    x² + y² = radius²; ``end0``, ``end1`` — the flat ends z = 0 and z = length (also
+    named ``z0``, ``z1`` as for a box); ``rim0``, ``rim1`` — the circles
+    x² + y² = radius² at z = 0 and z = length; ``body``.
+
+    ``check_limits`` as for :func:`box`.
+    """
+    fe.check_positive("cylinder radius", radius)
+    fe.check_positive("cylinder length", length)
+
+    def groups(gmsh):
+        def face(tag):
+            if gmsh.model.getType(2, tag) == "Cylinder":
+                return "lateral"
+            return "end0" if _centre(gmsh, 2, tag)[2] < length / 2 else "end1"
+
+        def rim(tag):
+            if gmsh.model.getType(1, tag) != "Circle":
+                return None                               # the lateral surface's seam
+            return "rim0" if _centre(gmsh, 1, tag)[2] < length / 2 else "rim1"
+
+        _physical_groups(gmsh, 2, face, ("lateral", "end0", "end1"))
+        _physical_groups(gmsh, 1, rim, ("rim0", "rim1"))
+
+    return _mesh_occ("cylinder", lambda occ: occ.addCylinder(0, 0, 0, 0, 0, length, radius), mesh_size, order,
+                     check_limits=check_limits, groups=groups, planes=("z0", "z1"))
+
+
+def spherical_cap(radius, height, mesh_size, order=2, check_limits=True) -> Mesh:
+    """The solid cut from the ball x² + y² + z² <= radius² by the plane
+    z = radius − height: the cap radius − height <= z <= radius, 0 < height < 2 radius,
+    meshed with tetrahedra of maximum size ``mesh_size``.
+
+    Node groups (mid-edge nodes included, on the exact surface for order 2): ``cap`` —
+    the curved surface x² + y² + z² = radius², z >= radius − height; ``base`` — the flat
+    disk z = radius − height, x² + y² <= radius² − (radius − height)² (also ``z0``);
+    ``body``.
+
+    ``check_limits`` as for :func:`box`.
+    """
+    check_cap_dimensions(radius, height)
+
+    def groups(gmsh):
+        _physical_groups(gmsh, 2, lambda tag: "cap" if gmsh.model.getType(2, tag) == "Sphere" else "base",
+                         ("cap", "base"))
+
+    polar = math.asin((radius - height) / radius)     # latitude of the cutting plane
+    return _mesh_occ("spherical_cap", lambda occ: occ.addSphere(0, 0, 0, radius, angle1=polar), mesh_size, order,
+                     check_limits=check_limits, groups=groups, planes=("z0",))
+
+
+def check_cap_dimensions(radius, height) -> None:
+    """ModelError unless the radius and height of :func:`spherical_cap` are positive and
+    finite, height < 2 radius."""
+    fe.check_positive("cap radius", radius)
+    fe.check_positive("cap height", height)
+    if not height < 2 * radius:
+        raise ModelError(f"cap height must be below twice the radius ({2 * radius:g}), not {height!r}")
+
+
+def check_groove_dimensions(lx, ly, lz, radius) -> None:
+    """ModelError unless the dimensions of :func:`grooved_block` are positive and finite,
+    radius < min(ly/2, lz)."""
+    for name, length in (("block length lx", lx), ("block length ly", ly), ("block length lz", lz),
+                         ("groove radius", radius)):
+        fe.check_positive(name, length)
+    if not radius < min(ly / 2, lz):
+        raise ModelError(f"groove radius must be below min(ly/2, lz) = {min(ly / 2, lz):g}, not {radius!r}")
+
+
+def grooved_block(lx, ly, lz, radius, mesh_size, order=2, check_limits=True) -> Mesh:
+    """The block [0, lx] x [0, ly] x [0, lz] with a half-cylinder channel cut into its
+    top face z = lz, meshed with tetrahedra of maximum size ``mesh_size``.
+
+    The channel's axis runs along x at y = ly/2, z = lz; its surface (the groove) is
+    exactly (y − ly/2)² + (z − lz)² = radius², 0 <= x <= lx, z <= lz, a half cylinder
+    from z = lz − radius to lz. ``radius`` < min(ly/2, lz), so that the top face keeps
+    two strips and the block one piece.
+
+    Node groups (mid-edge nodes included, on the exact surface for order 2):
+    ``groove``; ``bottom`` — the face z = 0; the bounding planes ``x0 .. z1`` of
+    :func:`bounding_face_groups` (``z1`` is the two strips of the top face); ``body``.
+
+    ``check_limits`` as for :func:`box`.
+    """
+    check_groove_dimensions(lx, ly, lz, radius)
+
+    def build(occ):
+        block = occ.addBox(0, 0, 0, lx, ly, lz)
+        occ.cut([(3, block)], [(3, occ.addCylinder(0, ly / 2, lz, lx, 0, 0, radius))])
+
+    def groups(gmsh):
+        def face(tag):
+            if gmsh.model.getType(2, tag) == "Cylinder":
+                return "groove"
+            return "bottom" if gmsh.model.getBoundingBox(2, tag)[5] < lz / 2 else None   # top z below lz/2
+
+        _physical_groups(gmsh, 2, face, ("groove", "bottom"))
+
+    return _mesh_occ("grooved_block", build, mesh_size, order, check_limits=check_limits, groups=groups)

@@ -6,10 +6,13 @@ canonical local order — the VTK/meshio order, which is also Abaqus C3D10's::
     vertices 0, 1, 2, 3 (positive volume), then mid-edge nodes of the edges
     (0,1), (1,2), (0,2), (0,3), (1,3), (2,3)
 
-Input orderings differ between tools (gmsh swaps the last two mid-edge nodes),
-so tet10 elements are brought into this order geometrically: each mid-edge
-node is matched to the edge whose midpoint it lies closest to. This accepts any
-tool's convention and catches corrupt connectivity.
+Input orderings differ between tools (gmsh swaps the last two mid-edge nodes,
+:data:`GMSH_TET10`). Elements meshed or read by gmsh are brought into this order by
+that known permutation, so mid-edge nodes placed on a curved surface (gmsh's
+second-order meshing, :mod:`preprocess.geometry`) keep their edges however far they
+lie from the straight edge's midpoint; tet10 elements from other tools are sorted
+geometrically: each mid-edge node is matched to the edge whose midpoint it lies
+closest to. This accepts any tool's convention and catches corrupt connectivity.
 
 Readers (regular files only, :mod:`preprocess.inputfiles`):
 * ``.geo`` and ``.msh``: the gmsh Python API (``.geo`` is meshed, see
@@ -35,6 +38,14 @@ from preprocess.inputfiles import regular_file
 
 #: mid-edge node k (local index 4 + k) sits on edge TET10_EDGES[k]
 TET10_EDGES = np.array([(0, 1), (1, 2), (0, 2), (0, 3), (1, 3), (2, 3)])
+
+#: gmsh's tet10 (element type 11) -> canonical order: gmsh's mid-edge nodes 8 and 9 sit
+#: on the edges (2,3) and (1,3), the canonical ones on (1,3) and (2,3)
+GMSH_TET10 = np.array([0, 1, 2, 3, 4, 5, 6, 7, 9, 8])
+
+#: canonical tet10 with corners 1 and 2 swapped (orientation reversed), still canonical:
+#: the mid-edge nodes of (0,1) <-> (0,2) and (1,3) <-> (2,3) swap with them
+_TET10_FLIP = np.array([0, 2, 1, 3, 6, 5, 4, 7, 9, 8])
 
 #: outward faces (corner triples) of a positively oriented tetrahedron, face i opposite vertex i
 TET_FACES = np.array([(1, 2, 3), (0, 3, 2), (0, 1, 3), (0, 2, 1)])
@@ -133,13 +144,15 @@ class Mesh:
         return np.linalg.det(p[:, 1:] - p[:, :1]) / 6.0
 
 
-def canonical_mesh(points, tets, node_groups, source) -> Mesh:
+def canonical_mesh(points, tets, node_groups, source, mid_nodes_in_order=False) -> Mesh:
     """Build a :class:`Mesh` from raw arrays in any tet4/tet10 node convention.
 
     Drops nodes not used by any tetrahedron (renumbering groups accordingly),
     orients every element positively and sorts tet10 mid-edge nodes into the
-    canonical order. Raises InputFileError for degenerate elements or tet10
-    connectivity whose mid-edge nodes do not match the edges.
+    canonical order — geometrically, or, with ``mid_nodes_in_order``, taking them as
+    already in the canonical order (e.g. gmsh's permuted by :data:`GMSH_TET10`).
+    Raises InputFileError for degenerate elements or tet10 connectivity whose mid-edge
+    nodes do not match the edges (geometric sorting only).
     """
     points = np.asarray(points, dtype=float)
     tets = np.asarray(tets, dtype=np.int64)
@@ -164,9 +177,12 @@ def canonical_mesh(points, tets, node_groups, source) -> Mesh:
         bad = int(np.argmax(np.abs(vol6) <= 1e-14 * scale))
         raise InputFileError(source, None, f"degenerate tetrahedron (zero volume), element {bad + 1}")
     flip = vol6 < 0
-    tets[flip, 1], tets[flip, 2] = tets[flip, 2].copy(), tets[flip, 1].copy()
-    if tets.shape[1] == 10:
-        tets = _sort_mid_nodes(points, tets, source)
+    if tets.shape[1] == 10 and mid_nodes_in_order:
+        tets[flip] = tets[flip][:, _TET10_FLIP]
+    else:
+        tets[flip, 1], tets[flip, 2] = tets[flip, 2].copy(), tets[flip, 1].copy()
+        if tets.shape[1] == 10:
+            tets = _sort_mid_nodes(points, tets, source)
     return Mesh(points, tets, groups, str(source))
 
 

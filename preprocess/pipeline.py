@@ -2,8 +2,9 @@
 
 ``build_body`` turns a mesh (in the units of its source) and a material into the
 body data of thesis Sec. 4.2.1 in SI units; ``mesh_source`` resolves the INPUT of
-``ffrmbs preprocess``: a mesh file or a built-in geometry (``box:LX,LY,LZ``,
-``stepped-beam``).
+``ffrmbs preprocess``: a mesh file or a built-in geometry (:data:`BUILTINS`: ``box``,
+``cylinder``, ``spherical-cap``, ``grooved-block`` with their dimensions after a
+colon, ``stepped-beam``), the box also structured (``--structured NX,NY,NZ``).
 """
 
 from __future__ import annotations
@@ -20,7 +21,18 @@ from preprocess.body import BodyData
 from preprocess.inputfiles import regular_file
 from preprocess.mesh import Mesh, check_meshing_options, read_mesh
 
-BUILTINS = ("box:LX,LY,LZ", "stepped-beam")
+#: built-in geometries with dimensions: name -> (dimension names, mesher of :mod:`preprocess.geometry`,
+#: its check of the dimensions beyond each being positive (or None), an example spec)
+_SHAPES = {
+    "box": (("LX", "LY", "LZ"), geometry.box, None, "box:1,1,5"),
+    "cylinder": (("R", "L"), geometry.cylinder, None, "cylinder:0.05,0.3"),
+    "spherical-cap": (("R", "H"), geometry.spherical_cap, geometry.check_cap_dimensions, "spherical-cap:0.1,0.03"),
+    "grooved-block": (("LX", "LY", "LZ", "R"), geometry.grooved_block, geometry.check_groove_dimensions,
+                      "grooved-block:0.06,0.12,0.06,0.04"),
+}
+#: the built-in geometries ``mesh_source`` takes, as the user types them
+BUILTINS = tuple(f"{name}:{','.join(shape[0])}" for name, shape in _SHAPES.items()) + ("stepped-beam",)
+_COUNTS = {2: "two", 3: "three", 4: "four"}
 
 
 @dataclass
@@ -44,44 +56,99 @@ class Material:
         return Material(self.density * f.density, self.young * f.stress, self.poisson)
 
 
-def check_mesh_options(spec: str, order=None, mesh_size=None):
+def builtin_shape(spec: str):
+    """``(mesher, dimensions)`` of a built-in geometry ``NAME:D1,D2,...`` of :data:`BUILTINS`
+    (``stepped-beam``: no dimensions), None when ``spec`` names none (a file path). A
+    ModelError for a wrong count of dimensions, one that is not a positive finite
+    number, or dimensions that make no such body (a cap's height >= 2 radius, a groove's
+    radius >= min(ly/2, lz))."""
+    if spec == "stepped-beam":
+        return geometry.stepped_beam, ()
+    name, colon, values = spec.partition(":")
+    if not colon or name not in _SHAPES:
+        return None
+    names, mesher, check, example = _SHAPES[name]
+    try:
+        dims = tuple(float(v) for v in values.split(","))
+    except ValueError:
+        dims = ()
+    if len(dims) != len(names):
+        raise ModelError(f"built-in {name} needs {_COUNTS[len(names)]} lengths {','.join(names)}, "
+                         f"e.g. {example} — got {spec!r}")
+    for dim, value in zip(names, dims):
+        fe.check_positive(f"{name} {dim}", value)
+    if check is not None:
+        check(*dims)
+    return mesher, dims
+
+
+def structured_divisions(text: str) -> tuple:
+    """The divisions (nx, ny, nz) of ``--structured NX,NY,NZ``: three whole numbers >= 1,
+    element edges along x, y, z, given as text; a ModelError otherwise."""
+    try:
+        divisions = tuple(int(v) for v in str(text).split(","))
+    except ValueError:
+        divisions = ()
+    if len(divisions) != 3 or min(divisions) < 1:
+        raise ModelError(f"--structured needs three whole numbers >= 1 (element edges along x, y, z), "
+                         f"e.g. 10,2,2 — got {text!r}")
+    return divisions
+
+
+def check_mesh_options(spec: str, order=None, mesh_size=None, structured=None):
     """The checks of :func:`mesh_source` on its options, before anything is read or
-    meshed: a ModelError for a ``mesh_size`` that is not positive and finite, and for an
-    ``order`` or a ``mesh_size`` given for a mesh file
+    meshed: a ModelError for a ``mesh_size`` that is not positive and finite, for a
+    built-in geometry's dimensions (:func:`builtin_shape`), for ``structured`` divisions
+    that are not three whole numbers >= 1 or given for anything but a ``box:`` or with a
+    ``mesh_size``, and for an ``order`` or a ``mesh_size`` given for a mesh file
     (:func:`~preprocess.mesh.check_meshing_options`); an InputFileError for a file that
-    is missing or not a regular file (:func:`~preprocess.inputfiles.regular_file`)."""
+    is missing or not a regular file (:func:`~preprocess.inputfiles.regular_file`).
+    Returns the divisions (nx, ny, nz), or None."""
     if mesh_size is not None:
         fe.check_positive("mesh size", mesh_size)
-    if not (spec.startswith("box:") or spec == "stepped-beam"):
+    shape = builtin_shape(spec)
+    if structured is not None:
+        if shape is None or shape[0] is not geometry.box:
+            raise ModelError(f"--structured applies to the built-in box:LX,LY,LZ only, not {spec}")
+        if mesh_size is not None:
+            raise ModelError("--mesh-size does not apply with --structured: the divisions set the elements")
+        return structured_divisions(structured)
+    if shape is None:
         check_meshing_options(regular_file(spec), order, mesh_size)
+    return None
 
 
-def mesh_source(spec: str, order=None, mesh_size=None, check_limits=True, announce=None) -> Mesh:
-    """The mesh named by ``spec``: a file path, ``box:LX,LY,LZ`` or ``stepped-beam``.
+def mesh_source(spec: str, order=None, mesh_size=None, check_limits=True, announce=None, structured=None) -> Mesh:
+    """The mesh named by ``spec``: a file path or a built-in geometry of :data:`BUILTINS`
+    (``box:LX,LY,LZ``, ``cylinder:R,L``, ``spherical-cap:R,H``, ``grooved-block:LX,LY,LZ,R``,
+    ``stepped-beam``; see :mod:`preprocess.geometry`).
 
     Built-in sizes and ``mesh_size`` are in the units of the run (m for SI, mm for SI(mm));
-    ``mesh_size`` must be positive and finite (ModelError) or None (a default), and None
-    for a mesh file. ``order``: 1 (tet4) or 2 (tet10) for a built-in geometry or a
-    ``.geo`` file, None meaning 2; None for a mesh file, which keeps its own order
+    ``mesh_size`` must be positive and finite (ModelError) or None — half the smallest
+    dimension of a built-in geometry, 5 mm for the stepped beam — and None for a mesh
+    file. ``structured`` (text ``"NX,NY,NZ"``, box only, no ``mesh_size``): the
+    box meshed structured with that many element edges along x, y, z
+    (:func:`~preprocess.geometry.box` ``divisions``), every face a node grid. ``order``:
+    1 (tet4) or 2 (tet10) for a built-in geometry or a ``.geo`` file, None meaning 2;
+    None for a mesh file, which keeps its own order
     (:func:`~preprocess.mesh.read_mesh`). ``check_limits``: a mesh estimated over the
     limits of :mod:`preprocess.limits` is a ModelError before meshing. ``announce``: called
     (no arguments) once the options pass :func:`check_mesh_options`, before anything is
     read or meshed, so a caller reporting progress says nothing for a refused option.
     """
-    check_mesh_options(spec, order, mesh_size)
+    divisions = check_mesh_options(spec, order, mesh_size, structured)
     if announce is not None:
         announce()
-    if spec.startswith("box:"):
-        try:
-            lx, ly, lz = (float(v) for v in spec[4:].split(","))
-        except ValueError:
-            raise ModelError(f"built-in box needs three lengths, e.g. box:1,1,5 — got {spec!r}") from None
-        return geometry.box(lx, ly, lz, min(lx, ly, lz) / 2 if mesh_size is None else mesh_size,
-                            2 if order is None else order, check_limits=check_limits)
-    if spec == "stepped-beam":
-        return geometry.stepped_beam(5.0 if mesh_size is None else mesh_size, 2 if order is None else order,
-                                     check_limits=check_limits)
-    return read_mesh(Path(spec), order, mesh_size, check_limits)
+    shape = builtin_shape(spec)
+    if shape is None:
+        return read_mesh(Path(spec), order, mesh_size, check_limits)
+    mesher, dims = shape
+    order = 2 if order is None else order
+    if divisions is not None:
+        return geometry.box(*dims, None, order, divisions=divisions, check_limits=check_limits)
+    if mesher is geometry.stepped_beam:
+        return mesher(5.0 if mesh_size is None else mesh_size, order, check_limits=check_limits)
+    return mesher(*dims, min(dims) / 2 if mesh_size is None else mesh_size, order, check_limits=check_limits)
 
 
 def build_body(mesh: Mesh, material: Material, n_modes: int, clamp: str | None = None,

@@ -19,8 +19,8 @@ def _entities_in(gmsh, dim, lo, hi, eps=1e-6):
 
 def _mesh(gmsh, size, order, curved, source):
     """Mesh the synchronized model at element size ``size`` [m] (min = max), tet4 or tet10;
-    ``curved``: tet10 mid-edge nodes on the CAD geometry, else on straight edges (as
-    :mod:`preprocess.geometry` meshes)."""
+    ``curved``: tet10 mid-edge nodes on the CAD geometry (as :mod:`preprocess.geometry`
+    meshes), else on straight edges."""
     gmsh.option.setNumber("Mesh.MeshSizeMin", size)
     gmsh.option.setNumber("Mesh.MeshSizeMax", size)
     gmsh.option.setNumber("Mesh.SecondOrderLinear", 0 if curved else 1)

@@ -76,6 +76,90 @@ def test_preprocess_missing_mesh_file(tmp_path):
     assert res.returncode == 2 and "none.msh" in res.stderr and "not found" in res.stderr
 
 
+SOFT = ["--density", "1000", "--young", "1e9", "--poisson", "0.3"]
+
+
+def preprocess_in_process(capsys, *argv):
+    """``ffrmbs preprocess`` run by main() in this process: (exit status, stdout, stderr)."""
+    from ffrmbs_app.cli import main
+
+    rc = main(["preprocess", *argv])
+    out, err = capsys.readouterr()
+    return rc or 0, out, err
+
+
+def test_preprocess_structured_box_gives_grid_faces(tmp_path, capsys):
+    """--structured 5,2,3 on a 0.25 x 0.05 x 0.05 m box, tet10: the face y = 0.05 is the
+    (2·5 + 1) x (2·3 + 1) node grid x = i·0.025, z = j·0.05/6 (longer side first)."""
+    from contours.node_grid import node_matrix
+
+    rc, _, err = preprocess_in_process(capsys, "box:0.25,0.05,0.05", "--structured", "5,2,3", "--modes", "2",
+                                       "--clamp", "x0", *SOFT, "--out", str(tmp_path))
+    assert rc == 0, err
+    body = read_body(tmp_path / "body.h5")
+    assert body.n_nodes == 11 * 5 * 7 and body.params["structured"] == "5,2,3"
+    O = node_matrix(body.u0, body.node_groups["y1"])
+    assert O.shape == (11, 7)
+    i, j = np.meshgrid(np.arange(11), np.arange(7), indexing="ij")
+    np.testing.assert_allclose(body.u0[O], np.stack([i * 0.025, np.full(i.shape, 0.05), j * 0.05 / 6], axis=-1),
+                               rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("source, options, fault", [
+    ("box:1,1,1", ("--structured", "5,2"), "--structured needs three whole numbers >= 1"),
+    ("box:1,1,1", ("--structured", "5,2,2,2"), "--structured needs three whole numbers"),
+    ("box:1,1,1", ("--structured", "5,0,2"), "--structured needs three whole numbers"),
+    ("box:1,1,1", ("--structured", "2.5,2,2"), "--structured needs three whole numbers"),
+    ("box:1,1,1", ("--structured", "nan,2,2"), "--structured needs three whole numbers"),
+    ("box:1,1,1", ("--structured", "a,b,c"), "--structured needs three whole numbers"),
+    ("box:1,1,1", ("--structured", "2,2,2", "--mesh-size", "0.5"), "--mesh-size does not apply with --structured"),
+    ("stepped-beam", ("--structured", "2,2,2"), "--structured applies to the built-in box:LX,LY,LZ only"),
+    ("cylinder:1,2", ("--structured", "2,2,2"), "--structured applies to the built-in box:LX,LY,LZ only"),
+    ("{tmp}/part.geo", ("--structured", "2,2,2"), "--structured applies to the built-in box:LX,LY,LZ only"),
+    ("cylinder:1", (), "built-in cylinder needs two lengths R,L"),
+    ("cylinder:1,x", (), "built-in cylinder needs two lengths R,L"),
+    ("cylinder:1,-2", (), "cylinder L must be positive"),
+    ("spherical-cap:1,2", (), "cap height must be below twice the radius"),
+    ("spherical-cap:1,0.5,3", (), "built-in spherical-cap needs two lengths R,H"),
+    ("grooved-block:1,1,1", (), "built-in grooved-block needs four lengths LX,LY,LZ,R"),
+    ("grooved-block:1,1,1,0.5", (), "groove radius must be below min(ly/2, lz) = 0.5"),
+    ("grooved-block:1,1,1,nan", (), "grooved-block R must be positive and finite"),
+])
+def test_preprocess_bad_mesh_options_are_one_line_before_meshing(tmp_path, capsys, source, options, fault):
+    (tmp_path / "part.geo").write_text('SetFactory("OpenCASCADE");\nBox(1) = {0, 0, 0, 1, 1, 1};\n')
+    rc, out, err = preprocess_in_process(capsys, source.format(tmp=tmp_path), *options, "--modes", "2", "--free",
+                                         *SOFT, "--out", str(tmp_path / "out"))
+    assert rc == 2 and out == ""
+    assert err.startswith("ffrmbs: error: ") and err.count("\n") == 1 and fault in err   # nothing meshed
+    assert not (tmp_path / "out").exists()
+
+
+def _radius(p):
+    return np.hypot(p[:, 0], p[:, 1])
+
+
+@pytest.mark.parametrize("source, mesh_size, surfaces", [
+    ("cylinder:0.05,0.3", "0.03", {"lateral": lambda p: _radius(p) - 0.05, "end1": lambda p: p[:, 2] - 0.3,
+                                   "rim0": lambda p: np.abs(_radius(p) - 0.05) + np.abs(p[:, 2])}),
+    ("spherical-cap:0.1,0.04", "0.02", {"cap": lambda p: np.linalg.norm(p, axis=1) - 0.1,
+                                        "base": lambda p: p[:, 2] - 0.06}),
+    ("grooved-block:0.06,0.12,0.06,0.04", "0.02", {"groove": lambda p: np.hypot(p[:, 1] - 0.06, p[:, 2] - 0.06) - 0.04,
+                                                   "bottom": lambda p: p[:, 2]}),
+])
+def test_preprocess_curved_builtins_name_their_exact_surfaces(tmp_path, capsys, source, mesh_size, surfaces):
+    """The body file of each new built-in carries its named face groups, every node (mid-edge
+    nodes included) on the exact surface (SI input, so lengths in m)."""
+    rc, _, err = preprocess_in_process(capsys, source, "--mesh-size", mesh_size, "--modes", "1", "--free", *SOFT,
+                                       "--out", str(tmp_path))
+    assert rc == 0, err
+    body = read_body(tmp_path / "body.h5")
+    assert body.params["element_order"] == 2
+    for group, distance in surfaces.items():
+        nodes = body.node_groups[group]
+        assert len(nodes) >= 10, group
+        np.testing.assert_allclose(distance(body.u0[nodes]), 0.0, rtol=0, atol=1e-12, err_msg=group)
+
+
 @pytest.mark.slow
 def test_main_job_runs_the_point_mass_on_the_beam(tmp_path):
     """``ffrmbs run`` with no scene argument: setup A of thesis Sec. 5.2. Independent
