@@ -98,7 +98,6 @@ class GroupFit:
     ctrl : (n_η n_ξ, 3) distinct control points of ū0 [m], η-major.
     node_deviation : (k,) |S(η_i, ξ_i) − x_i| at the patch's nodes [m].
     mid_deviation : (T,) |S(η_m, ξ_m) − x_m| at its surface triangles' mid-points [m].
-    mid_params : (T, 2) the mid-points' parameters.
     """
 
     group: str
@@ -109,11 +108,10 @@ class GroupFit:
     ctrl: np.ndarray
     node_deviation: np.ndarray
     mid_deviation: np.ndarray
-    mid_params: np.ndarray
 
-    def surface(self, params, d_eta=0, d_xi=0) -> np.ndarray:
-        """(m, 3) S (or a derivative) at the parameters ``params`` (m, 2) [m]."""
-        return self.fit.collocation(params, d_eta, d_xi) @ self.ctrl
+    def surface(self, params) -> np.ndarray:
+        """(m, 3) S(η, ξ) at the parameters ``params`` (m, 2) [m]."""
+        return self.fit.collocation(params) @ self.ctrl
 
     def describe(self) -> str:
         """Lines naming the patch and the route a 2s contour on the group takes."""
@@ -159,7 +157,7 @@ def fit_group(body, group, control_points=None, smoothing=SMOOTHING, source="the
         grid = None
     node_dev = np.linalg.norm(fit.collocation(fit.params) @ ctrl - patch.points, axis=1)
     mid_dev = np.linalg.norm(fit.collocation(mid_t) @ ctrl - mid_x, axis=1)
-    return GroupFit(group, fit, patch, report, grid, ctrl, node_dev, mid_dev, mid_t)
+    return GroupFit(group, fit, patch, report, grid, ctrl, node_dev, mid_dev)
 
 
 # --------------------------------------------------------------------------- sampling
