@@ -45,6 +45,7 @@ from contours import node_matrix
 from contours.fitting import SMOOTHING, fit_report, surface_fit
 from contours.fitting.report import midpoints
 from ffrmbs.errors import FfrmbsError, ModelError, OutputFileError, os_reason
+from ffrmbs_app.output_dirs import new_directories
 
 DEGREE = 3               #: the contour's degree in both directions (C²)
 SAMPLES_PER_SPAN = 4     #: contour samples per knot span and direction (the .vtu grid, the PNG's lines)
@@ -304,36 +305,20 @@ def write_contour_files(gf: GroupFit, out_dir) -> list[Path]:
     writers = {f"{stem}-fit.png": lambda path: fit_figure(gf).savefig(path, format="png"),
                f"{stem}-fit.vtu": lambda path: meshio.write(path, fit_mesh(gf), file_format="vtu"),
                f"{stem}-contour.vtu": lambda path: meshio.write(path, contour_mesh(gf), file_format="vtu")}
-    created, temporaries = [], []
+    temporaries = []
     try:
-        created = _make_dirs(out_dir)
-        for name, write in writers.items():
-            tmp = out_dir / f".{name}.tmp-{os.getpid()}"
-            temporaries.append(tmp)
-            write(tmp)
-        for tmp, name in zip(temporaries, writers):
-            os.replace(tmp, out_dir / name)
-    except BaseException as exc:
-        for tmp in temporaries:
-            tmp.unlink(missing_ok=True)
-        for d in reversed(created):
+        with new_directories(out_dir):
             try:
-                d.rmdir()
-            except OSError:
-                pass
-        if isinstance(exc, OSError):
-            raise OutputFileError(out_dir, f"cannot write the contour files: {os_reason(exc)}") from None
-        raise
+                for name, write in writers.items():
+                    tmp = out_dir / f".{name}.tmp-{os.getpid()}"
+                    temporaries.append(tmp)
+                    write(tmp)
+                for tmp, name in zip(temporaries, writers):
+                    os.replace(tmp, out_dir / name)
+            except BaseException:
+                for tmp in temporaries:
+                    tmp.unlink(missing_ok=True)
+                raise
+    except OSError as exc:
+        raise OutputFileError(out_dir, f"cannot write the contour files: {os_reason(exc)}") from None
     return [out_dir / name for name in writers]
-
-
-def _make_dirs(path: Path) -> list[Path]:
-    """Create ``path`` and its missing ancestors; return the ones created (outermost first)."""
-    missing = []
-    while not path.exists():
-        missing.append(path)
-        path = path.parent
-    missing.reverse()
-    for d in missing:
-        d.mkdir()
-    return missing
