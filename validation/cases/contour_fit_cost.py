@@ -166,4 +166,10 @@ def _slopes(table):
     for name, a, b in list(zip(OPERATIONS, t0, t1)) + [("fit", f0, f1)]:
         lines.append(f"- {name}: {math.log(b / a) / lk:.2f}, {math.log(b / a) / lc:.2f} "
                      f"({1e6 * a:.3g} µs → {1e6 * b:.3g} µs)")
+    n = np.array([row[1]["control_points"] for row in table], dtype=float)
+    lines += ["", "Least-squares line t = t₀ + c · (control points) per operation (a constant Python overhead t₀ "
+              "hides a linear part in the log-log slopes):", ""]
+    for j, name in enumerate(OPERATIONS):
+        c, t0 = np.polyfit(n, [row[2][j] for row in table], 1)
+        lines.append(f"- {name}: t₀ = {1e6 * t0:.3g} µs, c = {1e9 * c:.3g} ns per control point")
     return "\n".join(lines)

@@ -43,7 +43,8 @@ From the fit report (:func:`contours.fitting.fit_report`, FE-relative): ``fe_nod
 ``fe_mid_max_m`` the distance to the FE surface at the nodes and at the surface triangles'
 mid-points [m], ``fe_normal_max_deg`` the normal's angle to the FE triangles'; and
 ``mode_node_max`` the worst mode's max nodal fit error relative to its largest nodal
-value. CPU time: the contour's construction (patch, map, factored fit, F ū0 and F Φ),
+value; ``patch_nodes`` and ``spacing_m`` the patch's node count and mean node spacing [m]
+(the orders of convergence in the notes are taken against it). CPU time: the contour's construction (patch, map, factored fit, F ū0 and F Φ),
 numba compilation excluded, after one warm-up construction.
 """
 
@@ -186,7 +187,7 @@ def measure(surface, body, contour):
             "fe_node_max_m": report.rows[0]["node_max"], "fe_mid_max_m": report.rows[0]["mid_max"],
             "fe_normal_max_deg": report.normal_max,
             "mode_node_max": max(r["node_max"] for r in report.rows[1:]),
-            "patch_nodes": contour.patch.k,
+            "patch_nodes": contour.patch.k, "spacing_m": contour.patch.edge_length,
             "control_points": f"{contour.fit.eta.n_unique}x{contour.fit.xi.n_unique}"}
 
 
@@ -223,12 +224,12 @@ def _setup_note(quick):
 
 
 def _table(figures, quick):
-    lines = ["| surface | order | h [m] | patch nodes | control points | max dist / size | rms dist / size | "
+    lines = ["| surface | order | h [m] | patch nodes | node spacing [mm] | control points | max dist / size | rms dist / size | "
              "normal max [deg] | normal max off corners [deg] | normal rms [deg] | boundary max / size | FE node max [m] | FE mid max [m] | "
-             "FE normal max [deg] | mode node max (rel.) |", "|" + "---|" * 15]
+             "FE normal max [deg] | mode node max (rel.) |", "|" + "---|" * 16]
     for (name, order, h), m in figures.items():
         lines.append(f"| {name} | {'tet10' if order == 2 else 'tet4'} | {h:g} | {m['patch_nodes']} | "
-                     f"{m['control_points']} | {m['dist_max_rel']:.2e} | {m['dist_rms_rel']:.2e} | "
+                     f"{1e3 * m['spacing_m']:.2f} | {m['control_points']} | {m['dist_max_rel']:.2e} | {m['dist_rms_rel']:.2e} | "
                      f"{m['normal_max_deg']:.3g} | {m['normal_inner_max_deg']:.3g} | {m['normal_rms_deg']:.3g} | {m['boundary_max_rel']:.2e} | "
                      f"{m['fe_node_max_m']:.2e} | {m['fe_mid_max_m']:.2e} | {m['fe_normal_max_deg']:.3g} | "
                      f"{m['mode_node_max']:.2e} |")
@@ -236,8 +237,12 @@ def _table(figures, quick):
 
 
 def _order_note(figures, quick):
-    """Observed orders p = ln(e(h1)/e(h2)) / ln(h1/h2) between consecutive mesh sizes."""
-    lines = ["Observed convergence orders p = ln(e(h₁)/e(h₂)) / ln(h₁/h₂) between consecutive mesh sizes "
+    """Observed orders p = ln(e₁/e₂) / ln(s₁/s₂) between consecutive mesh sizes, s the
+    patch's mean node spacing (gmsh's own size limits can make two nominal sizes h mesh
+    alike)."""
+    lines = ["Observed convergence orders p = ln(e₁/e₂) / ln(s₁/s₂) between consecutive mesh sizes, s the patch's "
+             "mean node spacing (gmsh's curvature and default size limits can make two nominal sizes h give nearly "
+             "the same mesh, e.g. the cylinder at 0.02 and 0.014 m) "
              "(max distance, max normal error off the corners, boundary, mode-shape error; the plane's geometry "
              "errors at rounding level are left out):", ""]
     keys = ("dist_max_rel", "normal_inner_max_deg", "boundary_max_rel", "mode_node_max")
@@ -252,7 +257,8 @@ def _order_note(figures, quick):
                     if surface.name == "plate" and key != "mode_node_max":
                         orders.append("—")
                     else:
-                        orders.append(f"{math.log(a[key] / b[key]) / math.log(h1 / h2):.2f}")
-                parts.append(f"h {h1:g}→{h2:g}: " + " / ".join(orders))
+                        orders.append(f"{math.log(a[key] / b[key]) / math.log(a['spacing_m'] / b['spacing_m']):.2f}")
+                parts.append(f"h {h1:g}→{h2:g} (s {1e3 * a['spacing_m']:.2f}→{1e3 * b['spacing_m']:.2f} mm): "
+                             + " / ".join(orders))
             lines.append(f"- {surface.name}, {'tet10' if order == 2 else 'tet4'}: " + "; ".join(parts))
     return "\n".join(lines)
