@@ -11,6 +11,7 @@ Subcommands
 ``bench``       every benchmark in one process: tables, target verdicts, JSON (validation.bench)
 ``plot``        outputs, energy and contacts of a result file against time, as a PNG (ffrmbs_app.plot)
 ``export``      a result file to ParaView: deformed surfaces over time, .pvd + .vtu (ffrmbs_app.export)
+``contour``     a 2s contour fitted to a face group of a body: fit report, PNG, .vtu (ffrmbs_app.contour_report)
 
 Progress bars (preprocessing stages, export) are drawn on stderr only when it is a
 terminal; ``FFRMBS_PROGRESS=1`` forces them on, ``FFRMBS_PROGRESS=0`` off (ffrmbs_app.progress).
@@ -179,6 +180,21 @@ def cmd_export(args):
     print(f"wrote {pvd} (open it in ParaView: File > Open, Apply, then play)")
 
 
+def cmd_contour(args):
+    """Fit a 2s contour to a face group of a body; print the fit report, write a PNG and
+    ParaView files (:mod:`ffrmbs_app.contour_report`)."""
+    from preprocess.bodyfiles import read_body
+
+    from ffrmbs_app.contour_report import fit_group, parse_control_points, parse_smoothing, write_contour_files
+
+    control_points = parse_control_points(args.control_points)
+    smoothing = parse_smoothing(args.smoothing)
+    gf = fit_group(read_body(args.body), args.group, control_points, smoothing, source=args.body)
+    print(gf.describe())
+    print(gf.report.text())
+    print("wrote " + ", ".join(str(p) for p in write_contour_files(gf, args.out)))
+
+
 def _percent(share) -> str:
     """``share`` (a fraction) as a percentage for an argparse help text (% escaped)."""
     return f"{share:.0%}".replace("%", "%%")
@@ -211,11 +227,11 @@ def build_parser():
                           "a .msh or .inp mesh keeps its own order")
     pre.add_argument("--mesh-size", type=float, help="maximum element size, input units (built-in geometries "
                                                      "and .geo files; default: half the smallest dimension of "
-                                                     "a built-in geometry)")
+                                                     "a built-in geometry, 5 for stepped-beam)")
     pre.add_argument("--structured", metavar="NX,NY,NZ",
-                     help="box:LX,LY,LZ only: a structured (transfinite) mesh with NX, NY, NZ elements along "
-                          "x, y, z instead of --mesh-size; every face's nodes then form a grid (exact "
-                          "contour interpolation)")
+                     help="box:LX,LY,LZ only: a structured (transfinite) mesh of NX x NY x NZ cells along x, y, z "
+                          "(6 tetrahedra each) instead of --mesh-size; every face's nodes then form a grid "
+                          "(exact contour interpolation)")
     pre.add_argument("--out", type=output_dir, required=True, help="output directory")
     pre.add_argument("--no-limits", action="store_true",
                      help=f"mesh and solve even when the mesh is estimated over {mesh_limits.MAX_NODES:.0e} nodes "
@@ -284,6 +300,20 @@ def build_parser():
     export.add_argument("--body", action="append", metavar="NAME", help="only this body (repeatable)")
     export.add_argument("--compress", action="store_true", help="zlib-compress the .vtu files (smaller, slower)")
     export.set_defaults(func=cmd_export)
+
+    contour = sub.add_parser("contour", help="fit a 2s contour to a face group of a body: fit report, a PNG of "
+                                             "the deviation, ParaView .vtu files")
+    contour.add_argument("body", help="body directory or body.h5 (as for ffrmbs info)")
+    contour.add_argument("group", help="a node group of the body's surface (ffrmbs info lists them)")
+    contour.add_argument("--control-points", metavar="N|NE,NX",
+                         help="distinct control points per direction, >= 4 (default: a knot span of about two "
+                              "node spacings)")
+    contour.add_argument("--smoothing", metavar="S", help="dimensionless thin-plate weight of the fit, >= 0 "
+                                                          "(default 1e-6)")
+    contour.add_argument("--out", type=output_dir, default="ffrmbs-contour",
+                         help="output directory (default: ffrmbs-contour); GROUP-fit.png, GROUP-fit.vtu and "
+                              "GROUP-contour.vtu in it are replaced")
+    contour.set_defaults(func=cmd_contour)
     return p
 
 

@@ -63,6 +63,7 @@ import h5py
 import numpy as np
 
 from ffrmbs.errors import FfrmbsError, InputFileError, OutputFileError, os_reason
+from ffrmbs_app.output_dirs import new_directories
 from mbs.result_file import attribute, damaged_result_file, open_result_file
 
 MARKER = ".ffrmbs-export"
@@ -206,8 +207,6 @@ def export_paraview(result_path, out_dir=None, every=1, bodies=None, compress=Fa
     OutputFileError
         The export cannot be written (a full disk, no permission); nothing is left behind.
     """
-    from ffrmbs_app.progress import progress_bar
-
     result_path = Path(result_path)
     if isinstance(every, bool) or not isinstance(every, (int, np.integer)) or every < 1:
         raise FfrmbsError(f"every must be a positive integer, got {every!r}")
@@ -219,58 +218,53 @@ def export_paraview(result_path, out_dir=None, every=1, bodies=None, compress=Fa
 
     with open_result(result_path) as f:
         plan = _plan(f, result_path, bodies)
-        created, tmp = [], None
         try:
-            created = _make_parents(out_dir.parent)
-            tmp = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.tmp-", dir=out_dir.parent))
-            idx = np.arange(0, plan["n"], every)
-            n_files = len(idx) * len(plan["series"])
-            width = max(6, len(str(plan["n"] - 1)))
-            entries = []
-            with progress_bar(n_files, "export", unit="file") as bar:
-                for part, series in enumerate(plan["series"]):
-                    name, label, t = series["name"], series["label"], plan["t"]
-                    (tmp / name).mkdir()
-                    own = []
-                    for k, points, cells, point_data in _read(series["samples"](series, idx), result_path):
-                        file = f"{name}_{k:0{width}d}.vtu"
-                        _write_vtu(tmp / name / file, points, cells, point_data, compress)
-                        own.append((t[k], file, 0, label))
-                        entries.append((t[k], Path(name) / file, part, label))
-                        bar.update()
-                    write_pvd(tmp / name / f"{name}.pvd", own, series.get("comment"))
-            entries.sort(key=lambda e: (e[0], e[2]))
-            main = tmp / f"{result_path.stem}.pvd"
-            write_pvd(main, entries, f"ffrmbs export of {result_path.name}: "
-                                     + ", ".join(s["label"] for s in plan["series"]))
-            (tmp / MARKER).write_text(json.dumps({"result": str(result_path.absolute()), "every": every,
-                                                  "series": [s["name"] for s in plan["series"]]}) + "\n")
-            _replace_dir(tmp, out_dir)
-        except BaseException as exc:
-            if tmp is not None:
-                shutil.rmtree(tmp, ignore_errors=True)
-            for d in reversed(created):
-                try:
-                    d.rmdir()
-                except OSError:
-                    pass
-            if isinstance(exc, OSError):
-                raise OutputFileError(out_dir, f"cannot write the ParaView export: {os_reason(exc)}") from None
-            raise
+            with new_directories(out_dir.parent), _temporary_dir(out_dir) as tmp:
+                main = _write_series(tmp, plan, result_path, every, compress)
+                _replace_dir(tmp, out_dir)
+        except OSError as exc:
+            raise OutputFileError(out_dir, f"cannot write the ParaView export: {os_reason(exc)}") from None
     return out_dir / main.name
 
 
-def _make_parents(parent: Path):
-    """Create ``parent`` and its missing ancestors; return the ones created (outermost first)."""
-    missing = []
-    p = parent
-    while not p.exists():
-        missing.append(p)
-        p = p.parent
-    missing.reverse()
-    for d in missing:
-        d.mkdir()
-    return missing
+@contextmanager
+def _temporary_dir(out_dir: Path):
+    """A new hidden directory beside ``out_dir`` for the block, removed if the block raises."""
+    tmp = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.tmp-", dir=out_dir.parent))
+    try:
+        yield tmp
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+
+
+def _write_series(tmp: Path, plan, result_path: Path, every, compress) -> Path:
+    """Write every series of ``plan`` and the main .pvd into ``tmp``; the main .pvd's path."""
+    from ffrmbs_app.progress import progress_bar
+
+    idx = np.arange(0, plan["n"], every)
+    n_files = len(idx) * len(plan["series"])
+    width = max(6, len(str(plan["n"] - 1)))
+    entries = []
+    with progress_bar(n_files, "export", unit="file") as bar:
+        for part, series in enumerate(plan["series"]):
+            name, label, t = series["name"], series["label"], plan["t"]
+            (tmp / name).mkdir()
+            own = []
+            for k, points, cells, point_data in _read(series["samples"](series, idx), result_path):
+                file = f"{name}_{k:0{width}d}.vtu"
+                _write_vtu(tmp / name / file, points, cells, point_data, compress)
+                own.append((t[k], file, 0, label))
+                entries.append((t[k], Path(name) / file, part, label))
+                bar.update()
+            write_pvd(tmp / name / f"{name}.pvd", own, series.get("comment"))
+    entries.sort(key=lambda e: (e[0], e[2]))
+    main = tmp / f"{result_path.stem}.pvd"
+    write_pvd(main, entries, f"ffrmbs export of {result_path.name}: "
+                             + ", ".join(s["label"] for s in plan["series"]))
+    (tmp / MARKER).write_text(json.dumps({"result": str(result_path.absolute()), "every": every,
+                                          "series": [s["name"] for s in plan["series"]]}) + "\n")
+    return main
 
 
 def _replace_dir(tmp: Path, out_dir: Path):

@@ -10,6 +10,7 @@ there too; the others must compile and their imports must exist.
 """
 
 import os
+import shutil
 import subprocess
 import sys
 import time
@@ -155,9 +156,14 @@ def _argv(words):
     return None
 
 
+WRITTEN_INTO = ("examples",)        # the README preprocesses example parts into examples/scenes/
+IGNORED = ("plate", "channel", "__pycache__")     # bodies a user made there (.gitignore)
+
+
 def _fresh_clone(tmp):
     """A directory laid out like a fresh clone: the repository's tracked top-level entries
-    (all non-hidden ones without git) as symlinks, so outputs land in tmp."""
+    (all non-hidden ones without git) as symlinks — copies for those the README's commands
+    write into — so outputs land in tmp."""
     try:
         tracked = subprocess.run(["git", "ls-files"], cwd=REPO, capture_output=True, text=True, check=True).stdout
         names = {path.split("/")[0] for path in tracked.splitlines()}
@@ -165,7 +171,10 @@ def _fresh_clone(tmp):
         names = {p.name for p in REPO.iterdir()}
     tmp.mkdir()
     for name in sorted(n for n in names if not n.startswith(".")):
-        (tmp / name).symlink_to(REPO / name)
+        if name in WRITTEN_INTO:
+            shutil.copytree(REPO / name, tmp / name, ignore=shutil.ignore_patterns(*IGNORED))
+        else:
+            (tmp / name).symlink_to(REPO / name)
     return tmp
 
 

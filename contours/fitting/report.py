@@ -129,7 +129,8 @@ def fit_report(fit, patch, phi=None, name="patch", mode_numbers=None) -> FitRepo
             rows.append(dict(zip(("field", "node_max", "node_rms", "mid_max", "mid_rms"), (f"mode {label}",) +
                                  tuple(float(v) for v in e))))
             worst_mode = max(worst_mode, (float(e[0]), label), key=lambda w: w[0])
-    hint = "give more control points (control_points) or mesh finer (a smaller mesh size)"
+    hint = ("give more control points (control_points in a scene, --control-points for ffrmbs contour) or "
+            "mesh finer (a smaller mesh size)")
     if rows[0]["node_max"] > BOUNDS["distance"] * spacing:
         report.warnings.append(f"the contour lies up to {rows[0]['node_max']:.3g} m from the nodes, over "
                                f"{BOUNDS['distance']:.0%} of the node spacing {spacing:.3g} m: {hint}")

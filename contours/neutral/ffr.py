@@ -17,8 +17,9 @@ from scipy.spatial import cKDTree
 
 from ffrmbs.errors import ModelError
 from contours.nurbs import Interpolation1D, SurfaceInterpolation
+from contours.nurbs.knots import parameters
 
-from ..fitting import SMOOTHING, surface_fit
+from ..fitting import SMOOTHING, CurveFit, surface_fit
 from ..node_grid import check_node_matrix, node_line, node_matrix, node_path
 from .factory import Contour1sNeutralFactory, Contour2sNeutralFactory
 from .products import NeutralNurbsLocalPosition, NeutralNurbsModeShapes, NeutralNurbsPosition, NeutralNurbsVelocity
@@ -65,20 +66,31 @@ class Contour1sNeutralFFR(_FFRProducts, Contour1sNeutralFactory):
         a list is open. Given with a group, it must agree with the walk (ModelError).
     method : "chord" or "centripetal"
         Parametrization of the undeformed nodes (thesis eq. 3.19–3.21).
+    control_points : None or int
+        None: the curve interpolates the ordered nodes (exact, thesis eq. 3.22). An int:
+        a least-squares fit with that many distinct control points and uniform knots at
+        the same parameters (:class:`contours.fitting.CurveFit`), e.g. to smooth a long
+        edge of many nodes.
+    smoothing : float
+        Dimensionless weight of ∫ |C''|² in the fit (:mod:`contours.fitting.bspline_fit`).
     compiled : bool
         Span-local numba evaluation (default) or the reference route
         (:class:`~contours.neutral.factory.NeutralContour`).
     """
 
     def __init__(self, body, nodes, normal, degree=3, closed=None, method="chord", name="neutral 1s",
-                 compiled=True):
+                 compiled=True, control_points=None, smoothing=SMOOTHING):
         if isinstance(nodes, str):
             nodes, closed = self._walk(body, nodes, closed, name)
         else:
             nodes = check_node_matrix(np.asarray(nodes).reshape(1, -1), body.data.n_nodes)[0]
             closed = bool(closed)
         self.nodes = nodes
-        interp = Interpolation1D.from_points(body.data.u0[nodes], degree, closed, method)
+        points = body.data.u0[nodes]
+        if control_points is None:
+            interp = Interpolation1D.from_points(points, degree, closed, method)
+        else:
+            interp = CurveFit(parameters(points, method, closed), control_points, degree, closed, smoothing)
         phi = body.phi_nodes[nodes]
         super().__init__(body, CurveSpace(interp), body.data.u0[nodes], phi, normal, name, compiled)
 

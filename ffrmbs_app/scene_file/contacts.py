@@ -146,8 +146,11 @@ class ContactReader:
                 if outward not in (1, -1):
                     c.fail("outward", f"'outward' must be 1 or -1, got {outward}")
 
+            fitting = dict(control_points=_pair(c, "control_points", int) if c.has("control_points") else None,
+                           smoothing=c.get("smoothing"))
+
             def make(env):
-                return cls(env.bodies[name], nodes, extra, degree, closed, method, outward)
+                return cls(env.bodies[name], nodes, extra, degree, closed, method, outward, **fitting)
 
         else:   # 1s, band, cylinder: on a 1s neutral curve
             make = self._curve(c, kind)
@@ -169,7 +172,8 @@ class ContactReader:
         normal = c.get("normal")
         if not np.linalg.norm(normal) > 0:
             c.fail("normal", "'normal' must be a nonzero direction")
-        options = dict(degree=c.get("degree"), closed=closed, method=c.get("method"))
+        options = dict(degree=c.get("degree"), closed=closed, method=c.get("method"),
+                       control_points=c.get("control_points"), smoothing=c.get("smoothing"))
         extra = tuple(c.get(key) for key in CONTOUR[kind] if key not in CONTOUR["1s"])    # width, offset / radius
         curve_class, cls = CONTOURS["1s"], CONTOURS[kind]
 

@@ -158,9 +158,17 @@ Gravity is ``[scene] gravity``.
 
 - ``{ kind = "2s", body, nodes, extra_rows = 0, degree = 3, closed = false,
   method = "chord", outward }``: :class:`contours.Contour2sNeutralFFR` on a flexible
-  body. ``nodes`` is a node-group name (a planar structured patch), or the node
-  matrix O as a list of rows. ``degree`` and ``closed`` take one value or a pair
-  (η, ξ). ``outward`` is +1 or -1. Omitted, it is found from the body.
+  body. ``nodes`` is a node-group name or the node matrix O as a list of rows. A
+  group that is a planar structured grid is interpolated exactly; any other face
+  group of a tet4/tet10 surface (e.g. a gmsh physical surface) is fitted by least
+  squares (:mod:`contours.fitting`; a closed band such as a cylinder's lateral
+  surface periodically), with ``control_points`` (one count or a pair [η, ξ];
+  default: knot spans of about two node spacings — given, the group is fitted even if
+  it is a grid) and ``smoothing`` (1e-6, a dimensionless thin-plate weight).
+  ``ffrmbs contour BODY GROUP`` reports how well a group is fitted. ``degree`` and
+  ``closed`` take one value or a pair (η, ξ) (``closed``, ``extra_rows`` and
+  ``method`` concern grids only). ``outward`` is +1 or -1. Omitted, it is found from
+  the body.
 - ``{ kind = "1s" | "band" | "cylinder", body, start, direction, nodes, normal,
   degree = 3, closed, method = "chord", width, offset = 0, radius }``: a
   :class:`contours.Contour1sNeutralFFR`. It runs through the nodes on the line
@@ -170,7 +178,9 @@ Gravity is ``[scene] gravity``.
   curve: a box edge, a pulley rim), ordered by walking the body's surface edges
   (:func:`contours.node_grid.node_path`), or the ordered list of nodes.
   ``closed`` follows the walk when absent (a loop gives a closed curve; given, it
-  must agree); for a list or a line it defaults to false. ``normal`` *req.* is the
+  must agree); for a list or a line it defaults to false. The curve interpolates
+  the ordered nodes; with ``control_points`` (a count >= 2) it is a least-squares
+  fit to them instead (``smoothing``, 1e-6). ``normal`` *req.* is the
   reference normal in the body frame. "band" (a
   :class:`contours.FlexibleBand`) takes ``width`` *req.* [m] and ``offset`` [m].
   "cylinder" (a :class:`contours.FlexibleCylinder`) takes ``radius`` *req.* [m].
@@ -240,6 +250,7 @@ import inspect
 from dataclasses import dataclass
 
 from contact import LAWS, SOLVERS, RegularizedCoulombFriction
+from contours.fitting import SMOOTHING
 from mbs import BODIES, INTEGRATORS, JOINTS, LOADS, ROTATIONS, Tabulated
 from mbs.integrators import MoreauTimeStepping
 from mbs.joints import AXIS_KINDS
@@ -435,7 +446,10 @@ _CURVE = {"kind": _KIND, "body": FRAME["body"], "start": _vector(REQUIRED, "m"),
           "nodes": Key("special", None, doc="a node group (an edge of surface nodes, or with start and direction "
                                             "any group) or the ordered list of nodes"),
           "normal": _vector(REQUIRED), **_NEUTRAL,
-          "closed": Key("boolean", None, doc="from the walk of an edge group when absent, else false")}
+          "closed": Key("boolean", None, doc="from the walk of an edge group when absent, else false"),
+          "control_points": Key("integer", None, low=2, doc="absent: interpolate the nodes; a count: fit them "
+                                                            "by least squares"),
+          "smoothing": Key("number", SMOOTHING, low=0.0, doc="the fit's weight of the curvature energy")}
 CONTOUR = {
     "point": {"kind": _KIND, **FRAME},
     "sphere": {"kind": _KIND, **FRAME, "radius": _length(low=0.0, strict=True)},
@@ -447,7 +461,10 @@ CONTOUR = {
            "degree": Key("special", 3, doc="an integer >= 1 or a pair [eta, xi]"),
            "closed": Key("special", False, doc="true/false or a pair [eta, xi]"),
            "method": _NEUTRAL["method"],
-           "outward": Key("special", None, doc="+1 or -1; found from the body when absent")},
+           "outward": Key("special", None, doc="+1 or -1; found from the body when absent"),
+           "control_points": Key("special", None, doc="an integer >= 2 or a pair [eta, xi]: a fitted patch's "
+                                                      "distinct control points"),
+           "smoothing": Key("number", SMOOTHING, low=0.0, doc="a fitted patch's thin-plate weight")},
     "1s": _CURVE,
     "band": {**_CURVE, "width": _length(low=0.0, strict=True), "offset": _length(0.0, low=None)},
     "cylinder": {**_CURVE, "radius": _length(low=0.0, strict=True)},

@@ -1,0 +1,79 @@
+"""The example scenes on gmsh parts (examples/scenes/ball_on_plate.toml,
+ball_in_channel.toml) run as a user runs them — preprocess the part with the CLI, then
+``ffrmbs run`` — and obey the physics their headers state: free fall onto the plate's
+top face, and a frictionless ball whose centre stays on the cylinder of radius R − r
+inside the channel while it moves along the channel at constant speed."""
+
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from ffrmbs_app.cli import main
+from mbs.result_file import load_result
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+G = 9.81
+
+
+def run_example(tmp_path, part, preprocess_args, scene, body_dir, capsys):
+    """Preprocess ``part`` into tmp/body_dir, copy the scene beside it, run it; the Result."""
+    code = main(["preprocess", str(EXAMPLES / "parts" / part), *preprocess_args.split(), "--out",
+                 str(tmp_path / body_dir)])
+    assert code in (0, None)
+    shutil.copy(EXAMPLES / "scenes" / scene, tmp_path / scene)
+    out = tmp_path / "out"
+    code = main(["run", str(tmp_path / scene), "--out", str(out), "--no-check", "--no-export"])
+    assert code in (0, None)
+    printed = capsys.readouterr().out
+    result, _ = load_result(out / scene.replace(".toml", ".h5"))
+    return result, printed
+
+
+def header_command(scene, word):
+    """The command line of the scene file's header that starts with ``ffrmbs <word>``."""
+    lines = (EXAMPLES / "scenes" / scene).read_text().splitlines()
+    text = " ".join(l.lstrip("# ").rstrip("\\ ") for l in lines if l.startswith("#"))
+    start = text.index(f"ffrmbs {word}")
+    return text[start:].split("ffrmbs")[1]
+
+
+@pytest.mark.slow
+def test_ball_dropped_on_the_unstructured_plate_lands_when_free_fall_says(tmp_path, capsys):
+    args = header_command("ball_on_plate.toml", "preprocess").split()
+    assert args[1] == "examples/parts/plate.geo"           # the header's command, as a user types it
+    preprocess = " ".join(a for a in args[2:] if a not in ("--out", "examples/scenes/plate"))
+    result, _ = run_example(tmp_path, "plate.geo", preprocess, "ball_on_plate.toml", "plate", capsys)
+    z, t = result["z"], result.t
+    top, radius, drop = 0.01, 0.01, 0.005                  # [m] from the scene's header
+    t_hit = np.sqrt(2 * drop / G)                          # free fall onto the top face
+    first_bounce = t < t_hit + 5e-3
+    assert abs(t[first_bounce][np.argmin(z[first_bounce])] - t_hit) <= t[1] - t[0]
+    free = t < t_hit - 1e-3
+    assert np.allclose(z[free], top + radius + drop - 0.5 * G * t[free] ** 2, atol=1e-9)
+    # the ball never sinks into the (deflecting) plate by more than a Moreau step's drift
+    assert np.nanmin(result.contacts["drop"]["gap"]) > -2e-6       # (no gap before the first step)
+    # it bounced (e = 0.5), at most as high as e² of the drop (the plate keeps some energy)
+    rebound = z[t > t_hit + 1e-3].max() - (top + radius)
+    assert 0.0 < rebound < 0.25 * drop
+    E = sum(result.energy[k] for k in ("kinetic", "potential"))
+    assert E.max() <= E[0] * (1 + 1e-9)
+
+
+@pytest.mark.slow
+def test_ball_in_the_unstructured_channel_stays_on_its_cylinder(tmp_path, capsys):
+    args = header_command("ball_in_channel.toml", "preprocess").split()
+    assert args[1] == "examples/parts/channel.geo"
+    preprocess = " ".join(a for a in args[2:] if a not in ("--out", "examples/scenes/channel"))
+    result, _ = run_example(tmp_path, "channel.geo", preprocess, "ball_in_channel.toml", "channel", capsys)
+    x, y, z, t = result["x"], result["y"], result["z"], result.t
+    axis_y, axis_z, path_radius = 0.03, 0.04, 0.025 - 0.008
+    distance = np.hypot(y - axis_y, z - axis_z)
+    # on the cylinder of radius R − r: the fit error and the O(dt) drift of a Moreau contact
+    assert np.abs(distance - path_radius).max() < 1e-4
+    assert np.allclose(x, 0.02 + 0.2 * t, atol=1e-6)      # no force along a straight channel
+    # a frictionless swing keeps its height: it comes back to 40° on both sides
+    angle = np.degrees(np.arctan2(y - axis_y, axis_z - z))
+    assert angle.max() == pytest.approx(40.0, abs=0.5)
+    assert angle.min() == pytest.approx(-40.0, abs=0.5)
