@@ -21,7 +21,8 @@ time-stepping (θ = 0.5), Newton impact law with e = 0, frictionless.
     the ball's weight, from a full FE static solve (:func:`preprocess.statics.solve_static`)
     with the weight on the top node nearest the drop point — the 6-mode model deflects
     less under the same load (a Ritz basis is stiffer), and the contour spreads the load
-    over several nodes.
+    over several nodes. Near the edge, at small Δt, the plate's undamped ringing lifts the
+    resting ball a little above the closing offset (the notes; still within the bound).
 (b) **Ball sliding inside a tube** — steel tube, inner radius R = 50 mm, outer 60 mm,
     length 100 mm along z (horizontal; gravity along −y), unstructured curved tet10
     (mid-edge nodes on the cylinders, gmsh ``SecondOrderLinear`` 0), outer surface
@@ -199,8 +200,13 @@ def _plate_rows(result, quick):
         f"(a) Ball on the plate top, fit: {report.control_points[0]} x {report.control_points[1]} control points "
         f"on {report.k} nodes, geometry max distance {fit_bound:.2e} m (nodes and mid-points; a flat face is "
         "reproduced exactly up to rounding). Bound = fit + v_impact·Δt + static deflection; the error is the "
-        "closing step's penetration, which Moreau's exact free fall predicts (closing offset): the remainder "
-        "is the plate's deflection and the fit.\n\n" + "\n".join(table))
+        "closing step's penetration, which Moreau's exact free fall predicts (closing offset). Over a node and "
+        "a centroid the remainder is rounding. Near the edge, where the plate is most compliant, and at "
+        "Δt <= 5e-5 s, the ball stopped by the e = 0 impact is lifted by up to 1.3e-6 m by the plate's "
+        "ringing: 6 undamped modes near 38 kHz, which θ = 0.5 aliases at ω Δt >= 12 (the contact point's "
+        "velocity alternates step by step, ~5e-4 m/s) and the unilateral contact rectifies. The same happens "
+        "on a structured plate with its top grid interpolated (not the fit's doing); 2 % modal damping "
+        "lowers it to 3e-7 m. Every row stays within the bound.\n\n" + "\n".join(table))
 
 
 # --- (b) ball sliding inside a tube -------------------------------------------------------
