@@ -177,7 +177,7 @@ def _plate_rows(result, quick):
     report = fit_report(top.fit, top.patch, name="plate top z1")
     fit_bound = max(report.rows[0]["node_max"], report.rows[0]["mid_max"])
     settle(data, points["over a node"], 1e-4, t_end=1e-3)                      # compile
-    mesh = f"tet10 unstructured h={PLATE_MESH * 1e3:g} mm ({data.n_nodes} nodes)"
+    mesh = f"unstructured h={PLATE_MESH * 1e3:g} mm"
     table = ["| drop point | (x, y) [mm] | Δt [s] | z settled − (lz + r) [m] | Moreau closing offset [m] | "
              "remainder [m] | spread [m] | bound [m] | static deflection [m] |",
              "|---|---|---|---|---|---|---|---|---|"]
@@ -190,19 +190,21 @@ def _plate_rows(result, quick):
             result.rows.append(make_row(
                 NAME, {"setup": name, "scene": "ball on plate", "dt": dt, "mesh": mesh}, cpu,
                 abs(err) / BALL_RADIUS, "|z settled − (lz + r)| / r", "analytic rest height lz + r",
-                bound_rel=bound / BALL_RADIUS, fit_bound_m=fit_bound, static_deflection_m=deflection,
+                nodes=data.n_nodes, bound_rel=bound / BALL_RADIUS, fit_bound_m=fit_bound,
+                static_deflection_m=deflection,
                 closing_offset_m=closing_offset(dt), beyond_closing_offset_m=abs(err - closing_offset(dt)),
                 max_penetration_m=float(res.stats["max_penetration"])))
             table.append(f"| {name} | ({xy[0] * 1e3:.2f}, {xy[1] * 1e3:.2f}) | {dt:g} | {err:+.3e} | "
                          f"{closing_offset(dt):+.3e} | {abs(err - closing_offset(dt)):.1e} | {spread:.1e} | "
                          f"{bound:.3e} | {deflection:.1e} |")
     result.notes.append(
-        f"(a) Ball on the plate top, fit: {report.control_points[0]} x {report.control_points[1]} control points "
+        f"(a) Ball on the plate top ({mesh}, {data.n_nodes} nodes), fit: {report.control_points[0]} x "
+        f"{report.control_points[1]} control points "
         f"on {report.k} nodes, geometry max distance {fit_bound:.2e} m (nodes and mid-points; a flat face is "
         "reproduced exactly up to rounding). Bound = fit + v_impact·Δt + static deflection; the error is the "
         "closing step's penetration, which Moreau's exact free fall predicts (closing offset). Over a node and "
         "a centroid the remainder is rounding. Near the edge, where the plate is most compliant, and at "
-        "Δt <= 5e-5 s, the ball stopped by the e = 0 impact is lifted by up to 1.3e-6 m by the plate's "
+        "Δt <= 5e-5 s (full mode), the ball stopped by the e = 0 impact is lifted by up to 1.3e-6 m by the plate's "
         "ringing: 6 undamped modes near 38 kHz, which θ = 0.5 aliases at ω Δt >= 12 (the contact point's "
         "velocity alternates step by step, ~5e-4 m/s) and the unilateral contact rectifies. The same happens "
         "on a structured plate with its top grid interpolated (not the fit's doing); 2 % modal damping "
@@ -275,22 +277,23 @@ def slide(data, dt, t_end=TUBE_T):
 def _tube_rows(result, quick):
     sizes = (0.015,) if quick else (0.015, 0.01)
     steps = (1e-3, 5e-4) if quick else (1e-3, 5e-4, 2.5e-4, 1e-4)
-    table = ["| mesh | patch nodes | fit bound [m] | normal error [deg] | Δt [s] | path error / R | "
-             "radial drift / R | CPU [s] |", "|---|---|---|---|---|---|---|---|"]
+    table = ["| mesh | nodes | patch nodes | fit bound [m] | normal error [deg] | Δt [s] | path error / R | "
+             "radial drift / R | CPU [s] |", "|---|---|---|---|---|---|---|---|---|"]
     for size in sizes:
         data = tube_body(size)
         _, _, inner = ball_in_tube(data)
         report = fit_report(inner.fit, inner.patch, name="tube inner")
         fit_bound = max(report.rows[0]["node_max"], report.rows[0]["mid_max"])
         slide(data, 1e-3, t_end=2e-3)                                               # compile
-        mesh = f"tet10 unstructured curved h={size * 1e3:g} mm ({data.n_nodes} nodes)"
+        mesh = f"unstructured curved h={size * 1e3:g} mm"
         for dt in steps:
             err, drift, _, cpu = slide(data, dt)
             result.rows.append(make_row(
                 NAME, {"setup": "pendulum 60° + axial drift", "scene": "ball in tube", "dt": dt, "mesh": mesh},
                 cpu, err, "max |x − x_ref| / R", "rigid pendulum on ℓ = R − r (solve_ivp 1e-12)",
-                radial_drift=drift, fit_bound_m=fit_bound, normal_deg=report.normal_max))
-            table.append(f"| h = {size * 1e3:g} mm | {report.k} | {fit_bound:.2e} | {report.normal_max:.2g} | "
+                nodes=data.n_nodes, radial_drift=drift, fit_bound_m=fit_bound, normal_deg=report.normal_max))
+            table.append(f"| h = {size * 1e3:g} mm | {data.n_nodes} | {report.k} | {fit_bound:.2e} | "
+                         f"{report.normal_max:.2g} | "
                          f"{dt:g} | {err:.3e} | {drift:.3e} | {cpu:.2f} |")
     result.notes.append(
         "(b) Ball inside the tube (fitted inner surface, a closed band; outward normal towards the axis, decided "
@@ -376,10 +379,10 @@ def _beam_rows(result, quick):
     table = ["| setup | Δt [s] | mesh / contour | phases | phases (reference) | leading phases within "
              f"{PHASE_TOL * 1e3:g} ms | max Δt of those [ms] | state disagreement | v_y RMS / 0.2 m/s |",
              "|---|---|---|---|---|---|---|---|---|"]
-    variants = [(f"structured {BEAM_DIVISIONS}, top fitted {counts[0]} x {counts[1]}", ref_data, counts),
-                (f"unstructured h={BEAM_MESH * 1e3:g} mm ({datas['unstructured'].n_nodes} nodes), top fitted",
+    variants = [(f"structured {BEAM_DIVISIONS}, top fitted", ref_data, counts),
+                (f"unstructured h={BEAM_MESH * 1e3:g} mm, top fitted",
                  datas["unstructured"], None)]
-    variants += [(f"control: structured {c} ({datas[c].n_nodes} nodes), grid interpolated", datas[c], None)
+    variants += [(f"control: structured {c}, grid interpolated", datas[c], None)
                  for c in controls]
     for setup in ("A", "B"):
         for dt in steps:
@@ -393,17 +396,20 @@ def _beam_rows(result, quick):
                 result.rows.append(make_row(
                     NAME, {"setup": setup, "scene": "point mass on beam", "dt": dt, "mesh": mesh}, cpu, err,
                     "v_y RMS / 0.2 m/s", f"structured {BEAM_DIVISIONS} tet10, grid interpolated, same Δt",
+                    nodes=data.n_nodes, control_points=list(control_points) if control_points else None,
                     phases=len(p), phases_reference=len(p_ref), leading_phases_agreeing=n,
                     max_phase_time_diff_s=d, state_disagreement=dis))
                 table.append(f"| {setup} | {dt:g} | {mesh} | {len(p)} | {len(p_ref)} | {n} | {d * 1e3:.3f} | "
                              f"{dis:.2%} | {err:.2e} |")
+    sizes = ", ".join(f"{m if isinstance(m, str) else 'control ' + str(m)} {d.n_nodes}" for m, d in datas.items())
     result.notes.append(
         f"(c) Point mass on beam, {BEAM_MODES} modes each; reference: the structured tet10 mesh "
-        f"{BEAM_DIVISIONS} ({ref_data.n_nodes} nodes), top face interpolated exactly, same Δt. The fitted "
-        "structured top face isolates the fit (same modes). The unstructured mesh has other modes, so it is "
-        "compared for contact kinematics, not as a peer; the control rows are other structured meshes, "
-        "exactly interpolated: their late, short contact phases differ from the reference's as much as the "
-        "unstructured mesh's do, and their v_y differences are of the same size.\n\n" + "\n".join(table))
+        f"{BEAM_DIVISIONS}, top face interpolated exactly, same Δt. Nodes: {sizes}. The fitted "
+        f"structured top face ({counts[0]} x {counts[1]} control points) isolates the fit (same modes). The "
+        "unstructured mesh has other modes, so it is compared for contact kinematics, not as a peer; the "
+        "control rows are other structured meshes, exactly interpolated: their late, short contact phases "
+        "also differ from the reference's, and their v_y differences are of the same order.\n\n"
+        + "\n".join(table))
 
 
 def run(quick: bool) -> CaseResult:
