@@ -428,14 +428,19 @@ def test_contact_entries_map_onto_kinematics_and_laws(body_dir):
     ("v_eps = 1e-3", "v_eps = 0.0", "contact 'cylinder': RegularizedCoulombFriction(mu=0.4, v_eps=0.0): v_eps must"),
 ])
 def test_faults_in_sub_tables_and_dotted_keys_have_their_line(body_dir, old, new, fragment):
-    path = body_dir.parent / "contacts-fault.toml"
     text = CONTACTS.replace("NODES", "0, 1, 2, 3").replace("MATRIX", '"y1"')
+    assert_fault_at(body_dir.parent / "contacts-fault.toml", text, old, new, fragment, new)
+
+
+def assert_fault_at(path, text, old, new, fragment, line):
+    """``text`` with its one ``old`` replaced by ``new``, written to ``path``, is refused
+    with ``fragment`` in the fault, at the line that reads ``line``."""
     assert text.count(old) == 1
     path.write_text(text.replace(old, new))
     with pytest.raises(InputFileError) as info:
         read_scene(path)
     assert fragment in info.value.fault
-    assert path.read_text().splitlines()[info.value.line - 1] == new
+    assert path.read_text().splitlines()[info.value.line - 1] == line
 
 
 # --- faults -------------------------------------------------------------------------------------------
@@ -671,10 +676,4 @@ def test_band_on_an_unstructured_rim_catches_a_ball(rim_scene):
 ])
 def test_faults_of_an_edge_group_name_their_key(rim_scene, old, new, fragment, line):
     text, path, _ = rim_scene
-    fault = path.with_name("rim-fault.toml")
-    assert text.count(old) == 1
-    fault.write_text(text.replace(old, new))
-    with pytest.raises(InputFileError) as info:
-        read_scene(fault)
-    assert fragment in info.value.fault
-    assert fault.read_text().splitlines()[info.value.line - 1] == line
+    assert_fault_at(path.with_name("rim-fault.toml"), text, old, new, fragment, line)

@@ -207,30 +207,11 @@ class CurveFit:
         params = np.asarray(params, dtype=float).ravel()
         if not np.isfinite(params).all():
             raise ModelError("curve fit parameters must be finite")
-        self.eta = FitDirection(n_ctrl, degree, closed)
+        self.eta = d = FitDirection(n_ctrl, degree, closed)
+        # what the parametric space reads from an Interpolation1D
+        self.knots, self.degree, self.closed, self.n_ctrl, self.domain = d.knots, d.degree, d.closed, d.n_ctrl, d.domain
         self.params, self.n_points = params, params.size
         self._ls = _LeastSquares(self.eta.collocation(params), self.eta.gram(2), smoothing)
-
-    # the parametric space reads these like an Interpolation1D's
-    @property
-    def knots(self):
-        return self.eta.knots
-
-    @property
-    def degree(self):
-        return self.eta.degree
-
-    @property
-    def closed(self):
-        return self.eta.closed
-
-    @property
-    def n_ctrl(self):
-        return self.eta.n_ctrl
-
-    @property
-    def domain(self):
-        return self.eta.domain
 
     def control_points(self, values) -> np.ndarray:
         """Control points (n_ctrl, ...) of data (k, ...), wrapped when closed."""
