@@ -27,6 +27,7 @@ import argparse
 import os
 import sys
 import time
+import warnings
 from pathlib import Path
 
 from ffrmbs import __version__
@@ -320,7 +321,9 @@ def build_parser():
 def main(argv=None):
     args = build_parser().parse_args(argv)
     try:
-        args.func(args)
+        with warnings.catch_warnings():
+            warnings.showwarning = _show_warning
+            args.func(args)
     except RunInterrupted as exc:
         print(f"ffrmbs: {exc}; the result file is closed, continue with --resume", file=sys.stderr)
         return 130
@@ -337,6 +340,11 @@ def main(argv=None):
     except BrokenPipeError:
         return _reader_gone()
     return 0
+
+
+def _show_warning(message, category, filename, lineno, file=None, line=None):
+    """A warning as the command line shows it, one line: ``ffrmbs: warning: <message>``."""
+    print(f"ffrmbs: warning: {message}", file=sys.stderr if file is None else file)
 
 
 def _reader_gone():

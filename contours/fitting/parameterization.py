@@ -18,8 +18,10 @@ of the cut, loop 1, the other side, mapped onto the square's bottom, right, top 
 edges. The two sides of the cut land at η = 1 and η = 0, the same point of a direction
 periodic in η; each node keeps its parameters from the side η = 0.
 
-Both maps are projections of nothing: they follow the patch's own triangles, so a curved
-face (cylinder, sphere cap, channel) is parameterized as well as a flat one.
+Neither map projects onto a plane or a cylinder: both follow the patch's own triangles,
+so a curved face (a channel, a cap) is parameterized like a flat one. A smooth boundary
+(a cap's circle) gets its four corners where the boundary does not turn; the map is
+singular there and the fitted surface's normal is unreliable near those four points.
 """
 
 from __future__ import annotations
@@ -48,12 +50,12 @@ def parameterize(patch: SurfacePatch):
 
 def _corners(points, loop) -> np.ndarray:
     """Four positions in ``loop`` (indices into it, increasing) of the square's corners."""
+    if len(loop) < 4:
+        raise ModelError(f"a patch boundary of {len(loop)} nodes cannot be mapped to a square (at least 4)")
     x = points[loop]
     a, b = x - np.roll(x, 1, axis=0), np.roll(x, -1, axis=0) - x
     cos = np.einsum("ij,ij->i", a, b) / (np.linalg.norm(a, axis=1) * np.linalg.norm(b, axis=1))
     turn = np.arccos(np.clip(cos, -1.0, 1.0))
-    if len(loop) < 4:
-        raise ModelError(f"a patch boundary of {len(loop)} nodes cannot be mapped to a square (at least 4)")
     order = np.argsort(-turn, kind="stable")
     if turn[order[3]] >= CORNER_TURN:
         return np.sort(order[:4])

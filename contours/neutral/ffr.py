@@ -12,6 +12,8 @@ or a straight line of nodes.
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -19,7 +21,7 @@ from ffrmbs.errors import ModelError
 from contours.nurbs import Interpolation1D, SurfaceInterpolation
 from contours.nurbs.knots import parameters
 
-from ..fitting import SMOOTHING, CurveFit, surface_fit
+from ..fitting import SMOOTHING, CurveFit, fit_report, surface_fit
 from ..node_grid import check_node_matrix, node_line, node_matrix, node_path
 from .factory import Contour1sNeutralFactory, Contour2sNeutralFactory
 from .products import NeutralNurbsLocalPosition, NeutralNurbsModeShapes, NeutralNurbsPosition, NeutralNurbsVelocity
@@ -159,14 +161,15 @@ class Contour2sNeutralFFR(_FFRProducts, Contour2sNeutralFactory):
     Attributes
     ----------
     nodes : the node matrix O (grid route) or the patch's node indices (k,) (fitted).
-    fit, patch : the :class:`~contours.fitting.SurfaceFit` and
-        :class:`~contours.fitting.SurfacePatch` of a fitted patch, else None.
+    fit, patch, fit_report : the :class:`~contours.fitting.SurfaceFit`,
+        :class:`~contours.fitting.SurfacePatch` and :class:`~contours.fitting.FitReport`
+        of a fitted patch (a warning for each bound of the report it exceeds), else None.
     """
 
     def __init__(self, body, nodes, extra_rows=0, degree=3, closed=False, method="chord",
                  outward=None, name="neutral 2s", compiled=True, control_points=None, smoothing=SMOOTHING):
         data = body.data
-        self.fit = self.patch = None
+        self.fit = self.patch = self.fit_report = None
         if isinstance(nodes, str):
             group = body.node_group(nodes)
             O = None if control_points is not None else _grid_or_none(data, group, extra_rows)
@@ -178,6 +181,10 @@ class Contour2sNeutralFFR(_FFRProducts, Contour2sNeutralFactory):
         if O is None:
             self.nodes = self.patch.nodes
             space = SurfaceSpace(self.fit)
+            self.fit_report = fit_report(self.fit, self.patch, body.phi_nodes[self.nodes],
+                                         f"{name}: node group {nodes!r} of body {body.name!r}")
+            for line in self.fit_report.warnings:
+                warnings.warn(f"{self.fit_report.name}: {line}", stacklevel=2)
         else:
             self.nodes = O
             space = SurfaceSpace(SurfaceInterpolation.from_grid(data.u0[O], as_pair(degree, "degree"),
