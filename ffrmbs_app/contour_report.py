@@ -43,7 +43,6 @@ import numpy as np
 
 from contours import node_matrix
 from contours.fitting import SMOOTHING, fit_report, surface_fit
-from contours.fitting.report import midpoints
 from ffrmbs.errors import FfrmbsError, ModelError, OutputFileError, os_reason
 from ffrmbs_app.output_dirs import new_directories
 
@@ -94,11 +93,9 @@ class GroupFit:
     group : the node group's name.
     fit, patch : the :class:`~contours.fitting.SurfaceFit` and
         :class:`~contours.fitting.SurfacePatch`.
-    report : the :class:`~contours.fitting.FitReport` (geometry and every mode).
+    report : the :class:`~contours.fitting.FitReport` (geometry and every mode; its
+        ``ctrl``, ``node_deviation`` and ``mid_deviation`` are drawn and written).
     grid : (n_η, n_ξ) of the node matrix O when the group is a planar structured grid, else None.
-    ctrl : (n_η n_ξ, 3) distinct control points of ū0 [m], η-major.
-    node_deviation : (k,) |S(η_i, ξ_i) − x_i| at the patch's nodes [m].
-    mid_deviation : (T,) |S(η_m, ξ_m) − x_m| at its surface triangles' mid-points [m].
     """
 
     group: str
@@ -106,13 +103,10 @@ class GroupFit:
     patch: object
     report: object
     grid: tuple | None
-    ctrl: np.ndarray
-    node_deviation: np.ndarray
-    mid_deviation: np.ndarray
 
     def surface(self, params) -> np.ndarray:
         """(m, 3) S(η, ξ) at the parameters ``params`` (m, 2) [m]."""
-        return self.fit.collocation(params) @ self.ctrl
+        return self.fit.collocation(params) @ self.report.ctrl
 
     def describe(self) -> str:
         """Lines naming the patch and the route a 2s contour on the group takes."""
@@ -150,15 +144,11 @@ def fit_group(body, group, control_points=None, smoothing=SMOOTHING, source="the
                              f"node group {group!r}")
     phi = body.phi.reshape(body.n_nodes, 3, body.n_modes)[patch.nodes]
     report = fit_report(fit, patch, phi, group)
-    ctrl = fit.control_points(patch.points)[:fit.eta.n_unique, :fit.xi.n_unique].reshape(-1, 3)
-    mid_x, mid_t = midpoints(patch, patch.points, fit.params)
     try:
         grid = node_matrix(body.u0, nodes).shape
     except ModelError:
         grid = None
-    node_dev = np.linalg.norm(fit.collocation(fit.params) @ ctrl - patch.points, axis=1)
-    mid_dev = np.linalg.norm(fit.collocation(mid_t) @ ctrl - mid_x, axis=1)
-    return GroupFit(group, fit, patch, report, grid, ctrl, node_dev, mid_dev)
+    return GroupFit(group, fit, patch, report, grid)
 
 
 # --------------------------------------------------------------------------- sampling
@@ -224,7 +214,7 @@ def fit_figure(gf: GroupFit):
     ax.computed_zorder = False                   # the knot lines stay above the surface
 
     per_triangle = len(patch.linear) // len(patch.triangles)          # 4 sub-triangles of a 6-node one
-    colour = np.repeat(gf.mid_deviation, per_triangle) / scale
+    colour = np.repeat(gf.report.mid_deviation, per_triangle) / scale
     norm = Normalize(0.0, colour.max() if colour.max() > 0 else 1.0)
     cmap = colormaps["viridis"]
     ax.add_collection3d(Poly3DCollection(patch.points[patch.linear], facecolors=cmap(norm(colour)),
@@ -274,9 +264,9 @@ def fit_mesh(gf: GroupFit):
 
     p = gf.patch
     return meshio.Mesh(p.points, [(TRIANGLE_CELLS[p.triangles.shape[1]], p.triangles)],
-                       point_data={"deviation": gf.node_deviation, "eta": gf.fit.params[:, 0],
+                       point_data={"deviation": gf.report.node_deviation, "eta": gf.fit.params[:, 0],
                                    "xi": gf.fit.params[:, 1], "node": p.nodes},
-                       cell_data={"mid_deviation": [gf.mid_deviation]})
+                       cell_data={"mid_deviation": [gf.report.mid_deviation]})
 
 
 def contour_mesh(gf: GroupFit):

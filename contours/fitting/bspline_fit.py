@@ -184,14 +184,19 @@ class SurfaceFit:
         rows = np.repeat(np.arange(m), pe * px)
         return coo_matrix((vals.ravel(), (rows, cols.ravel())), shape=(m, self.eta.n_unique * nx)).tocsr()
 
-    def control_points(self, values) -> np.ndarray:
-        """Control points (eta.n_ctrl, xi.n_ctrl, ...) of data ``values`` (k, ...), wrapped
-        along closed directions; units of ``values``."""
+    def distinct_control_points(self, values) -> np.ndarray:
+        """The n_η n_ξ distinct control points (η-major, the columns of :meth:`collocation`)
+        of data ``values`` (k, ...): shape (n_η n_ξ, ...), units of ``values``."""
         Q = np.asarray(values, dtype=float)
         if Q.ndim == 0 or Q.shape[0] != self.n_points:
             raise ModelError(f"expected values of shape ({self.n_points}, ...), got {Q.shape}")
-        P = self._ls.solve(Q.reshape(self.n_points, -1))
-        P = P.reshape((self.eta.n_unique, self.xi.n_unique) + Q.shape[1:])
+        return self._ls.solve(Q.reshape(self.n_points, -1)).reshape((-1,) + Q.shape[1:])
+
+    def control_points(self, values) -> np.ndarray:
+        """Control points (eta.n_ctrl, xi.n_ctrl, ...) of data ``values`` (k, ...), wrapped
+        along closed directions; units of ``values``."""
+        P = self.distinct_control_points(values)
+        P = P.reshape((self.eta.n_unique, self.xi.n_unique) + P.shape[1:])
         return np.ascontiguousarray(self.xi.wrap(self.eta.wrap(P, 0), 1))
 
     def matrix(self) -> np.ndarray:

@@ -48,6 +48,14 @@ def parameterize(patch: SurfacePatch):
     return _band_map(patch), (True, False)
 
 
+def unwrap_seam(t) -> np.ndarray:
+    """Triangle corner parameters ``t`` (T, c, 2) of a band, η shifted by ±1 where a corner
+    lies across the seam η = 0 ≡ 1 from the triangle's first corner (in place; returned)."""
+    d = t[..., 0] - t[..., :1, 0]
+    t[..., 0] += np.where(d > 0.5, -1.0, 0.0) + np.where(d < -0.5, 1.0, 0.0)
+    return t
+
+
 def _corners(points, loop) -> np.ndarray:
     """Four positions in ``loop`` (indices into it, increasing) of the square's corners."""
     if len(loop) < 4:

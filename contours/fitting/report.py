@@ -20,6 +20,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .parameterization import unwrap_seam
+
 #: warning bounds: geometry node distance / node spacing, normal angle [deg], mode node error
 BOUNDS = {"distance": 0.01, "normal_deg": 2.0, "mode": 0.02}
 
@@ -32,6 +34,8 @@ class FitReport:
 
     rows : list of dicts, one for the geometry and one per mode: field, node_max,
         node_rms, mid_max, mid_rms (m for the geometry, relative for modes).
+    ctrl : (n_η n_ξ, 3) [m] the distinct control points of the undeformed surface.
+    node_deviation (k,), mid_deviation (T,) [m] : |S − x| at each node and mid-point.
     normal_max, normal_rms : the normal's angle error [deg].
     spacing : mean node spacing of the patch [m].
     warnings : lines saying which bound is exceeded and how to lower the error.
@@ -44,6 +48,9 @@ class FitReport:
     normal_max: float
     normal_rms: float
     rows: list = field(default_factory=list)
+    ctrl: np.ndarray | None = None
+    node_deviation: np.ndarray | None = None
+    mid_deviation: np.ndarray | None = None
     warnings: list = field(default_factory=list)
 
     def text(self) -> str:
@@ -60,9 +67,9 @@ class FitReport:
         return "\n".join(lines)
 
 
-def midpoints(patch, values, params):
+def midpoints(patch, values, params, closed=False):
     """(values, params) at the mid-points of the patch's surface triangles (module docstring);
-    η is unwrapped across the seam of a closed band first."""
+    on a closed band (``closed``) η is unwrapped across the seam first."""
     tri = patch.triangles
     t = np.asarray(params)[tri].copy()
     if tri.shape[1] == 3:
@@ -72,11 +79,11 @@ def midpoints(patch, values, params):
         # the nodes' parameters are piecewise linear on the four sub-triangles: the
         # mid-point is the centroid of the middle one
         t = t[:, 3:]
-    wt = np.full(t.shape[1], 1.0 / t.shape[1])
-    ref = t[:, :1, 0]
-    t[..., 0] += np.where(t[..., 0] - ref > 0.5, -1.0, 0.0) + np.where(t[..., 0] - ref < -0.5, 1.0, 0.0)
-    mid_params = np.einsum("j,tjc->tc", wt, t)
-    mid_params[:, 0] %= 1.0
+    if closed:
+        unwrap_seam(t)
+    mid_params = t.mean(axis=1)
+    if closed:
+        mid_params[:, 0] %= 1.0
     mid_values = np.einsum("j,tj...->t...", w, np.asarray(values)[tri])
     return mid_values, mid_params
 
@@ -101,31 +108,33 @@ def fit_report(fit, patch, phi=None, name="patch", mode_numbers=None) -> FitRepo
     """
     params = fit.params
     B = fit.collocation(params)
-    mid_x, mid_t = midpoints(patch, patch.points, params)
+    mid_x, mid_t = midpoints(patch, patch.points, params, fit.eta.closed)
     Bm = fit.collocation(mid_t)
-    P = fit.control_points(patch.points)[:fit.eta.n_unique, :fit.xi.n_unique].reshape(-1, 3)
+    P = fit.distinct_control_points(patch.points)
 
-    def errors(P, nodal, mid):
-        dn = np.linalg.norm(B @ P - nodal, axis=-1)
-        dm = np.linalg.norm(Bm @ P - mid, axis=-1)
+    def deviations(P, nodal, mid):
+        return np.linalg.norm(B @ P - nodal, axis=-1), np.linalg.norm(Bm @ P - mid, axis=-1)
+
+    def errors(dn, dm):
         return dn.max(), np.sqrt((dn ** 2).mean()), dm.max(), np.sqrt((dm ** 2).mean())
 
     spacing = patch.edge_length
+    node_dev, mid_dev = deviations(P, patch.points, mid_x)
     rows = [dict(zip(("field", "node_max", "node_rms", "mid_max", "mid_rms"),
-                     ("geometry",) + errors(P, patch.points, mid_x)))]
+                     ("geometry",) + errors(node_dev, mid_dev)))]
     n = np.cross(fit.collocation(mid_t, 1, 0) @ P, fit.collocation(mid_t, 0, 1) @ P)
     n /= np.linalg.norm(n, axis=1)[:, None]
     angle = np.degrees(np.arccos(np.clip(np.abs(np.einsum("ij,ij->i", n, fe_normals(patch))), 0.0, 1.0)))
     report = FitReport(name, patch.k, (fit.eta.n_unique, fit.xi.n_unique), spacing, float(angle.max()),
-                       float(np.sqrt((angle ** 2).mean())), rows)
+                       float(np.sqrt((angle ** 2).mean())), rows, P, node_dev, mid_dev)
     worst_mode = (0.0, None)
     if phi is not None and phi.shape[-1]:
         labels = mode_numbers if mode_numbers is not None else range(1, phi.shape[-1] + 1)
-        Pphi = fit.control_points(phi)[:fit.eta.n_unique, :fit.xi.n_unique].reshape(-1, 3, phi.shape[-1])
-        mid_phi, _ = midpoints(patch, phi, params)
+        Pphi = fit.distinct_control_points(phi)
+        mid_phi, _ = midpoints(patch, phi, params, fit.eta.closed)
         for j, label in enumerate(labels):
             scale = np.linalg.norm(phi[:, :, j], axis=1).max()
-            e = np.array(errors(Pphi[:, :, j], phi[:, :, j], mid_phi[:, :, j])) / (scale if scale > 0 else 1.0)
+            e = np.array(errors(*deviations(Pphi[:, :, j], phi[:, :, j], mid_phi[:, :, j]))) / (scale or 1.0)
             rows.append(dict(zip(("field", "node_max", "node_rms", "mid_max", "mid_rms"), (f"mode {label}",) +
                                  tuple(float(v) for v in e))))
             worst_mode = max(worst_mode, (float(e[0]), label), key=lambda w: w[0])

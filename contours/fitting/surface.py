@@ -8,7 +8,7 @@ import numpy as np
 from ffrmbs.errors import ModelError
 
 from .bspline_fit import SMOOTHING, SurfaceFit
-from .parameterization import parameterize
+from .parameterization import parameterize, unwrap_seam
 from .patch import SurfacePatch
 
 #: default knot span, in mean node spacings of the patch (about one tet10 element edge)
@@ -23,9 +23,8 @@ def default_control_points(patch: SurfacePatch, params, degree=(3, 3), closed=(F
     L_η = Σ_T area_T |J_η| / Σ_T area_T (the length of a line η ∈ [0, 1]), likewise L_ξ."""
     x = patch.points[patch.linear]
     t = np.asarray(params)[patch.linear].copy()
-    if closed[0]:                    # unwrap triangles across the seam η = 0 ≡ 1
-        t[..., 0] += np.where(t[..., 0] - t[..., :1, 0] > 0.5, -1.0, 0.0)
-        t[..., 0] += np.where(t[..., 0] - t[..., :1, 0] < -0.5, 1.0, 0.0)
+    if closed[0]:
+        unwrap_seam(t)
     dx = x[:, 1:] - x[:, :1]                              # (T, 2, 3)
     dt = t[:, 1:] - t[:, :1]                              # (T, 2, 2)
     det = dt[:, 0, 0] * dt[:, 1, 1] - dt[:, 0, 1] * dt[:, 1, 0]
