@@ -104,6 +104,9 @@ class Contour(ABC):
 
     dim: int
     name: str
+    #: the contacts on this contour see the static compliance of the modes its body leaves
+    #: out (:mod:`contours.residual`); set on neutral contours and those derived from them
+    residual_flexibility = False
 
     def __init__(self, body, name):
         self.body = body

@@ -170,9 +170,11 @@ class FlexibleBand(OffsetContour):
     """A band of ``width`` [m] at ``offset`` [m] along the neutral normal n (thesis
     Sec. 5.2, MBSim's ``FlexibleBand``): ξ ∈ [−w/2, w/2] runs along t2 = n × t1, the
     band's normal is the surface normal r_η × r_ξ (= n on an undeformed straight line).
-    Put it on the side the neutral's reference normal points to (offset ≥ 0)."""
+    Put it on the side the neutral's reference normal points to (offset ≥ 0).
+    ``residual_flexibility``: as for the neutral contours (:mod:`contours.residual`)."""
 
-    def __init__(self, neutral, width, offset=0.0, name="band", compiled=True):
+    def __init__(self, neutral, width, offset=0.0, name="band", compiled=True, residual_flexibility=False):
+        self.residual_flexibility = bool(residual_flexibility)
         if not width > 0:
             raise ModelError(f"{name}: width must be positive, got {width}")
         self.width, self.offset = float(width), float(offset)
@@ -186,9 +188,11 @@ class FlexibleBand(OffsetContour):
 
 class FlexibleCylinder(OffsetContour):
     """A cylinder of ``radius`` [m] around the neutral curve (MBSim's
-    ``CylinderFlexible``): ξ = φ ∈ [0, 2π) from n towards t2, outward normal radial."""
+    ``CylinderFlexible``): ξ = φ ∈ [0, 2π) from n towards t2, outward normal radial.
+    ``residual_flexibility``: as for the neutral contours (:mod:`contours.residual`)."""
 
-    def __init__(self, neutral, radius, name="cylinder", compiled=True):
+    def __init__(self, neutral, radius, name="cylinder", compiled=True, residual_flexibility=False):
+        self.residual_flexibility = bool(residual_flexibility)
         if not radius > 0:
             raise ModelError(f"{name}: radius must be positive, got {radius}")
         self.radius = float(radius)

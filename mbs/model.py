@@ -38,9 +38,10 @@ from .body_stage import BodyStage
 from .bounding_spheres import SphereTable
 from .equations import Equations
 from .fused_detection import fused_detection
+from .residual_contact import ResidualContacts
 
 N_FACTORS = 8          # Cholesky factors of a constant M̂ kept for different step sizes (+1)
-CACHES = ("contact_sets", "problem_views", "factor_dt", "factor_last")   # Data rebuilt on demand (the
+CACHES = ("contact_sets", "problem_views", "factor_dt", "factor_last", "comp_entries")   # Data rebuilt on demand (the
                               # last step's factor of a constant M̂ is looked up again in ``factors``):
                               # not in a checkpoint
 
@@ -104,6 +105,9 @@ class Model:
         :mod:`mbs.linalg_kernels`); None: M̂ is factored whole (LAPACK).
     idle_rows : int array
         Rows of u of the bodies the plan solves apart (zero in every solve).
+    residual : ResidualContacts or None
+        The contacts on contours with residual flexibility and their compliances
+        (:mod:`mbs.residual_contact`); None when there is none.
     """
 
     system: object
@@ -134,6 +138,7 @@ class Model:
     m_max: int
     blocks: np.ndarray | None
     idle_rows: np.ndarray
+    residual: ResidualContacts | None
 
     @property
     def n_act(self) -> int:
@@ -144,7 +149,8 @@ class Model:
 def compile_model(system, plan=None, theta=0.5, solver=None) -> Model:
     """The :class:`Model` of ``system`` for a run under ``plan`` (:class:`mbs.plan.Plan`,
     or None: every body integrated, every contour updated each step); ``theta`` and
-    ``solver`` the Moreau options (module docstring)."""
+    ``solver`` the Moreau options (module docstring). The residual flexibility of
+    corrected contours is cached in ``system.cache_dir`` (None: computed each time)."""
     idle = tuple(bp.body for bp in plan.modal_bodies) if plan is not None else ()
     equations = Equations(system, idle, plan.forces if plan is not None else ())
     active_u = None
@@ -179,6 +185,7 @@ def compile_model(system, plan=None, theta=0.5, solver=None) -> Model:
         blocks = blocks.reshape(-1, 2)
     idle_rows = np.array([i for b in equations.idle for i in range(b.u_slice.start, b.u_slice.stop)],
                          dtype=np.int64)
+    residual = ResidualContacts(contacts, set_valued, getattr(system, "cache_dir", None))
     return Model(system=system, equations=equations, body_stage=body_stage,
                  nq=system.nq, nu=system.nu, n_c=system.n_c, idle=equations.idle, active_u=active_u,
                  theta=float(theta), solver=solver, constant_iteration=equations.constant_iteration_matrix,
@@ -188,7 +195,7 @@ def compile_model(system, plan=None, theta=0.5, solver=None) -> Model:
                  penalty=penalty, spheres=SphereTable(contacts) if plan is not None else None, fused=fused,
                  contours=contours, owner_at=owner_at, owners=owners,
                  single_valued=tuple(i for i, sv in enumerate(set_valued) if not sv), m_max=system.n_c + sum(dims),
-                 blocks=blocks, idle_rows=idle_rows)
+                 blocks=blocks, idle_rows=idle_rows, residual=residual if residual else None)
 
 
 class Data:
@@ -238,6 +245,17 @@ class Data:
         self.work_u = np.zeros(nu)          # M̂⁻¹ W Λ, then (1 − 2θ)Δt u_k
         self.u_prev = np.zeros(nu)          # u_k while u_{k+1} is formed
         self.solver_work = np.zeros((4, m))
+        # compliant contacts (mbs.residual_contact, contact.compliance): spring state per
+        # contact row (end force [N], deflection [m], its rate [m/s]) and this step's
+        # compliant rows, their normal rows, compliance (r, r) [m/N], state and Λ₀ [N s]
+        n_rows = sum(model.dims)
+        self.comp_force, self.comp_delta, self.comp_delta_dot = np.zeros((3, n_rows))
+        self.comp_rows, self.comp_normal = np.zeros(m, dtype=np.int64), np.zeros(m, dtype=np.int64)
+        self.comp_C = np.zeros((m, m))
+        self.comp_F, self.comp_d, self.comp_dd, self.comp_lam0 = np.zeros((4, m))
+        self.comp_c, self.comp_work = np.zeros((3, 3)), np.zeros((2, 3, 3))     # c(a, b), its frame work
+        self.comp_r = 0
+        self.comp_entries = [None] * (2 * n)
         n_s = 0 if model.spheres is None else len(model.spheres.spheres)
         self.sphere_centres = np.zeros((n_s, 3))    # bounding spheres of the prunable contacts [m]
         self.sphere_radii = np.zeros(n_s)

@@ -14,7 +14,8 @@ its :class:`~mbs.model.Data` that reads the arrays the previous stages wrote:
 4. :func:`detect`: the live contacts located (broad phase by bounding boxes, search,
    g_N, frame, point Jacobians; a fused detection, :mod:`mbs.fused_detection`, updates
    its contours and does all this in one compiled call); a unilateral contact is closed where
-   g_N(q_θ) <= its ``closing_tol`` → ``closed``, the closed set-valued contacts in
+   g_N(q_θ) <= its ``closing_tol``, or while the spring of a compliant contact still
+   pushes (:mod:`contact.compliance`: the effective gap is g_N + δ) → ``closed``, the closed set-valued contacts in
    ``closed_idx``, the largest penetration;
 5. :func:`constraints`: the contact laws at the located contacts — single-valued
    (penalty) forces into h; M̂ = M + θΔt D + θ²Δt² K factored (once per step size when
@@ -41,10 +42,12 @@ from __future__ import annotations
 import numpy as np
 from scipy.linalg.lapack import dpotrf, dpotrs
 
+from contact.compliance import compliant_problem, compliant_update
 from contact.laws import Bilateral
 from contact.solver import ContactSet
 
 from . import _stage_kernels as K
+from . import residual_contact
 from .linalg_kernels import block_cho_solve_matrix, block_cho_solve_vector, block_iteration_factor
 from .step_failure import StepFailure
 
@@ -101,6 +104,9 @@ def detect(model, data, dt):
         c = model.contacts[i]
         f = fused[i]
         closed = c.locate() if f is None else f.locate(data.q_m, data.u, data.t_m)
+        if not closed and model.residual is not None and model.residual.compliant[i] and data.warm[i] \
+                and data.comp_force[model.lam_at[i]] > 0.0 and c.kinematics.active:
+            closed = True       # apart only by the spring's deflection: it must release first
         data.closed[i] = closed
         if closed:
             if model.set_valued[i]:
@@ -154,6 +160,11 @@ def constraints(model, data, dt):
         row += dim
     solve_matrix(model, data, factor, W, MW)
     K.contact_problem_into(W, MW, data.u_free, data.u, offset, closing, G, xi_free, gamma_pre)
+    data.comp_r = 0
+    if model.residual is not None and residual_contact.assemble(model, data, dt):
+        r = data.comp_r
+        compliant_problem(G, xi_free, gamma_pre, data.comp_rows[:r], data.comp_C[:r, :r], data.comp_F[:r],
+                          data.comp_d[:r], data.comp_dd[:r], dt, model.theta, data.comp_lam0[:r])
 
 
 def impulses(model, data, dt):
@@ -172,12 +183,17 @@ def impulses(model, data, dt):
     if not converged:
         raise StepFailure(f"contact problem not solved: residual {residual:.3g} m/s after "
                           f"{it} iterations ({data.n_closed} closed contacts)")
+    keep_warm_start(model, data, lam)
+    r = data.comp_r
+    if r:
+        compliant_update(lam, gamma_plus, gamma_pre, data.comp_rows[:r], data.comp_normal[:r], data.comp_C[:r, :r],
+                         data.comp_F[:r], data.comp_d[:r], data.comp_dd[:r], dt, model.theta, data.comp_lam0[:r])
+        residual_contact.store(model, data)
     last = data.last
     data.stats["solver_iterations"] += it
     last[2] += it
     last[3] = max(last[3], residual)
     last[4] += K.impulse_work(lam, gamma_plus, closing, gamma_pre)
-    keep_warm_start(model, data, lam)
 
 
 def velocity(model, data, dt):

@@ -43,6 +43,8 @@ class System:
         self.ground = ground_frame()
         self.nq = self.nu = self.n_c = 0
         self.com_frames = []     # each body's centre-of-mass frame (gravity)
+        self.cache_dir = None    # where preprocessing reused between runs is kept (residual
+                                 # flexibility of contours, mbs.residual_contact); None: not kept
         self._equations = None
 
     # --- building -----------------------------------------------------------------------

@@ -78,10 +78,15 @@ class Contour1sNeutralFFR(_FFRProducts, Contour1sNeutralFactory):
     compiled : bool
         Span-local numba evaluation (default) or the reference route
         (:class:`~contours.neutral.factory.NeutralContour`).
+    residual_flexibility : bool
+        Contacts on this contour act through the static compliance of the modes the body
+        leaves out (:mod:`contours.residual`, :mod:`contact.compliance`): accurate impacts
+        with few modes, no extra coordinates.
     """
 
     def __init__(self, body, nodes, normal, degree=3, closed=None, method="chord", name="neutral 1s",
-                 compiled=True, control_points=None, smoothing=SMOOTHING):
+                 compiled=True, control_points=None, smoothing=SMOOTHING, residual_flexibility=False):
+        self.residual_flexibility = bool(residual_flexibility)
         if isinstance(nodes, str):
             nodes, closed = self._walk(body, nodes, closed, name)
         else:
@@ -157,6 +162,10 @@ class Contour2sNeutralFFR(_FFRProducts, Contour2sNeutralFactory):
     compiled : bool
         Span-local numba evaluation (default) or the reference route
         (:class:`~contours.neutral.factory.NeutralContour`).
+    residual_flexibility : bool
+        Contacts on this contour act through the static compliance of the modes the body
+        leaves out (:mod:`contours.residual`, :mod:`contact.compliance`): accurate impacts
+        with few modes, no extra coordinates.
 
     Attributes
     ----------
@@ -167,7 +176,9 @@ class Contour2sNeutralFFR(_FFRProducts, Contour2sNeutralFactory):
     """
 
     def __init__(self, body, nodes, extra_rows=0, degree=3, closed=False, method="chord",
-                 outward=None, name="neutral 2s", compiled=True, control_points=None, smoothing=SMOOTHING):
+                 outward=None, name="neutral 2s", compiled=True, control_points=None, smoothing=SMOOTHING,
+                 residual_flexibility=False):
+        self.residual_flexibility = bool(residual_flexibility)
         data = body.data
         self.fit = self.patch = self.fit_report = None
         if isinstance(nodes, str):

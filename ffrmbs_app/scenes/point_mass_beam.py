@@ -35,7 +35,7 @@ from contours import Contour1sNeutralFFR, Contour2sNeutralFFR, FlexibleBand, Poi
 from ffrmbs.errors import ModelError
 from mbs import FlexibleBodyFFR, PointMass, PrescribedFrameMotion, System
 
-from .cache import cached_body
+from .cache import cache_dir, cached_body
 
 LENGTH, HEIGHT, WIDTH = 0.25, 0.05, 0.05          # [m] along x, y, z
 DENSITY, YOUNG, POISSON = 920.0, 5e7, 0.3         # [kg/m³], [Pa], [-]
@@ -103,22 +103,26 @@ class Scene:
                 "node19": lambda t, q, u: beam.phi_nodes[j] @ q[beam.q_slice]}
 
 
-def build(setup="A", modes=20, law="impact", e=0.0, k=PENALTY_K, d=0.0, contour="2s", data=None) -> Scene:
+def build(setup="A", modes=20, law="impact", e=0.0, k=PENALTY_K, d=0.0, contour="2s", data=None,
+          residual_flexibility=False) -> Scene:
     """Setup ``"A"`` or ``"B"`` with ``modes`` (int, or "all"), ``law`` "impact"
     (coefficient of restitution e) or "penalty" (k [N/m], d [N s/m]), ``contour`` "2s"
-    or "band"; ``data`` the beam's body data (default: :func:`default_beam_data`)."""
+    or "band"; ``data`` the beam's body data (default: :func:`default_beam_data`);
+    ``residual_flexibility``: the contour carries the dropped modes' static compliance
+    (:mod:`contours.residual`; the System caches it in the scene cache)."""
     if setup not in SETUPS:
         raise ModelError(f"setup must be one of {sorted(SETUPS)}, not {setup!r}")
     data = default_beam_data() if data is None else data
     n = data.n_modes if modes == "all" else int(modes)
     system = System()
+    system.cache_dir = cache_dir()
     beam = system.add(FlexibleBodyFFR(data, modes=n, frame=PrescribedFrameMotion.fixed(), name="beam"))
     mass = system.add(PointMass(MASS, position=SETUPS[setup], velocity=VELOCITY, name="point mass"))
     if contour == "2s":
-        surface = Contour2sNeutralFFR(beam, "y1")
+        surface = Contour2sNeutralFFR(beam, "y1", residual_flexibility=residual_flexibility)
     elif contour == "band":
         axis = Contour1sNeutralFFR.along_line(beam, (0.0, HEIGHT, WIDTH / 2), (1, 0, 0), normal=(0, 1, 0), degree=4)
-        surface = FlexibleBand(axis, width=WIDTH, offset=0.0)
+        surface = FlexibleBand(axis, width=WIDTH, offset=0.0, residual_flexibility=residual_flexibility)
     else:
         raise ModelError(f"contour must be '2s' or 'band', not {contour!r}")
     if law == "impact":

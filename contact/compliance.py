@@ -1,0 +1,134 @@
+"""A compliant unilateral contact in the Moreau step: the contact acts through a massless
+linear spring in series — the residual flexibility of the modes a reduced body leaves out
+(:mod:`contours.residual`, :mod:`preprocess.residual`).
+
+Let a closed contact have rows ρ of the contact problem (normal, and tangential with
+friction), W its Jacobian, C (r × r) [m/N] the compliance of its rows (and of the other
+compliant contacts' rows on the same bodies: cross-compliance), F [N] the spring force at
+the end of a step and δ = C F [m] the spring's deflection, which opens the gap:
+
+    g_eff = g + δ,      γ_eff = Wᵀ u + δ̇                                       (S1)
+
+Signorini and Newton's law hold for the effective quantities, as for a rigid contact.
+The spring is integrated by the same θ-method as the bodies (Moreau–Jean; θ = ½ the
+trapezoidal rule, θ = 1 implicit Euler):
+
+    Λ = Δt ((1 − θ) F_k + θ F_{k+1})                  (impulse over the step)    (S2)
+    δ_{k+1} − δ_k = Δt ((1 − θ) δ̇_k + θ δ̇_{k+1})                               (S3)
+
+Taking the unknown Λ' = θ Δt F_{k+1} ≥ 0 (so the cone of Coulomb's law bounds the end
+force) and Λ₀ = (1 − θ) Δt F_k (known), (S2)–(S3) with δ_{k+1} = C F_{k+1} give
+
+    δ̇_{k+1} = C Λ' / (θ Δt)² − δ_k / (θ Δt) − (1 − θ) δ̇_k / θ                  (S4)
+
+and with u_{k+1} = u_free + M̂⁻¹ W (Λ₀ + Λ') the end-of-step effective velocity is
+
+    γ⁺_eff = ξ'_free + G' Λ',   G' = G + C / (θ Δt)²,
+             ξ'_free = ξ_free + G Λ₀ − δ_k / (θ Δt) − (1 − θ) δ̇_k / θ,
+             γ⁻_eff = γ⁻ + δ̇_k                                                 (S5)
+
+— the contact problem the solver already solves (:mod:`contact.solver`), with the
+compliance on the diagonal scaled by the step (implicit: no step limit appears however
+soft or stiff C is) and the spring's state in the free velocity. :func:`compliant_problem`
+makes it; after the solve :func:`compliant_update` sets F_{k+1} = Λ'/(θΔt), δ_{k+1},
+δ̇_{k+1} and the total impulse Λ = Λ₀ + Λ' the velocity update uses.
+
+Energy (θ = ½). Per step the impulse does the work Λᵀ(γ⁻ + γ⁺)/2 on the bodies (the
+θ = ½ identity) and ½(F_k + F_{k+1})ᵀ(δ_{k+1} − δ_k) = Λᵀ(δ̇_k + δ̇_{k+1})/2 on the spring
+(S2–S3): together Λᵀ(γ⁻_eff + γ⁺_eff)/2, which is zero on every row where Newton's law with
+e = 1 holds with equality (γ⁺_eff = −γ⁻_eff). θ > ½ damps the spring as it damps the
+bodies. So with e = 1 the bodies' energy plus the
+spring's ½ Fᵀ δ is kept while the contact stays closed, to rounding when C is constant
+(a contact point sliding over the contour changes C; ½ Fᵀ dC F is then exchanged). With
+e < 1 the spring still stores and returns its energy; the law's loss is of the order
+(ω Δt)² of the contact's spring–mass frequency ω. When the end force vanishes (release)
+the spring is at rest, δ = 0, and its rate δ̇ (undefined for a massless spring) is set to
+zero. A contact that was open in the last step starts with F = δ = δ̇ = 0. C = 0 gives
+back the rigid contact exactly.
+
+:func:`compliant_problem` and :func:`compliant_update` are numba kernels that allocate
+nothing; :func:`compliant_problem_reference` and :func:`compliant_update_reference` are
+their numpy references.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+
+@numba.njit(cache=True)
+def compliant_problem(G, xi_free, gamma_pre, rows, C, force, delta, delta_dot, dt, theta, lam0):
+    """The contact problem (S5) in place: ``G`` (m, m), ``xi_free``, ``gamma_pre`` (m,) of
+    the rigid contacts, the compliant rows ``rows`` (r,) with their compliance ``C``
+    (r, r) [m/N] and spring state ``force`` [N], ``delta`` [m], ``delta_dot`` [m/s] (r,)
+    at the start of the step; Λ₀ = (1 − θ) Δt F_k into ``lam0`` (r,) [N s]."""
+    r = rows.shape[0]
+    m = G.shape[0]
+    th_dt = theta * dt
+    for a in range(r):
+        lam0[a] = (1.0 - theta) * dt * force[a]
+    for i in range(m):
+        s = 0.0
+        for a in range(r):
+            s += G[i, rows[a]] * lam0[a]
+        xi_free[i] += s
+    for a in range(r):
+        ra = rows[a]
+        xi_free[ra] -= delta[a] / th_dt + (1.0 - theta) / theta * delta_dot[a]
+        gamma_pre[ra] += delta_dot[a]
+    scale = 1.0 / (th_dt * th_dt)
+    for a in range(r):
+        for b in range(r):
+            G[rows[a], rows[b]] += scale * C[a, b]
+
+
+@numba.njit(cache=True)
+def compliant_update(lam, gamma_plus, gamma_pre, rows, normal, C, force, delta, delta_dot, dt, theta, lam0):
+    """After the solve (Λ' in ``lam``, γ⁺_eff in ``gamma_plus``, γ⁻_eff in ``gamma_pre``):
+    the spring state at the end of the step, F = Λ'/(θΔt), δ = C F, δ̇ by (S3) (zero where
+    the contact's normal force, row ``normal[a]`` of ``rows``, vanishes), γ⁺ and γ⁻
+    of the bodies (γ_eff − δ̇) and Λ = Λ₀ + Λ' in place."""
+    r = rows.shape[0]
+    th_dt = theta * dt
+    for a in range(r):
+        gamma_pre[rows[a]] -= delta_dot[a]
+        force[a] = lam[rows[a]] / th_dt
+    for a in range(r):
+        d = 0.0
+        for b in range(r):
+            d += C[a, b] * force[b]
+        rate = (d - delta[a]) / th_dt - (1.0 - theta) / theta * delta_dot[a]
+        gamma_plus[rows[a]] -= rate
+        delta[a] = d
+        delta_dot[a] = rate
+    for a in range(r):
+        if force[normal[a]] == 0.0:
+            delta_dot[a] = 0.0
+        lam[rows[a]] += lam0[a]
+
+
+def compliant_problem_reference(G, xi_free, gamma_pre, rows, C, force, delta, delta_dot, dt, theta):
+    """numpy reference of :func:`compliant_problem`; returns new (G, ξ_free, γ⁻, Λ₀)."""
+    lam0 = (1.0 - theta) * dt * force
+    xi = xi_free + G[:, rows] @ lam0
+    xi[rows] -= delta / (theta * dt) + (1.0 - theta) / theta * delta_dot
+    gp = gamma_pre.copy()
+    gp[rows] += delta_dot
+    G2 = G.copy()
+    G2[np.ix_(rows, rows)] += C / (theta * dt) ** 2
+    return G2, xi, gp, lam0
+
+
+def compliant_update_reference(lam, gamma_plus, gamma_pre, rows, normal, C, force, delta, delta_dot, dt, theta,
+                               lam0):
+    """numpy reference of :func:`compliant_update`; returns new (Λ, γ⁺, γ⁻, F, δ, δ̇)."""
+    F = lam[rows] / (theta * dt)
+    d = C @ F
+    rate = (d - delta) / (theta * dt) - (1.0 - theta) / theta * delta_dot
+    gp, gm, la = gamma_plus.copy(), gamma_pre.copy(), lam.copy()
+    gp[rows] -= rate
+    gm[rows] -= delta_dot
+    la[rows] += lam0
+    rate = np.where(F[normal] == 0.0, 0.0, rate)
+    return la, gp, gm, F, d, rate

@@ -1,0 +1,113 @@
+"""numba kernels of the residual compliance (:mod:`contours.residual`, eq. C1–C2) and of
+a contact's compliance block in its frame (:mod:`mbs.residual_contact`); the numpy
+references are :func:`compliance_between_reference` and the blocks route of
+:meth:`contours.residual.ResidualCompliance.weights`."""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from .neutral import _kernels as NK
+
+
+@numba.njit(cache=True)
+def compliance_between(G, Ba, ia, ka, Bb, ib, kb, out):
+    """out (3, 3) = Σ_{i<ka} Σ_{j<kb} Ba[i] G[3 ia[i]:+3, 3 ib[j]:+3] Bb[j]ᵀ [m/N]
+    (eq. C2) from the residual flexibility G (3 n_P, 3 n_P) and the blocks Ba, Bb
+    (k, 3, 3) of two points' control points ia, ib."""
+    for r in range(3):
+        for c in range(3):
+            out[r, c] = 0.0
+    for i in range(ka):
+        I = 3 * ia[i]
+        for j in range(kb):
+            J = 3 * ib[j]
+            for r in range(3):
+                for c in range(3):
+                    s = 0.0                       # (Ba_i G_ij Bb_jᵀ)[r, c]
+                    for s1 in range(3):
+                        a = Ba[i, r, s1]
+                        if a == 0.0:
+                            continue
+                        for s2 in range(3):
+                            s += a * G[I + s1, J + s2] * Bb[j, c, s2]
+                    out[r, c] += s
+
+
+def compliance_between_reference(G, Ba, ia, ka, Bb, ib, kb):
+    """The numpy reference of :func:`compliance_between`: Bₐ G_sub B_bᵀ with the blocks
+    laid side by side."""
+    rows = (3 * ia[:ka, None] + np.arange(3)).ravel()
+    cols = (3 * ib[:kb, None] + np.arange(3)).ravel()
+    A = np.concatenate(list(Ba[:ka]), axis=1)          # (3, 3 ka)
+    B = np.concatenate(list(Bb[:kb]), axis=1)          # (3, 3 kb)
+    return A @ G[np.ix_(rows, cols)] @ B.T
+
+
+@numba.njit(cache=True)
+def neutral_weights(dim, knots_e, ints, dom, knots_x, eta, xi, Be, Bx, offset, w, index):
+    """The scalar weights N_i (k,) of eq. C1 (B_i = N_i I on a neutral contour) and the
+    control points' indices in G_P (their ``offset`` added) at (η, ξ) of a 1s (``dim``
+    1) or 2s contour with the geometry arrays of its space (``ints`` = p, n_ctrl, closed
+    per direction, ``dom`` the domains); returns k. Be, Bx (3, p + 1) work."""
+    pe, ne, ce = ints[0], ints[1], ints[2] != 0
+    se = NK.locate(knots_e, pe, ne, ce, dom[0], dom[1], eta, Be)
+    k = 0
+    if dim == 1:
+        for a in range(pe + 1):
+            w[k] = Be[0, a]
+            index[k] = offset + se - pe + a
+            k += 1
+        return k
+    px, nx, cx = ints[3], ints[4], ints[5] != 0
+    sx = NK.locate(knots_x, px, nx, cx, dom[2], dom[3], xi, Bx)
+    for a in range(pe + 1):
+        for b in range(px + 1):
+            w[k] = Be[0, a] * Bx[0, b]
+            index[k] = offset + (se - pe + a) * nx + (sx - px + b)
+            k += 1
+    return k
+
+
+@numba.njit(cache=True)
+def compliance_scalar(G, wa, ia, ka, wb, ib, kb, out):
+    """out (3, 3) = Σ_i Σ_j wa_i wb_j G[3 ia_i:+3, 3 ib_j:+3] [m/N]: eq. C2 with the
+    blocks B = N I of neutral contours."""
+    for r in range(3):
+        for c in range(3):
+            out[r, c] = 0.0
+    for i in range(ka):
+        I = 3 * ia[i]
+        for j in range(kb):
+            J = 3 * ib[j]
+            f = wa[i] * wb[j]
+            for r in range(3):
+                for c in range(3):
+                    out[r, c] += f * G[I + r, J + c]
+
+
+@numba.njit(cache=True)
+def add_contact_block(C, ra, da, rb, db, sign, n_a, T_a, n_b, T_b, A, c, work):
+    """C[ra:ra+da, rb:rb+db] += sign R_aᵀ A c Aᵀ R_b with R = [n, T] (3, dim) in world
+    axes, A (3, 3) the body rotation, c (3, 3) body axes [m/N]; ``work`` (2, 3, 3)."""
+    AcAt, R = work[0], work[1]
+    for r in range(3):                       # A c Aᵀ
+        for q in range(3):
+            s = 0.0
+            for i in range(3):
+                for j in range(3):
+                    s += A[r, i] * c[i, j] * A[q, j]
+            AcAt[r, q] = s
+    for x in range(db):                      # R = (A c Aᵀ) R_b, column x
+        for r in range(3):
+            s = 0.0
+            for q in range(3):
+                s += AcAt[r, q] * (n_b[q] if x == 0 else T_b[q, x - 1])
+            R[r, x] = s
+    for y in range(da):
+        for x in range(db):
+            s = 0.0
+            for r in range(3):
+                s += (n_a[r] if y == 0 else T_a[r, y - 1]) * R[r, x]
+            C[ra + y, rb + x] += sign * s

@@ -1,0 +1,260 @@
+"""Residual compliance of a flexible contour: the static flexibility, at any point of the
+contour, of the modes its body leaves out (:mod:`preprocess.residual`).
+
+A neutral contour's local position is a NURBS over control points P = F ū (F the
+interpolation or fitting matrix of the contour's nodes, thesis eq. 3.22–3.23), so a
+point's small displacement is
+
+    δū(η, ξ) = Σ_i B_i(η, ξ) δP_i,        B_i = N_i I                          (C1)
+
+(3 × 3 blocks, body axes) over the (p + 1) or (p_η + 1)(p_ξ + 1) control points of the
+span; on a derived contour at offset d̄ = α n̄ + β t̄2 from a 1s neutral curve
+(:mod:`contours.derived`), B_i = N_i I + N'_i Ğ with Ğ = ∂d̄/∂ū_η of the undeformed
+curve. By virtual work a force f at the point loads control point i with B_iᵀ f and the
+nodes with the transfer matrix T = (F ⊗ I₃)ᵀ scattered on the contour's nodes. With the
+residual flexibility of the control points G_P = Tᵀ G_res T (3 n_P, 3 n_P) [m/N], the
+displacement at point a under a force f at point b of the same contour is c(a, b) f with
+
+    c(a, b) = Σ_i Σ_j B_i(a) G_P[i, j] B_j(b)ᵀ          (3 × 3, body axes) [m/N]  (C2)
+
+— the residual compliance: span-local, a few numbers per point whatever the mesh, and
+exact (to rounding) against the full FE static solution for loads the contour can apply:
+Φ K_n⁻¹ Φᵀ + G_res = G (:func:`preprocess.residual.residual_flexibility`). The linear
+correction is taken on the undeformed contour (B, Ğ at q_f = 0), as G_res itself is.
+
+:func:`residual_compliance` builds it for a contour of a flexible body (one sparse
+factorization of the body's stiffness per body, shared through ``flexibility``; the
+projection Tᵀ G T optionally cached on disk, keyed by the body's matrices and T).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import scipy.sparse as sp
+
+from ffrmbs.errors import ModelError
+from preprocess.residual import (StaticFlexibility, clamped_nodes_of, projected_flexibility,
+                                 residual_flexibility)
+
+from . import _residual_kernels as RK
+from .derived import OffsetContour, offset_frame
+from .neutral import _kernels as NK
+from .neutral.factory import NeutralContour
+
+
+class ResidualCompliance:
+    """The residual compliance c(a, b) of one contour (module docstring, eq. C1–C2).
+
+    Parameters
+    ----------
+    contour : NeutralContour or OffsetContour (on a neutral 1s contour)
+    G_P : (3 n, 3 n) [m/N]
+        Residual flexibility of the control points of this contour, or of all the corrected
+        contours of its body (then cross-compliances between them are included).
+    offset : int
+        The first of this contour's n_P control points in G_P (their order: the flattened
+        control-point array, wrapped copies of a closed direction included).
+
+    Attributes
+    ----------
+    contour, G_P, n_P, offset
+    """
+
+    def __init__(self, contour, G_P, offset=0):
+        self.contour = contour
+        self.neutral = neutral_of(contour)
+        space = self.neutral.space
+        self.n_P = int(np.prod(space.ctrl_shape))
+        self.offset = int(offset)
+        G_P = np.ascontiguousarray(G_P, dtype=float)
+        if G_P.ndim != 2 or G_P.shape[0] != G_P.shape[1] or G_P.shape[0] < 3 * (self.offset + self.n_P):
+            raise ModelError(f"{contour.name}: residual flexibility of shape {G_P.shape} does not hold its "
+                             f"{self.n_P} control points from {self.offset} on")
+        self.G_P = G_P
+        self._dirs = (space.eta,) if space.dim == 1 else (space.eta, space.xi)
+        n_w = int(np.prod([d.p + 1 for d in self._dirs]))
+        self._B = [np.zeros((3, d.p + 1)) for d in self._dirs]
+        self._work = np.zeros((2, n_w, 3, 3)), np.zeros((2, n_w), dtype=np.int64)
+        offset = isinstance(contour, OffsetContour)
+        self._offset = contour.offset_law if offset else None
+        self._ctrl0 = self.neutral._local_position.ctrl0.reshape(self.n_P, 3) if offset else None
+        # the compiled route of a neutral contour (B_i = N_i I): knots η, ints, domains,
+        # knots ξ (η's again on a curve), bases, weights
+        g = space.geometry
+        self._kernel_geometry = (g[0], g[1], g[2], g[0]) if space.dim == 1 else (g[0], g[2], g[3], g[1])
+        self._Bc = np.zeros((2, 3, max(d.p for d in self._dirs) + 1))
+        self._w = np.zeros((2, n_w))
+
+    @property
+    def rotation(self) -> np.ndarray:
+        """The body rotation A (3, 3) of the contour's last update."""
+        return self.neutral.A
+
+    def weights(self, eta, xi, blocks, index) -> int:
+        """The blocks B_i (k, 3, 3) of eq. C1 and their control points' indices (k,) in
+        G_P at (η, ξ) into ``blocks``, ``index``; returns k."""
+        k = 0
+        if len(self._dirs) == 1:
+            d = self._dirs[0]
+            B = self._B[0]
+            s = NK.locate(d.knots, d.p, d.n_ctrl, d.closed, d.a, d.b, eta, B)
+            for a in range(d.p + 1):
+                index[k] = s - d.p + a
+                blocks[k] = B[0, a] * np.eye(3)
+                k += 1
+            if self._offset is not None:
+                self._offset_blocks(xi, B, index[:k], blocks[:k])
+            index[:k] += self.offset
+            return k
+        e, x = self._dirs
+        Be, Bx = self._B
+        se = NK.locate(e.knots, e.p, e.n_ctrl, e.closed, e.a, e.b, eta, Be)
+        sx = NK.locate(x.knots, x.p, x.n_ctrl, x.closed, x.a, x.b, xi, Bx)
+        for a in range(e.p + 1):
+            for b in range(x.p + 1):
+                index[k] = self.offset + (se - e.p + a) * x.n_ctrl + (sx - x.p + b)
+                blocks[k] = Be[0, a] * Bx[0, b] * np.eye(3)
+                k += 1
+        return k
+
+    def _offset_blocks(self, xi, B, index, blocks):
+        """B_i += N'_i Ğ of a point at offset (α, β)(ξ) from the undeformed neutral curve."""
+        from . import _offset_kernels as OK
+
+        al, be = OK.offsets(*self._offset, float(xi))[:2]
+        u_eta = B[1] @ self._ctrl0[index]
+        _, _, _, Dt2, Dn = offset_frame(u_eta, self.neutral.normal_ref)
+        G = al * Dn + be * Dt2
+        for k in range(len(index)):
+            blocks[k] += B[1, k] * G
+
+    def between(self, eta_a, xi_a, eta_b, xi_b, other=None, out=None) -> np.ndarray:
+        """c(a, b) (3, 3) [m/N] in body axes (eq. C2): the displacement at (η_a, ξ_a) of this
+        contour per unit force at (η_b, ξ_b) of ``other`` (this contour when None; another
+        contour of the same body sharing G_P). Two neutral contours take the compiled
+        route (allocation-free with ``out``), a derived one the blocks of :meth:`weights`."""
+        other = self if other is None else other
+        if other.G_P is not self.G_P:
+            raise ModelError(f"{self.contour.name} and {other.contour.name}: no cross-compliance (not built together "
+                             "by residual_compliances)")
+        out = np.zeros((3, 3)) if out is None else out
+        (blocks_a, _), (index_a, _) = self._work
+        (_, blocks_b), (_, index_b) = other._work
+        if self._offset is None and other._offset is None:
+            ka = self._scalar_weights(eta_a, xi_a, 0, index_a)
+            kb = other._scalar_weights(eta_b, xi_b, 1, index_b)
+            RK.compliance_scalar(self.G_P, self._w[0], index_a, ka, other._w[1], index_b, kb, out)
+            return out
+        ka = self.weights(eta_a, xi_a, blocks_a, index_a)
+        kb = other.weights(eta_b, xi_b, blocks_b, index_b)
+        RK.compliance_between(self.G_P, blocks_a, index_a, ka, blocks_b, index_b, kb, out)
+        return out
+
+    def _scalar_weights(self, eta, xi, slot, index) -> int:
+        """N_i and indices of a neutral contour's point into ``self._w[slot]``, ``index``."""
+        knots_e, ints, dom, knots_x = self._kernel_geometry
+        return RK.neutral_weights(len(self._dirs), knots_e, ints, dom, knots_x, float(eta), float(xi),
+                                  self._Bc[0], self._Bc[1], self.offset, self._w[slot], index)
+
+    def at(self, eta, xi=0.0, out=None) -> np.ndarray:
+        """c(a, a) (3, 3) [m/N] in body axes at (η, ξ) (eq. C2)."""
+        return self.between(eta, xi, eta, xi, out=out)
+
+
+def neutral_of(contour) -> NeutralContour:
+    """The neutral contour a residual compliance is built on: the contour itself, or a
+    derived contour's 1s neutral curve; ModelError for anything else."""
+    if isinstance(contour, NeutralContour):
+        return contour
+    if isinstance(contour, OffsetContour):
+        return contour.neutral
+    raise ModelError(f"{getattr(contour, 'name', contour)!r}: residual flexibility needs a neutral contour of a "
+                     f"flexible body (or a band or cylinder on one), not a {type(contour).__name__}")
+
+
+def transfer_matrix(contour) -> sp.csr_matrix:
+    """T (3N, 3 n_P): column 3 i + d is the nodal load of a unit force along body axis d on
+    control point i of ``contour`` (Fᵀ scattered on the contour's nodes, module
+    docstring)."""
+    neutral = neutral_of(contour)
+    nodes = np.asarray(neutral.nodes).reshape(-1)
+    k = nodes.size
+    identity = np.eye(k).reshape(np.asarray(neutral.nodes).shape + (k,))
+    F = np.asarray(neutral.space.interpolate(identity)).reshape(-1, k)       # (n_P, k): P = F ū
+    n_P = F.shape[0]
+    n_dof = 3 * neutral.body.data.n_nodes
+    rows = (3 * nodes[None, :, None] + np.arange(3)[None, None, :]).repeat(n_P, axis=0)
+    cols = (3 * np.arange(n_P)[:, None, None] + np.arange(3)[None, None, :]).repeat(k, axis=1)
+    vals = np.repeat(F[:, :, None], 3, axis=2)
+    T = sp.coo_matrix((vals.ravel(), (rows.ravel(), cols.ravel())), shape=(n_dof, 3 * n_P)).tocsr()
+    T.eliminate_zeros()
+    return T
+
+
+def static_flexibility(body) -> StaticFlexibility:
+    """The static flexibility of a flexible body's FE model (clamped or inertia relief,
+    :class:`preprocess.residual.StaticFlexibility`), factored once."""
+    data = body.data
+    return StaticFlexibility(data.stiffness, data.masses, data.u0, clamped_nodes_of(data))
+
+
+def residual_compliances(contours, flexibility=None, cache_dir=None) -> list:
+    """The :class:`ResidualCompliance` of each of ``contours`` (all on one body) on the
+    body's kept modes (``body.phi``, ``body.K_ff``), sharing one G_P, so that
+    cross-compliances between them are included. ``flexibility``: the body's
+    :class:`~preprocess.residual.StaticFlexibility` (made here when None and needed);
+    ``cache_dir``: a directory where Tᵀ G T (the costly part, independent of the modes
+    kept) is read or written, keyed by the body's stiffness, masses, supports and T."""
+    neutrals = [neutral_of(c) for c in contours]
+    body = neutrals[0].body
+    if any(n.body is not body for n in neutrals):
+        raise ModelError("residual_compliances: the contours are on different bodies")
+    parts = [transfer_matrix(c) for c in contours]
+    T = sp.hstack(parts, format="csr")
+    TGT = path = None
+    if cache_dir is not None:
+        path = Path(cache_dir) / f"residual-{_key(body.data, T)}.npy"
+        if path.is_file():
+            TGT = np.load(path, allow_pickle=False)
+            if TGT.shape != (T.shape[1], T.shape[1]):
+                TGT = None
+    if TGT is None:
+        TGT = projected_flexibility(static_flexibility(body) if flexibility is None else flexibility, T)
+        if path is not None:
+            _save(path, TGT)
+    G_P = residual_flexibility(TGT, (T.T @ body.phi).T, body.K_ff)
+    offsets = np.cumsum([0] + [t.shape[1] // 3 for t in parts])
+    return [ResidualCompliance(c, G_P, int(o)) for c, o in zip(contours, offsets)]
+
+
+def residual_compliance(contour, flexibility=None, cache_dir=None) -> ResidualCompliance:
+    """The :class:`ResidualCompliance` of one contour (:func:`residual_compliances`)."""
+    return residual_compliances([contour], flexibility, cache_dir)[0]
+
+
+def _key(data, T) -> str:
+    """Hash of what Tᵀ G T depends on: K, the masses, the node positions, the supports, T."""
+    h = hashlib.sha256()
+    K = sp.csr_matrix(data.stiffness)
+    for a in (K.indptr, K.indices, K.data, data.masses, data.u0, clamped_nodes_of(data), T.indptr, T.indices,
+              T.data):
+        h.update(np.ascontiguousarray(a).tobytes())
+    return h.hexdigest()[:20]
+
+
+def _save(path: Path, array) -> None:
+    """``array`` to ``path`` (.npy) through a temporary file and a rename (never half-written)."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as f:
+            np.save(f, array, allow_pickle=False)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise

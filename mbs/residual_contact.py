@@ -1,0 +1,151 @@
+"""Contacts on contours with residual flexibility: the compliance of each closed contact in
+its contact frame, for the compliant contact problem of :mod:`contact.compliance`.
+
+At compile time (:class:`ResidualContacts`) every contour with ``residual_flexibility``
+set gets its :class:`~contours.residual.ResidualCompliance` on its body's kept modes;
+the corrected contours of one body share one residual flexibility (cross-compliance
+between them included), and one factorization of the body's stiffness. Each step
+(:func:`assemble`) the closed compliant contacts' rows and their compliance
+
+    C_jk = Σ_{sides a of j, b of k on one body} s_a s_b R_jᵀ A c(a, b) Aᵀ R_k     (r × r) [m/N]
+
+are formed, with R_j = [n, T] (3 × dim) the contact frame (world axes), A the body's
+rotation, c(a, b) the residual compliance between the two contact points (body axes,
+eq. C2 of :mod:`contours.residual`) and s = +1 on a contact's contour 1 (the point side),
+−1 on its contour 2: the force Λ acts along +R on side 1 and −R on side 2, and g_N, γ
+measure side 1 relative to side 2 (:mod:`contact.kinematics`), so each side's
+deflection opens the gap.
+"""
+
+from __future__ import annotations
+
+from contours._residual_kernels import add_contact_block
+from contours.residual import residual_compliances, static_flexibility
+from ffrmbs.errors import ModelError
+
+
+class ResidualContacts:
+    """The compliant sides of a System's contacts (module docstring).
+
+    Parameters
+    ----------
+    contacts : sequence of contacts
+    set_valued : sequence of bool
+    cache_dir : path or None
+        Where the projected static flexibility of each corrected contour is cached
+        (:func:`contours.residual.residual_compliances`).
+
+    Attributes
+    ----------
+    sides : tuple
+        Per contact a tuple of (sign, ResidualCompliance, side) — side 1 or 2 — of its
+        corrected contours (empty: a rigid contact).
+    compliant : tuple of bool
+        The contact has a corrected contour.
+    compliances : dict
+        The ResidualCompliance of each corrected contour, by id.
+    """
+
+    def __init__(self, contacts, set_valued, cache_dir=None):
+        by_body = {}
+        for i, c in enumerate(contacts):
+            for contour in c.contours():
+                if getattr(contour, "residual_flexibility", False):
+                    if not set_valued[i]:
+                        raise ModelError(f"contact {c.name!r}: residual flexibility needs a set-valued law "
+                                         "(Newton impact or Coulomb contact); a penalty law's spring is the "
+                                         "contact's own compliance")
+                    if contour.body is None or not hasattr(contour.body, "K_ff"):
+                        raise ModelError(f"contour {contour.name!r}: residual flexibility needs a flexible body")
+                    group = by_body.setdefault(id(contour.body), (contour.body, {}))[1]
+                    group[id(contour)] = contour
+        self.compliances = {}
+        for body, group in by_body.values():
+            contours = list(group.values())
+            for contour, rc in zip(contours, residual_compliances(contours, static_flexibility(body), cache_dir)):
+                self.compliances[id(contour)] = rc
+        sides = []
+        for c in contacts:
+            k = c.kinematics
+            s = []
+            for sign, side, contour in ((1.0, 1, k.contour1), (-1.0, 2, k.contour2)):
+                if id(contour) in self.compliances:
+                    s.append((sign, self.compliances[id(contour)], side))
+            sides.append(tuple(s))
+        self.sides = tuple(sides)
+        self.compliant = tuple(bool(s) for s in sides)
+
+    def __bool__(self):
+        return any(self.compliant)
+
+
+def assemble(model, data, dt) -> int:
+    """The compliant rows of this step's contact problem, their compliance and spring
+    state (module docstring) into Data's workspaces; the state of a contact that was open
+    last step is zeroed first. Returns r, the number of compliant rows. Allocates no
+    numpy array when the contours are neutral ones (:mod:`contours._residual_kernels`)."""
+    rc = model.residual
+    r = 0
+    row = model.n_c
+    entries = data.comp_entries
+    n_e = 0
+    for j in range(data.n_closed):
+        i = data.closed_idx[j]
+        dim = model.dims[i]
+        if rc.compliant[i]:
+            at = model.lam_at[i]
+            fresh = not data.warm[i]
+            for x in range(dim):
+                if fresh:
+                    data.comp_force[at + x] = data.comp_delta[at + x] = data.comp_delta_dot[at + x] = 0.0
+                data.comp_rows[r + x] = row + x
+                data.comp_normal[r + x] = r
+                data.comp_F[r + x] = data.comp_force[at + x]
+                data.comp_d[r + x] = data.comp_delta[at + x]
+                data.comp_dd[r + x] = data.comp_delta_dot[at + x]
+            k = model.contacts[i].kinematics
+            for sign, comp, side in rc.sides[i]:
+                point = k.point1 if side == 1 else k.point2
+                entries[n_e] = (r, dim, sign, comp, point.eta, point.xi, k)
+                n_e += 1
+            r += dim
+        row += dim
+    C = data.comp_C[:r, :r]
+    C.fill(0.0)
+    c, work = data.comp_c, data.comp_work
+    for a in range(n_e):
+        ra, da, sa, ca, eta_a, xi_a, ka = entries[a]
+        for b in range(n_e):
+            rb, db, sb, cb, eta_b, xi_b, kb = entries[b]
+            if cb.G_P is ca.G_P:
+                ca.between(eta_a, xi_a, eta_b, xi_b, cb, c)
+                add_contact_block(C, ra, da, rb, db, sa * sb, ka.n, ka.T, kb.n, kb.T, ca.rotation, c, work)
+    data.comp_r = r
+    return r
+
+
+def store(model, data) -> None:
+    """The spring state of the compliant rows back into the contacts' slots."""
+    r = 0
+    for j in range(data.n_closed):
+        i = data.closed_idx[j]
+        if model.residual.compliant[i]:
+            at = model.lam_at[i]
+            for x in range(model.dims[i]):
+                data.comp_force[at + x] = data.comp_F[r]
+                data.comp_delta[at + x] = data.comp_d[r]
+                data.comp_delta_dot[at + x] = data.comp_dd[r]
+                r += 1
+
+
+def spring_energy(model, data) -> float:
+    """½ Σ Fᵀ δ [J] of the contacts closed at the end of the last step (their springs'
+    energy; zero without residual flexibility)."""
+    if model.residual is None:
+        return 0.0
+    e = 0.0
+    for i, compliant in enumerate(model.residual.compliant):
+        if compliant and data.warm[i]:
+            at, dim = model.lam_at[i], model.dims[i]
+            e += 0.5 * float(data.comp_force[at:at + dim] @ data.comp_delta[at:at + dim])
+    return e

@@ -1,0 +1,135 @@
+"""Static and residual flexibility of an FE model (static correction of a modal model).
+
+A modally reduced body keeps n modes Φ (3N, n) of K φ = ω² M φ. Under a force f its
+static deflection is Φ K_n⁻¹ Φᵀ f (K_n = Φᵀ K Φ); the full model's is G f with the
+static flexibility G. The modes left out carry the difference, the **residual
+flexibility** (MacNeal 1971; Craig & Kurdila 2006, Sec. 17.4)
+
+    G_res = G − Φ K_n⁻¹ Φᵀ                                             (R1)
+
+which is symmetric, positive semi-definite, and equal to Σ_{dropped} φ φᵀ / ω² when Φ
+holds exact eigenvectors. G is
+
+* **clamped** (some DOFs fixed): G = K_ff⁻¹ on the free DOFs, zero rows and columns at
+  the clamped ones (R2);
+* **free-free** (inertia relief): the flexibility of the elastic modes only,
+  G = Σ_{elastic} φ φᵀ / ω², so that G f carries no rigid motion. With R (3N, 6) the
+  M-orthonormal rigid modes (:func:`preprocess.modes.rigid_body_modes`), u = G f solves
+  the bordered system
+
+      [ K      M R ] [u]   [f]
+      [ Rᵀ M   0   ] [μ] = [0]                                          (R3)
+
+  the last rows make u M-orthogonal to R, and μ = Rᵀ f removes from f the part that
+  would accelerate the body rigidly (the loads are balanced by the inertia of the
+  rigid motion, hence "inertia relief").
+
+Both are solved with one sparse LU factorization (:class:`StaticFlexibility`). A
+contour needs G_res only on the loads it can apply: with a transfer matrix T (3N, m)
+whose columns are nodal load patterns (for a NURBS contour, a unit force on one
+control point spread over the contour's nodes by the fitting matrix), the reduced
+residual flexibility is Tᵀ G_res T (m, m): :func:`projected_flexibility` solves Tᵀ G T
+(independent of the modes kept), :func:`residual_flexibility` removes the kept modes.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as sla
+
+from ffrmbs.errors import ModelError
+
+from .modes import clamped_dofs, rigid_body_modes
+
+
+#: smallest |pivot| of the LU factor, relative to the largest, of a regular stiffness matrix
+SINGULAR_PIVOT = 1e-12
+
+
+class StaticFlexibility:
+    """The static flexibility G of an FE model, factored once (module docstring, R2/R3).
+
+    Parameters
+    ----------
+    stiffness : (3N, 3N) sparse [N/m]
+        The unconstrained stiffness matrix K.
+    masses : (N,) [kg]
+        Lumped node masses (the inertia relief of a free-free body).
+    u0 : (N, 3) [m]
+        Node positions (the rigid modes of a free-free body).
+    clamped_nodes : int array or None
+        Nodes whose DOFs are fixed; None or empty: a free-free body.
+    """
+
+    def __init__(self, stiffness, masses, u0, clamped_nodes=None):
+        K = sp.csc_matrix(stiffness)
+        n_dof = K.shape[0]
+        self.n_dof = n_dof
+        self.clamped = clamped_nodes is not None and len(clamped_nodes) > 0
+        try:
+            if self.clamped:
+                self.free = ~clamped_dofs(n_dof, clamped_nodes)
+                self._lu = sla.splu(K[self.free][:, self.free].tocsc())
+            else:
+                self.rigid = rigid_body_modes(np.asarray(u0, float), np.asarray(masses, float))
+                MR = np.repeat(np.asarray(masses, float), 3)[:, None] * self.rigid
+                bordered = sp.bmat([[K, sp.csc_matrix(MR)], [sp.csc_matrix(MR.T), None]], format="csc")
+                self._lu = sla.splu(bordered)
+            pivots = np.abs(self._lu.U.diagonal())
+            if not pivots.min() > SINGULAR_PIVOT * pivots.max():
+                raise RuntimeError(f"pivot ratio {pivots.min() / pivots.max():.2g}")
+        except RuntimeError as exc:            # SuperLU: "Factor is exactly singular", or nearly
+            raise ModelError("the static flexibility cannot be computed: the stiffness matrix is singular "
+                             f"with the body's supports ({exc}); clamp enough nodes to hold the body") from None
+
+    def solve(self, forces) -> np.ndarray:
+        """Displacements G f (3N, m) [m] of load columns ``forces`` (3N, m) [N]."""
+        f = np.asarray(forces, dtype=float).reshape(self.n_dof, -1)
+        if self.clamped:
+            u = np.zeros_like(f)
+            u[self.free] = self._lu.solve(np.ascontiguousarray(f[self.free]))
+            return u
+        rhs = np.vstack([f, np.zeros((6, f.shape[1]))])
+        return self._lu.solve(rhs)[:self.n_dof]
+
+
+#: load columns solved at once by :func:`projected_flexibility` (bounds its memory)
+CHUNK = 256
+
+
+def projected_flexibility(flexibility: StaticFlexibility, transfer) -> np.ndarray:
+    """Tᵀ G T (m, m) [m/N] of load patterns ``transfer`` T (3N, m) (dense or sparse),
+    solved ``CHUNK`` columns at a time; symmetrized."""
+    T = sp.csc_matrix(transfer)
+    m = T.shape[1]
+    out = np.empty((m, m))
+    for a in range(0, m, CHUNK):
+        b = min(a + CHUNK, m)
+        out[:, a:b] = T.T @ flexibility.solve(T[:, a:b].toarray())
+    return 0.5 * (out + out.T)
+
+
+def residual_flexibility(projected, phi_t, modal_stiffness) -> np.ndarray:
+    """Tᵀ G_res T = Tᵀ G T − (Φᵀ T)ᵀ K_n⁻¹ (Φᵀ T) (m, m) [m/N] (eq. R1) from the projected
+    flexibility Tᵀ G T (m, m) (:func:`projected_flexibility`), Φᵀ T (n, m) of the kept
+    modes and their stiffness K_n = Φᵀ K Φ (n, n); symmetrized."""
+    out = np.array(projected, dtype=float)
+    if phi_t.shape[0]:
+        out -= phi_t.T @ np.linalg.solve(modal_stiffness, phi_t)
+    return 0.5 * (out + out.T)
+
+
+def clamped_nodes_of(data) -> np.ndarray:
+    """The clamped nodes of body data: the preprocessor's ``clamp`` group (``params``), else
+    the nodes whose rows of Φ are zero in every mode (thesis Listing 4.2: clamped nodes
+    have zero rows); empty for a free-free body."""
+    group = data.params.get("clamp") if data.params else None
+    if group:
+        if group not in data.node_groups:
+            raise ModelError(f"the body's clamped node group {group!r} is not in its node groups")
+        return np.asarray(data.node_groups[group], dtype=np.int64)
+    if data.params and data.params.get("free"):
+        return np.zeros(0, dtype=np.int64)
+    rows = np.abs(data.phi).reshape(data.n_nodes, -1).max(axis=1) if data.n_modes else np.ones(data.n_nodes)
+    return np.flatnonzero(rows == 0.0).astype(np.int64)

@@ -1,0 +1,237 @@
+"""Contacts on contours with residual flexibility in the Moreau step (contact.compliance,
+mbs.residual_contact), against analytic and full-FE oracles.
+
+* A mass dropped on a beam kept with NO modes: the contour's residual compliance is then
+  the beam's whole static compliance c, and the mass meets a massless spring of stiffness
+  1/c: a half sine of duration π √(m c), deepest deflection v₀ √(m c), rebound speed v₀
+  (for e = 0 as for e = 1: the law acts on the spring's end, which stores and returns the
+  energy).
+* A mass pressed with a constant force onto a beam with n modes plus the correction, with
+  Coulomb friction holding it, settles where the full FE model's static solution puts the
+  contact point (K_ff⁻¹, normal and tangential).
+* e = 1 with 20 modes: kinetic + elastic + spring energy kept to rounding while closed.
+* Kernels against their numpy references.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.sparse.linalg as sla
+
+from contact import (Contact, ContactKinematicsPointContour2s, UnilateralCoulombContact, UnilateralNewtonImpact)
+from contact.compliance import (compliant_problem, compliant_problem_reference, compliant_update,
+                                compliant_update_reference)
+from contact.search import Contact2sSearch
+from contact.solver import ProxSolver
+from contours import Contour2sNeutralFFR, PointContour
+from contours.residual import residual_compliance, transfer_matrix
+from ffrmbs.errors import ModelError
+from mbs import FlexibleBodyFFR, Force, PointMass, PrescribedFrameMotion, System, stages
+from mbs.model import Data, compile_model
+from mbs.residual_contact import spring_energy
+from preprocess import Material, build_body
+from preprocess.geometry import box
+from preprocess.modes import all_modes, clamped_dofs
+from preprocess.residual import clamped_nodes_of
+
+TOP = 0.02          # the beam's top face y [m]
+
+
+@pytest.fixture(scope="module")
+def beam_data():
+    """A clamped tet4 beam 100 x 20 x 20 mm (x = 0 clamped), soft (E = 50 MPa), all modes."""
+    mesh = box(0.1, TOP, 0.02, None, order=1, divisions=(6, 3, 4))
+    data = build_body(mesh, Material(920.0, 5e7, 0.3), n_modes=1, clamp="x0")
+    data.eigenvalues, data.phi = all_modes(data.stiffness, data.masses, data.node_groups["x0"])
+    return data
+
+
+def scene(data, modes, law, position, velocity=(0.0, 0.0, 0.0), residual=True, force=None, mass=0.05):
+    system = System()
+    beam = system.add(FlexibleBodyFFR(data, modes=modes, frame=PrescribedFrameMotion.fixed(), name="beam"))
+    point = system.add(PointMass(mass, position=position, velocity=velocity, name="mass"))
+    top = Contour2sNeutralFFR(beam, "y1", residual_flexibility=residual)
+    contact = system.add(Contact(ContactKinematicsPointContour2s(PointContour(point.point), top), law, name="c"))
+    if force is not None:
+        system.add(Force(point.point, force))
+    return system, beam, point, top, contact
+
+
+def run(system, t_end, dt, theta=0.5, every=None):
+    """Step the Moreau stages by hand; returns the Data (and calls ``every(model, data)``)."""
+    model = compile_model(system, None, theta=theta, solver=ProxSolver("gauss-seidel", tol=1e-13, max_iter=5000))
+    data = Data(model)
+    data.q[:], data.u[:] = system.initial_state()
+    while data.t < t_end - 0.5 * dt:
+        stages.step(model, data, dt)
+        if every is not None:
+            every(model, data)
+    return model, data
+
+
+@pytest.mark.parametrize("e", [0.0, 1.0])
+def test_mass_on_the_whole_static_compliance_is_a_half_sine(e, beam_data):
+    x, z, v0, m, dt = 0.085, 0.01, 0.2, 0.05, 2e-6
+    system, beam, point, top, contact = scene(beam_data, 0, UnilateralNewtonImpact(e), (x, TOP + 1e-5, z),
+                                              (0.0, -v0, 0.0), mass=m)
+    eta, xi = Contact2sSearch(top).solve(np.array([x, TOP, z]), None)
+    c = residual_compliance(top).at(eta, xi)[1, 1]
+    duration, depth = np.pi * np.sqrt(m * c), v0 * np.sqrt(m * c)
+    ys, closed = [], []
+
+    def record(model, data):
+        ys.append(data.q[point.q_slice][1])
+        closed.append(data.closed[0])
+
+    model, data = run(system, 1e-5 / v0 + 1.3 * duration, dt, every=record)
+    assert abs(data.u[point.u_slice][1] / v0 - 1.0) < 1e-6
+    assert abs((TOP - min(ys)) / depth - 1.0) < 2 * v0 * dt / depth   # closing at the midpoint: O(v₀ Δt)
+    assert abs(np.count_nonzero(closed) * dt / duration - 1.0) < 3 * dt / duration
+    assert c > 0
+
+
+def settle(data_beam, modes, position, force, mu=1.0, t_end=0.5, dt=2e-3):
+    """The pressed mass's position after ``t_end`` of implicit Euler (θ = 1, which damps
+    the bodies and the contact's spring alike: ω Δt ≈ 0.7 for the mass on its spring)."""
+    system, beam, point, top, contact = scene(data_beam, modes, UnilateralCoulombContact(0.0, mu), position,
+                                              force=force, mass=0.05)
+    model, data = run(system, t_end, dt, theta=1.0)
+    return data.q[point.q_slice], top, model, data
+
+
+@pytest.mark.parametrize("modes", [5, 10, 20, 50])
+def test_pressed_mass_settles_at_the_full_fe_static_solution(modes, beam_data):
+    """At rest the contact point has moved by the full model's K_ff⁻¹ f under the contact
+    force f = the applied force (Coulomb friction holding the tangential part). The
+    normal and tangents turn with the deflection, so the contact force in body axes is f
+    only to the surface's rotation (~ deflection / beam height): with deflections of
+    ~2e-8 m that is ~1e-6, the tolerance."""
+    x, z = 0.085, 0.01
+    f = np.array([2e-5, -1e-4, 1e-5])                  # [N]
+    q, top, model, data = settle(beam_data, modes, (x, TOP, z), f)
+    eta, xi = Contact2sSearch(top).solve(np.array([x, TOP, z]), None)
+    rc = model.residual.compliances[id(top)]
+    blocks, index = np.zeros((16, 3, 3)), np.zeros(16, dtype=np.int64)
+    k = rc.weights(eta, xi, blocks, index)
+    T = transfer_matrix(top).toarray()
+    Tp = sum(T[:, 3 * index[i]:3 * index[i] + 3] @ blocks[i].T for i in range(k))
+    K = beam_data.stiffness.tocsc()
+    free = ~clamped_dofs(K.shape[0], clamped_nodes_of(beam_data))
+    u = np.zeros(K.shape[0])
+    u[free] = sla.spsolve(K[free][:, free], (Tp @ f)[free])
+    expected = Tp.T @ u
+    moved = q - np.array([x, TOP, z])
+    assert np.abs(moved - expected).max() < 1e-6 * np.abs(expected).max(), (moved, expected)
+
+
+def test_pressed_mass_without_correction_misses_the_static_solution(beam_data):
+    """The same press without the correction stops short by the residual compliance."""
+    x, z = 0.085, 0.01
+    f = np.array([0.0, -1e-2, 0.0])
+    with_c = settle(beam_data, 10, (x, TOP, z), f)[0][1] - TOP
+    system, beam, point, top, contact = scene(beam_data, 10, UnilateralCoulombContact(0.0, 1.0), (x, TOP, z),
+                                              force=f, residual=False)
+    without = run(system, 0.5, 2e-3, theta=1.0)[1].q[point.q_slice][1] - TOP
+    assert without > 1.2 * with_c                       # both negative: the uncorrected beam is too stiff
+
+
+def bounce_energies(data, modes, dt, t_end):
+    """e = 1 bounce of the 0.05 kg mass at 0.2 m/s: per step (kinetic + elastic + ½ Fᵀδ
+    [J], contact closed, end force F [N], compliance C [m/N] of the normal row)."""
+    m, v0 = 0.05, 0.2
+    system, beam, point, top, contact = scene(data, modes, UnilateralNewtonImpact(1.0), (0.085, TOP + 1e-5, 0.01),
+                                              (0.0, -v0, 0.0), mass=m)
+    rows = []
+
+    def record(model, d):
+        q_f, qd_f = d.q[beam.q_slice][beam._f], d.u[beam.u_slice][beam._fu]
+        e = 0.5 * m * d.u[point.u_slice] @ d.u[point.u_slice] + 0.5 * qd_f @ qd_f + 0.5 * q_f @ beam.K_ff @ q_f
+        rows.append((e + spring_energy(model, d), d.closed[0], d.comp_force[0], d.comp_C[0, 0] if d.comp_r else 0.0))
+
+    run(system, t_end, dt, every=record)
+    return np.array(rows, dtype=float).T
+
+
+def test_elastic_impacts_on_the_static_compliance_keep_energy(beam_data):
+    """e = 1 on the whole static compliance (no modes): kinetic + spring energy is kept to
+    rounding at every step while the spring pushes; the release step (the end force
+    reaching zero within a step) changes it by O(Δt²)."""
+    released = []
+    for dt in (4e-6, 2e-6):
+        E, closed, F, C = bounce_energies(beam_data, 0, dt, 0.04)
+        e0 = E[0]
+        pushing = (F[1:] > 0) & (F[:-1] > 0)
+        assert pushing.sum() > 1000
+        assert np.abs(np.diff(E)[pushing]).max() < 1e-13 * e0
+        release = (F[:-1] > 0) & (F[1:] == 0)
+        assert release.sum() == 1
+        released.append(abs(np.diff(E)[release][0]) / e0)
+    assert released[1] < 1e-6 and released[1] < released[0] / 3.0
+
+
+def test_elastic_impacts_with_modes_exchange_only_the_sliding_energy(beam_data):
+    """e = 1 with 20 modes plus the correction: the mass slides a little as the beam tilts,
+    so the compliance C at the contact point changes; then per step (S2–S3 of
+    contact.compliance) E_{k+1} − E_k = −½ F_k (C_{k+1} − C_k) F_{k+1} exactly while the
+    spring pushes, which checks the bodies' and the spring's energy exchange to rounding."""
+    E, closed, F, C = bounce_energies(beam_data, 20, 2e-6, 0.012)
+    e0 = E[0]
+    pushing = (F[1:] > 0) & (F[:-1] > 0)
+    assert pushing.sum() > 500
+    exchange = -0.5 * F[:-1] * np.diff(C) * F[1:]
+    assert np.abs(np.diff(E) - exchange)[pushing].max() < 1e-12 * e0
+    assert np.abs(exchange[pushing]).max() > 1e-8 * e0          # the sliding term is there to be checked
+    assert abs(E[-1] / e0 - 1.0) < 1e-3                           # with the releases and the sliding
+
+
+@pytest.mark.parametrize("theta", [0.5, 0.7, 1.0])
+def test_kernels_match_their_references(theta):
+    rng = np.random.default_rng(7)
+    m, rows = 7, np.array([1, 2, 3, 5], dtype=np.int64)
+    normal = np.array([0, 0, 0, 3], dtype=np.int64)
+    A = rng.standard_normal((m, m))
+    G, C = A @ A.T, np.diag(rng.random(4)) * 1e-4
+    xi, gp = rng.standard_normal((2, m))
+    F, d, dd = rng.random(4), rng.random(4) * 1e-5, rng.standard_normal(4) * 1e-2
+    F[3] = 0.0
+    ref = compliant_problem_reference(G, xi, gp, rows, C, F, d, dd, 1e-4, theta)
+    G2, xi2, gp2, lam0 = G.copy(), xi.copy(), gp.copy(), np.zeros(4)
+    compliant_problem(G2, xi2, gp2, rows, C, F, d, dd, 1e-4, theta, lam0)
+    for got, want in zip((G2, xi2, gp2, lam0), ref):
+        assert np.allclose(got, want, rtol=1e-14, atol=1e-14)
+    lam, gplus = np.abs(rng.standard_normal((2, m)))
+    lam[5] = 0.0
+    ref = compliant_update_reference(lam, gplus, gp2, rows, normal, C, F, d, dd, 1e-4, theta, lam0)
+    lam3, gplus3, gp3, F3, d3, dd3 = lam.copy(), gplus.copy(), gp2.copy(), F.copy(), d.copy(), dd.copy()
+    compliant_update(lam3, gplus3, gp3, rows, normal, C, F3, d3, dd3, 1e-4, theta, lam0)
+    for got, want in zip((lam3, gplus3, gp3, F3, d3, dd3), ref):
+        assert np.allclose(got, want, rtol=1e-14, atol=1e-14)
+    assert dd3[3] == 0.0                                  # released: no spring rate
+
+
+def test_penalty_law_with_residual_flexibility_is_refused(beam_data):
+    from contact import LinearRegularizedUnilateralConstraint
+
+    system = scene(beam_data, 5, LinearRegularizedUnilateralConstraint(1e5, 0.0), (0.05, TOP, 0.01))[0]
+    with pytest.raises(ModelError, match="set-valued"):
+        compile_model(system)
+
+
+def test_without_residual_flexibility_nothing_is_compiled(beam_data):
+    system = scene(beam_data, 5, UnilateralNewtonImpact(0.0), (0.05, TOP, 0.01), residual=False)[0]
+    assert compile_model(system).residual is None
+
+
+def test_a_steady_compliant_step_allocates_no_numpy_array(beam_data):
+    """200 steps with the compliant contact closed throughout, after warm-up steps."""
+    from numpy_allocations import NumpyAllocations
+
+    system = scene(beam_data, 20, UnilateralNewtonImpact(0.0), (0.085, TOP, 0.01), (0.0, -0.05, 0.0))[0]
+    model, data = run(system, 2e-4, 1e-6)
+    assert data.closed[0] and data.comp_r == 1
+    with NumpyAllocations() as count:
+        for _ in range(200):
+            stages.step(model, data, 1e-6)
+    assert data.closed[0]
+    assert count.n == 0, count.sizes
