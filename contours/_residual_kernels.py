@@ -88,9 +88,10 @@ def compliance_scalar(G, wa, ia, ka, wb, ib, kb, out):
 
 
 @numba.njit(cache=True)
-def add_contact_block(C, ra, da, rb, db, sign, n_a, T_a, n_b, T_b, A, c, work):
-    """C[ra:ra+da, rb:rb+db] += sign R_aᵀ A c Aᵀ R_b with R = [n, T] (3, dim) in world
-    axes, A (3, 3) the body rotation, c (3, 3) body axes [m/N]; ``work`` (2, 3, 3)."""
+def add_contact_block(C, ra, da, rb, db, sign, n_a, T_a, sa, n_b, T_b, sb, A, c, work):
+    """C[ra:ra+da, rb:rb+db] += sign R_aᵀ A c Aᵀ R_b with R = [n, T[:, s:]] (3, dim) in
+    world axes (s = 0: rows [n, t1, t2]; s = 1: rows [n, t2] of a point kept on a curve),
+    A (3, 3) the body rotation, c (3, 3) body axes [m/N]; ``work`` (2, 3, 3)."""
     AcAt, R = work[0], work[1]
     for r in range(3):                       # A c Aᵀ
         for q in range(3):
@@ -103,11 +104,11 @@ def add_contact_block(C, ra, da, rb, db, sign, n_a, T_a, n_b, T_b, A, c, work):
         for r in range(3):
             s = 0.0
             for q in range(3):
-                s += AcAt[r, q] * (n_b[q] if x == 0 else T_b[q, x - 1])
+                s += AcAt[r, q] * (n_b[q] if x == 0 else T_b[q, x - 1 + sb])
             R[r, x] = s
     for y in range(da):
         for x in range(db):
             s = 0.0
             for r in range(3):
-                s += (n_a[r] if y == 0 else T_a[r, y - 1]) * R[r, x]
+                s += (n_a[r] if y == 0 else T_a[r, y - 1 + sa]) * R[r, x]
             C[ra + y, rb + x] += sign * s

@@ -9,7 +9,8 @@ between them included), and one factorization of the body's stiffness. Each step
 
     C_jk = Σ_{sides a of j, b of k on one body} s_a s_b R_jᵀ A c(a, b) Aᵀ R_k     (r × r) [m/N]
 
-are formed, with R_j = [n, T] (3 × dim) the contact frame (world axes), A the body's
+are formed, with R_j = [n, T] (3 × dim) the contact frame (world axes; [n, t2] for a point
+kept on a curve), A the body's
 rotation, c(a, b) the residual compliance between the two contact points (body axes,
 eq. C2 of :mod:`contours.residual`) and s = +1 on a contact's contour 1 (the point side),
 −1 on its contour 2: the force Λ acts along +R on side 1 and −R on side 2, and g_N, γ
@@ -19,6 +20,7 @@ deflection opens the gap.
 
 from __future__ import annotations
 
+from contact.kinematics import PointOnCurveConstraint
 from contours._residual_kernels import add_contact_block
 from contours.residual import residual_compliances, static_flexibility
 from ffrmbs.errors import ModelError
@@ -44,6 +46,9 @@ class ResidualContacts:
         The contact has a corrected contour.
     compliances : dict
         The ResidualCompliance of each corrected contour, by id.
+    skip : tuple of int
+        Per contact the first tangent of its rows: 0 for [n, t1, t2] (a contact), 1 for
+        [n, t2] (a point kept on a curve, :class:`contact.CurveConstraint`).
     """
 
     def __init__(self, contacts, set_valued, cache_dir=None):
@@ -74,6 +79,7 @@ class ResidualContacts:
             sides.append(tuple(s))
         self.sides = tuple(sides)
         self.compliant = tuple(bool(s) for s in sides)
+        self.skip = tuple(int(isinstance(c.kinematics, PointOnCurveConstraint)) for c in contacts)
 
     def __bool__(self):
         return any(self.compliant)
@@ -106,7 +112,7 @@ def assemble(model, data, dt) -> int:
             k = model.contacts[i].kinematics
             for sign, comp, side in rc.sides[i]:
                 point = k.point1 if side == 1 else k.point2
-                entries[n_e] = (r, dim, sign, comp, point.eta, point.xi, k)
+                entries[n_e] = (r, dim, sign, comp, point.eta, point.xi, k, rc.skip[i])
                 n_e += 1
             r += dim
         row += dim
@@ -114,12 +120,12 @@ def assemble(model, data, dt) -> int:
     C.fill(0.0)
     c, work = data.comp_c, data.comp_work
     for a in range(n_e):
-        ra, da, sa, ca, eta_a, xi_a, ka = entries[a]
+        ra, da, sa, ca, eta_a, xi_a, ka, ta = entries[a]
         for b in range(n_e):
-            rb, db, sb, cb, eta_b, xi_b, kb = entries[b]
+            rb, db, sb, cb, eta_b, xi_b, kb, tb = entries[b]
             if cb.G_P is ca.G_P:
                 ca.between(eta_a, xi_a, eta_b, xi_b, cb, c)
-                add_contact_block(C, ra, da, rb, db, sa * sb, ka.n, ka.T, kb.n, kb.T, ca.rotation, c, work)
+                add_contact_block(C, ra, da, rb, db, sa * sb, ka.n, ka.T, ta, kb.n, kb.T, tb, ca.rotation, c, work)
     data.comp_r = r
     return r
 

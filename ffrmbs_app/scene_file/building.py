@@ -14,6 +14,7 @@ import numpy as np
 
 from ffrmbs.errors import InputFileError, ModelError
 from ffrmbs_app.scene import Scene, name_fault
+from ffrmbs_app.scenes.cache import cache_dir
 from mbs import INTEGRATORS, LOADS, Joint, SpringDamper, System, Tabulated, read_force_file
 from mbs.joints import AXIS_KINDS
 from mbs.loads import WEIGHT_SUM_TOL
@@ -246,6 +247,7 @@ class SceneBuilder:
         """The Scene: the bodies in file order, then springs, joints, loads and contacts."""
         settings, doc = self.settings, self.doc
         env = Env(System(gravity=settings["gravity"]))
+        env.system.cache_dir = cache_dir()           # residual flexibility of contours, reused between runs
         for body in self.bodies.values():
             env.bodies[body.name] = run(doc, body.keypath, f"body {body.name!r}",
                                         lambda body=body: env.system.add(body.make()))

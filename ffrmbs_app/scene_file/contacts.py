@@ -147,7 +147,7 @@ class ContactReader:
                     c.fail("outward", f"'outward' must be 1 or -1, got {outward}")
 
             fitting = dict(control_points=_pair(c, "control_points", int) if c.has("control_points") else None,
-                           smoothing=c.get("smoothing"))
+                           smoothing=c.get("smoothing"), residual_flexibility=c.get("residual_flexibility"))
 
             def make(env):
                 return cls(env.bodies[name], nodes, extra, degree, closed, method, outward, **fitting)
@@ -176,12 +176,14 @@ class ContactReader:
                        control_points=c.get("control_points"), smoothing=c.get("smoothing"))
         extra = tuple(c.get(key) for key in CONTOUR[kind] if key not in CONTOUR["1s"])    # width, offset / radius
         curve_class, cls = CONTOURS["1s"], CONTOURS[kind]
+        residual = dict(residual_flexibility=c.get("residual_flexibility"))
 
         def make(env):
             body = env.bodies[name]
-            curve = (curve_class.along_line(body, start, direction, normal, nodes=nodes, **options) if line
-                     else curve_class(body, nodes, normal, **options))
-            return curve if kind == "1s" else cls(curve, *extra)
+            own = residual if kind == "1s" else {}
+            curve = (curve_class.along_line(body, start, direction, normal, nodes=nodes, **options, **own) if line
+                     else curve_class(body, nodes, normal, **options, **own))
+            return curve if kind == "1s" else cls(curve, *extra, **residual)
 
         return make
 

@@ -184,6 +184,10 @@ Gravity is ``[scene] gravity``.
   reference normal in the body frame. "band" (a
   :class:`contours.FlexibleBand`) takes ``width`` *req.* [m] and ``offset`` [m].
   "cylinder" (a :class:`contours.FlexibleCylinder`) takes ``radius`` *req.* [m].
+- Each of these flexible contours takes ``residual_flexibility`` (false): true makes
+  its contacts act through the static compliance of the modes the body leaves out
+  (:mod:`contours.residual`; a set-valued law is needed), accurate impacts with few
+  modes; the compliance is computed once and cached with the scenes' body data.
 - ``{ kind = "plane", <frame>, normal = [0, 0, 1], size = 1 }``: a
   :class:`contours.PlaneContour` through the frame's point, with that normal in
   the frame's axes. The default frame is the ground origin.
@@ -449,7 +453,8 @@ _CURVE = {"kind": _KIND, "body": FRAME["body"], "start": _vector(REQUIRED, "m"),
           "closed": Key("boolean", None, doc="from the walk of an edge group when absent, else false"),
           "control_points": Key("integer", None, low=2, doc="absent: interpolate the nodes; a count: fit them "
                                                             "by least squares"),
-          "smoothing": Key("number", SMOOTHING, low=0.0, doc="the fit's weight of the curvature energy")}
+          "smoothing": Key("number", SMOOTHING, low=0.0, doc="the fit's weight of the curvature energy"),
+          "residual_flexibility": Key("boolean", False, doc="contacts see the dropped modes' static compliance")}
 CONTOUR = {
     "point": {"kind": _KIND, **FRAME},
     "sphere": {"kind": _KIND, **FRAME, "radius": _length(low=0.0, strict=True)},
@@ -464,7 +469,8 @@ CONTOUR = {
            "outward": Key("special", None, doc="+1 or -1; found from the body when absent"),
            "control_points": Key("special", None, doc="an integer >= 2 or a pair [eta, xi]: a fitted patch's "
                                                       "distinct control points"),
-           "smoothing": Key("number", SMOOTHING, low=0.0, doc="a fitted patch's thin-plate weight")},
+           "smoothing": Key("number", SMOOTHING, low=0.0, doc="a fitted patch's thin-plate weight"),
+           "residual_flexibility": _CURVE["residual_flexibility"]},
     "1s": _CURVE,
     "band": {**_CURVE, "width": _length(low=0.0, strict=True), "offset": _length(0.0, low=None)},
     "cylinder": {**_CURVE, "radius": _length(low=0.0, strict=True)},
