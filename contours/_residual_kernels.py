@@ -71,6 +71,20 @@ def neutral_weights(dim, knots_e, ints, dom, knots_x, eta, xi, Be, Bx, offset, w
 
 
 @numba.njit(cache=True)
+def neutral_between(G, knots_ea, ints_a, dom_a, knots_xa, off_a, eta_a, xi_a,
+                    knots_eb, ints_b, dom_b, knots_xb, off_b, eta_b, xi_b, B, w, index, out):
+    """c(a, b) (3, 3) [m/N] of two points of neutral contours (eq. C2 with B_i = N_i I):
+    each point's weights by :func:`neutral_weights` (a contour is 1s when its ints hold
+    one direction), then :func:`compliance_scalar`. Work: B (2, 3, p + 1), w and index
+    (2, (p + 1)²)."""
+    dim_a = 1 if ints_a.shape[0] == 3 else 2
+    dim_b = 1 if ints_b.shape[0] == 3 else 2
+    ka = neutral_weights(dim_a, knots_ea, ints_a, dom_a, knots_xa, eta_a, xi_a, B[0], B[1], off_a, w[0], index[0])
+    kb = neutral_weights(dim_b, knots_eb, ints_b, dom_b, knots_xb, eta_b, xi_b, B[0], B[1], off_b, w[1], index[1])
+    compliance_scalar(G, w[0], index[0], ka, w[1], index[1], kb, out)
+
+
+@numba.njit(cache=True)
 def compliance_scalar(G, wa, ia, ka, wb, ib, kb, out):
     """out (3, 3) = Σ_i Σ_j wa_i wb_j G[3 ia_i:+3, 3 ib_j:+3] [m/N]: eq. C2 with the
     blocks B = N I of neutral contours."""

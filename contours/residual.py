@@ -87,8 +87,12 @@ class ResidualCompliance:
         # knots ξ (η's again on a curve), bases, weights
         g = space.geometry
         self._kernel_geometry = (g[0], g[1], g[2], g[0]) if space.dim == 1 else (g[0], g[2], g[3], g[1])
-        self._Bc = np.zeros((2, 3, max(d.p for d in self._dirs) + 1))
-        self._w = np.zeros((2, n_w))
+        p_max = 8                                   # any contour of the body: a pair's second point
+        if max(d.p for d in self._dirs) > p_max:
+            raise ModelError(f"{contour.name}: residual flexibility supports degrees up to {p_max}")
+        self._Bc = np.zeros((2, 3, p_max + 1))
+        self._w = np.zeros((2, (p_max + 1) ** 2))
+        self._index = np.zeros((2, (p_max + 1) ** 2), dtype=np.int64)
 
     @property
     def rotation(self) -> np.ndarray:
@@ -146,20 +150,15 @@ class ResidualCompliance:
         (blocks_a, _), (index_a, _) = self._work
         (_, blocks_b), (_, index_b) = other._work
         if self._offset is None and other._offset is None:
-            ka = self._scalar_weights(eta_a, xi_a, 0, index_a)
-            kb = other._scalar_weights(eta_b, xi_b, 1, index_b)
-            RK.compliance_scalar(self.G_P, self._w[0], index_a, ka, other._w[1], index_b, kb, out)
+            ga, gb = self._kernel_geometry, other._kernel_geometry
+            RK.neutral_between(self.G_P, ga[0], ga[1], ga[2], ga[3], self.offset, float(eta_a), float(xi_a),
+                               gb[0], gb[1], gb[2], gb[3], other.offset, float(eta_b), float(xi_b),
+                               self._Bc, self._w, self._index, out)
             return out
         ka = self.weights(eta_a, xi_a, blocks_a, index_a)
         kb = other.weights(eta_b, xi_b, blocks_b, index_b)
         RK.compliance_between(self.G_P, blocks_a, index_a, ka, blocks_b, index_b, kb, out)
         return out
-
-    def _scalar_weights(self, eta, xi, slot, index) -> int:
-        """N_i and indices of a neutral contour's point into ``self._w[slot]``, ``index``."""
-        knots_e, ints, dom, knots_x = self._kernel_geometry
-        return RK.neutral_weights(len(self._dirs), knots_e, ints, dom, knots_x, float(eta), float(xi),
-                                  self._Bc[0], self._Bc[1], self.offset, self._w[slot], index)
 
     def at(self, eta, xi=0.0, out=None) -> np.ndarray:
         """c(a, a) (3, 3) [m/N] in body axes at (η, ξ) (eq. C2)."""
@@ -205,30 +204,35 @@ def static_flexibility(body) -> StaticFlexibility:
 
 def residual_compliances(contours, flexibility=None, cache_dir=None) -> list:
     """The :class:`ResidualCompliance` of each of ``contours`` (all on one body) on the
-    body's kept modes (``body.phi``, ``body.K_ff``), sharing one G_P, so that
-    cross-compliances between them are included. ``flexibility``: the body's
+    body's kept modes (``body.K_ff``; their control points Φ_P = F Φ are the contours'
+    own, so Φᵀ T needs no T), sharing one G_P, so that cross-compliances between them
+    are included. ``flexibility``: the body's
     :class:`~preprocess.residual.StaticFlexibility` (made here when None and needed);
     ``cache_dir``: a directory where Tᵀ G T (the costly part, independent of the modes
-    kept) is read or written, keyed by the body's stiffness, masses, supports and T."""
+    kept) is read or written, keyed by the body's matrices and the contours' fitting
+    matrices (:func:`_key`)."""
     neutrals = [neutral_of(c) for c in contours]
     body = neutrals[0].body
     if any(n.body is not body for n in neutrals):
         raise ModelError("residual_compliances: the contours are on different bodies")
-    parts = [transfer_matrix(c) for c in contours]
-    T = sp.hstack(parts, format="csr")
+    sizes = [int(np.prod(n.space.ctrl_shape)) for n in neutrals]
     TGT = path = None
     if cache_dir is not None:
-        path = Path(cache_dir) / f"residual-{_key(body.data, T)}.npy"
+        path = Path(cache_dir) / f"residual-{_key(body.data, neutrals)}.npy"
         if path.is_file():
             TGT = np.load(path, allow_pickle=False)
-            if TGT.shape != (T.shape[1], T.shape[1]):
+            if TGT.shape != (3 * sum(sizes),) * 2:
                 TGT = None
     if TGT is None:
+        T = sp.hstack([transfer_matrix(c) for c in contours], format="csr")
         TGT = projected_flexibility(static_flexibility(body) if flexibility is None else flexibility, T)
         if path is not None:
             _save(path, TGT)
-    G_P = residual_flexibility(TGT, (T.T @ body.phi).T, body.K_ff)
-    offsets = np.cumsum([0] + [t.shape[1] // 3 for t in parts])
+    n_f = body.K_ff.shape[0]
+    phi_t = np.vstack([n.mode_shapes.ctrl.reshape(-1, n_f) if n_f else np.zeros((3 * k, 0))
+                       for n, k in zip(neutrals, sizes)]).T                          # Φᵀ T (n_f, 3 n_P)
+    G_P = residual_flexibility(TGT, phi_t, body.K_ff)
+    offsets = np.cumsum([0] + sizes)
     return [ResidualCompliance(c, G_P, int(o)) for c, o in zip(contours, offsets)]
 
 
@@ -237,13 +241,20 @@ def residual_compliance(contour, flexibility=None, cache_dir=None) -> ResidualCo
     return residual_compliances([contour], flexibility, cache_dir)[0]
 
 
-def _key(data, T) -> str:
-    """Hash of what Tᵀ G T depends on: K, the masses, the node positions, the supports, T."""
+def _key(data, neutrals) -> str:
+    """Hash of what Tᵀ G T depends on: K, the masses, the node positions, the supports,
+    and per contour its nodes, knots and the fitting matrix F, fingerprinted by the
+    control points of a fixed pseudo-random nodal field (F r: equal for two F only if
+    they are equal, with probability one)."""
     h = hashlib.sha256()
     K = sp.csr_matrix(data.stiffness)
-    for a in (K.indptr, K.indices, K.data, data.masses, data.u0, clamped_nodes_of(data), T.indptr, T.indices,
-              T.data):
+    for a in (K.indptr, K.indices, K.data, data.masses, data.u0, clamped_nodes_of(data)):
         h.update(np.ascontiguousarray(a).tobytes())
+    for n in neutrals:
+        nodes = np.asarray(n.nodes)
+        field = np.random.default_rng(12345).standard_normal(nodes.shape + (2,))
+        for a in (nodes, *n.space.geometry, n.space.interpolate(field)):
+            h.update(np.ascontiguousarray(a).tobytes())
     return h.hexdigest()[:20]
 
 

@@ -4,7 +4,8 @@ its contact frame, for the compliant contact problem of :mod:`contact.compliance
 At compile time (:class:`ResidualContacts`) every contour with ``residual_flexibility``
 set gets its :class:`~contours.residual.ResidualCompliance` on its body's kept modes;
 the corrected contours of one body share one residual flexibility (cross-compliance
-between them included), and one factorization of the body's stiffness. Each step
+between them included), computed from one factorization of the body's stiffness, or
+read from ``System.cache_dir``. Each step
 (:func:`assemble`) the closed compliant contacts' rows and their compliance
 
     C_jk = Σ_{sides a of j, b of k on one body} s_a s_b R_jᵀ A c(a, b) Aᵀ R_k     (r × r) [m/N]
@@ -22,7 +23,7 @@ from __future__ import annotations
 
 from contact.kinematics import PointOnCurveConstraint
 from contours._residual_kernels import add_contact_block
-from contours.residual import residual_compliances, static_flexibility
+from contours.residual import residual_compliances
 from ffrmbs.errors import ModelError
 
 
@@ -67,7 +68,7 @@ class ResidualContacts:
         self.compliances = {}
         for body, group in by_body.values():
             contours = list(group.values())
-            for contour, rc in zip(contours, residual_compliances(contours, static_flexibility(body), cache_dir)):
+            for contour, rc in zip(contours, residual_compliances(contours, None, cache_dir)):
                 self.compliances[id(contour)] = rc
         sides = []
         for c in contacts:

@@ -50,8 +50,9 @@ KINDS = ("v_y RMS / 0.2 m/s", "node 19 RMS / peak", "y max [m]")
 
 
 def _simulate(data, setup="A", modes=20, law="impact", e=0.0, contour="2s", integrator="moreau", dt=1e-5,
-              atol=None, t_end=T_END):
-    scene = pmb.build(setup, modes, law, e, contour=contour, data=data)
+              atol=None, t_end=T_END, residual_flexibility="off"):
+    scene = pmb.build(setup, modes, law, e, contour=contour, data=data,
+                      residual_flexibility=residual_flexibility == "on")
     options = dict(theta=0.5, trace=True)
     if integrator == "moreau-adaptive":
         options.update(atol=atol, rtol=0.0)
@@ -80,7 +81,9 @@ def run(quick: bool) -> CaseResult:
     n_all = data.n_modes
     t_end = 0.03 if quick else T_END
     ref_dt = 5e-6 if quick else REF_DT
-    _simulate(data, t_end=1e-4)                                        # compile the kernels
+    for contour in ("2s", "band"):                                     # compile the kernels
+        for on_off in ("off", "on"):
+            _simulate(data, contour=contour, t_end=0.0102, residual_flexibility=on_off)
     result = CaseResult(plot_groups=("sweep", "error_kind"))
     refs = {}
 
@@ -92,16 +95,23 @@ def run(quick: bool) -> CaseResult:
 
     def add(sweep, ref, ref_name, **config):
         scene, res, cpu = _simulate(data, t_end=t_end, **config)
-        row_config = {"sweep": sweep, "setup": "A", "modes": 20, "law": "impact", "e": 0.0, "contour": "2s",
-                      "integrator": "moreau", "dt": 1e-5, **config}
+        row_config = {"sweep": sweep, "setup": "A", "modes": 20, "residual_flexibility": "off", "law": "impact",
+                      "e": 0.0, "contour": "2s", "integrator": "moreau", "dt": 1e-5, **config}
         for kind, err in zip(KINDS, _errors(res, ref)):
             result.rows.append(make_row(NAME, row_config, cpu, err, kind, ref_name, **_extras(scene, res)))
         return res
 
     all_name = f"all {n_all} modes, Δt = {ref_dt:g} s"
     ref_a = reference()
-    mode_counts = (10, 20) if quick else (10, 20, 50, 100, 200)
-    runs = {m: add("modes", ref_a, all_name, modes=m) for m in mode_counts}
+    mode_counts = (10, 20) if quick else (5, 10, 20, 50, 100, 200)
+    runs = {}
+    for setup in ("A",) if quick else ("A", "B"):
+        ref = ref_a if setup == "A" else reference(setup="B")
+        for m in mode_counts:
+            for on_off in ("off", "on"):
+                res = add("modes", ref, all_name, setup=setup, modes=m, residual_flexibility=on_off)
+                if setup == "A":
+                    runs[(m, on_off)] = res
 
     if not quick:
         own = reference(modes=20, dt=1e-6)
@@ -120,12 +130,14 @@ def run(quick: bool) -> CaseResult:
     setups = ("A",) if quick else ("A", "B")
     for setup in setups:
         ref = reference(setup=setup)
-        if setup == "B":
-            for m in (20, 100):
-                add("setup B", ref, all_name, setup="B", modes=m)
         for contour in ("2s", "band"):
-            add("contour", ref, all_name, setup=setup, contour=contour)
+            for on_off in ("off", "on"):
+                add("contour", ref, all_name, setup=setup, contour=contour, residual_flexibility=on_off)
 
+    phases = {key[0]: len(contact_intervals(r.trace["t"], r.trace["dt"], r.trace["closed"]))
+              for key, r in refs.items() if key[1:] == ("impact", 0.0, "all", ref_dt, "2s")}
+    result.notes.append(_correction_table(result.rows) + "\n\nContact phases of the references: " +
+                        ", ".join(f"setup {k}: {v}" for k, v in sorted(phases.items())) + ".")
     result.notes.append(_contour_table(result.rows))
     result.figures["outputs"] = lambda path: _figure(path, ref_a, runs)
     return result
@@ -134,12 +146,34 @@ def run(quick: bool) -> CaseResult:
 def _contour_table(rows):
     lines = ["Contour type at 20 modes, Newton impact e = 0 (thesis Table 5.3; MBSim in 2014, 0.05 s: "
              "setup A 36 s band / 74 s 2s, setup B 33 s / 46 s):", "",
-             "| setup | contour | CPU [s] | v_y RMS / 0.2 m/s | node 19 RMS / peak |", "|---|---|---|---|---|"]
+             "| setup | contour | residual flexibility | CPU [s] | v_y RMS / 0.2 m/s | node 19 RMS / peak |",
+             "|---|---|---|---|---|---|"]
     for r in rows:
         c = r["config"]
         if c["sweep"] == "contour" and r["error_kind"] == KINDS[0]:
             node = next(s for s in rows if s["config"] == c and s["error_kind"] == KINDS[1])
-            lines.append(f"| {c['setup']} | {c['contour']} | {r['cpu_s']:.2f} | {r['error']:.2e} | {node['error']:.2e} |")
+            lines.append(f"| {c['setup']} | {c['contour']} | {c['residual_flexibility']} | {r['cpu_s']:.2f} | "
+                         f"{r['error']:.2e} | {node['error']:.2e} |")
+    return "\n".join(lines)
+
+
+def _correction_table(rows):
+    """Modes × residual flexibility (off/on): errors, contact phases and CPU per setup."""
+    lines = ["Modes with and without residual flexibility (2s contour, Newton impact e = 0, Δt = 1e-5 s; "
+             "errors against all modes):", "",
+             "| setup | modes | v_y RMS off | v_y RMS on | node 19 RMS off | node 19 RMS on | contact phases off / on "
+             "| CPU off / on [s] |", "|---|---|---|---|---|---|---|---|"]
+    table = {}
+    for r in rows:
+        c = r["config"]
+        if c["sweep"] == "modes":
+            table.setdefault((c["setup"], c["modes"]), {})[(c["residual_flexibility"], r["error_kind"])] = r
+    for (setup, modes), t in sorted(table.items()):
+        v, n = KINDS[0], KINDS[1]
+        lines.append(f"| {setup} | {modes} | {t[('off', v)]['error']:.2%} | {t[('on', v)]['error']:.2%} | "
+                     f"{t[('off', n)]['error']:.2%} | {t[('on', n)]['error']:.2%} | "
+                     f"{t[('off', v)]['contact_intervals']} / {t[('on', v)]['contact_intervals']} | "
+                     f"{t[('off', v)]['cpu_s']:.2f} / {t[('on', v)]['cpu_s']:.2f} |")
     return "\n".join(lines)
 
 
@@ -151,7 +185,8 @@ def _figure(path, ref, runs):
     FigureCanvasAgg(fig)
     axes = fig.subplots(3, 1, sharex=True)
     for label, res, style in [("all modes (reference)", ref, "k-")] + [
-            (f"{m} modes", r, "-") for m, r in runs.items()]:
+            (f"{m} modes, correction {on_off}", r, "-" if on_off == "on" else ":") for (m, on_off), r in runs.items()
+            if m in (10, 20)]:
         t = 1e3 * res.t
         axes[0].plot(t, 1e3 * res["y"], style, label=label, lw=1)
         axes[1].plot(t, res["vy"], style, lw=1)
