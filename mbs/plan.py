@@ -26,7 +26,9 @@ dropped rest provably moves no node by more than half the tolerance (:func:`_mod
 any mode with an initial state is kept, the others stay zero. A body given a mode count
 or list keeps it. The other half of the tolerance bounds the neglected coupling (rule 2).
 
-Contacts: a contour is updated, and its contact searched, only in steps where the
+Contacts: a contact on a contour with residual flexibility acts through the static
+compliance of the modes its body leaves out (:mod:`contours.residual`), which the plan
+says. A contour is updated, and its contact searched, only in steps where the
 bodies' bounding spheres (their nodes, grown by the bound of the elastic displacement,
 :meth:`~mbs.body.Body.bounding_sphere`) come within the contact's broad-phase margin
 (:meth:`contact.Contact.may_touch`); the contact is open otherwise.
@@ -42,6 +44,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.spatial.transform import Rotation
+
+from preprocess.residual import clamped_nodes_of
 
 from .flexible_body import FlexibleBodyFFR
 
@@ -121,12 +125,26 @@ def make_plan(system, t_end, tolerance=TOLERANCE, outputs=None) -> Plan:
         if bp.modal:
             absorbed += own
     contacts = [f"contact {c.name!r}: contours updated and searched only while the bodies' bounding "
-                f"spheres come within {_margin(c)} (broad phase), open otherwise"
+                f"spheres come within {_margin(c)} (broad phase), open otherwise" + _correction(c)
                 for c in system.contacts]
     names = sorted(outputs or {})
     out = [f"outputs: {', '.join(names) if names else 'none'} requested; each evaluated from its own "
            "rows of the mode shapes (no full-field recovery)"]
     return Plan(plans, contacts, out, tolerance, absorbed)
+
+
+def _correction(contact) -> str:
+    """What a contact on contours with residual flexibility adds to its plan line."""
+    notes = []
+    for contour in contact.contours():
+        if getattr(contour, "residual_flexibility", False):
+            body = contour.body
+            n_dof = 3 * (body.data.n_nodes - clamped_nodes_of(body.data).size) - (0 if clamped_nodes_of(
+                body.data).size else 6)
+            notes.append(f"; on {contour.name!r} it acts through the static compliance of all the modes body "
+                         f"{body.name!r} leaves out (residual flexibility: {body.n_modes} of its FE model's "
+                         f"{n_dof} modes kept, no extra coordinates)")
+    return "".join(notes)
 
 
 def _margin(contact) -> str:

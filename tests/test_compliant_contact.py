@@ -235,3 +235,10 @@ def test_a_steady_compliant_step_allocates_no_numpy_array(beam_data):
             stages.step(model, data, 1e-6)
     assert data.closed[0]
     assert count.n == 0, count.sizes
+
+
+def test_the_plan_says_which_contacts_use_the_correction(beam_data):
+    on = scene(beam_data, 5, UnilateralNewtonImpact(0.0), (0.05, TOP, 0.01))[0].plan(0.01)
+    off = scene(beam_data, 5, UnilateralNewtonImpact(0.0), (0.05, TOP, 0.01), residual=False)[0].plan(0.01)
+    assert "residual flexibility: 5 of its FE model's" in str(on)
+    assert "residual flexibility" not in str(off)
