@@ -150,7 +150,7 @@ def cmd_run(args):
     print("wrote " + ", ".join(written))
 
 
-DEFAULT_SCENE_OPTIONS = ("setup", "modes", "law", "e", "contour", "t_end", "dt")
+DEFAULT_SCENE_OPTIONS = ("setup", "modes", "law", "e", "contour", "residual_flexibility", "t_end", "dt")
 
 
 def cmd_bench(args):
@@ -273,6 +273,9 @@ def build_parser():
                          help="set-valued Newton impact (default) or linear penalty k = 1e7 N/m")
     default.add_argument("--e", type=float, help="coefficient of restitution of the impact law (default 0)")
     default.add_argument("--contour", choices=("2s", "band"), help="top-face contour (default 2s)")
+    default.add_argument("--no-residual-flexibility", dest="residual_flexibility", action="store_false",
+                         default=None, help="leave out the dropped modes' static compliance at the contact "
+                                            "(on by default with the impact law)")
     default.add_argument("--t-end", type=float, help="simulated time [s] (default 0.1)")
     default.add_argument("--dt", type=float, help="time step [s] (default 1e-5)")
     run.set_defaults(func=cmd_run)

@@ -22,7 +22,9 @@ The job, for a scene (:class:`ffrmbs_app.scene.Scene`) built fresh by ``make_sce
 3. the accuracy: the same scene once more at Δt/2 (``check``); max |x(Δt) − x(Δt/2)| over
    every output estimates the time-discretization error (the error of the Δt/2 run is
    about half of it for a first-order scheme across impacts), reported in the output's
-   unit and relative to its range over the run (:func:`error_estimate`);
+   unit and relative to its range over the run (:func:`error_estimate`); likewise each
+   of the scene's ``variants`` (e.g. twice the modes, another mesh) estimates the part of
+   the error its modelling choice makes;
 4. the summary (in the file's ``summary`` attribute and printed): steps, wall and CPU
    seconds, µs per step; energy at start and end; for Moreau runs the contact intervals,
    the largest penetration and the energy balance E(end) − E(0) − W of the impulses
@@ -156,6 +158,11 @@ def _run(make_scene, scene, path, check, resume, checkpoint_every, flush_every, 
     if check:
         half = _simulate(make_scene(), dt=0.5 * scene.dt)
         summary["error_estimate"] = {name: error_estimate(res[name], half[name], units[name]) for name in res.outputs}
+        summary["error_parts"] = {}
+        for label, (what, make) in scene.variants.items():
+            other = _simulate(make())
+            summary["error_parts"][label] = {"against": what, "outputs": {
+                name: error_estimate(res[name], other[name], units[name]) for name in res.outputs}}
     recorder.write_summary(summary)
     _report(summary, log)
     if plot:
@@ -237,5 +244,8 @@ def _report(s, log):
         est = ", ".join(_estimate_text(name, e) for name, e in s["error_estimate"].items())
         log(f"accuracy (time step: max |run(dt) - run(dt/2)| per output, absolute and relative to the output's "
             f"range over the run): {est}")
+    for label, part in s.get("error_parts", {}).items():
+        est = ", ".join(_estimate_text(name, e) for name, e in part["outputs"].items())
+        log(f"accuracy ({label}: max |run - run with {part['against']}|): {est}")
     log(f"cost: {s['timed_steps']} steps in {s['wall_s']:.2f} s wall ({s['cpu_s']:.2f} s CPU), "
         f"{s['us_per_step']:.0f} µs per step" + (f" (resumed: {s['steps']} steps in all)" if "note" in s else ""))

@@ -49,7 +49,10 @@ class Scene:
     scene was built from (the result file records their SHA-256); description: one line
     for logs; warmup: (t_end, dt) [s] of a short run made first so that the numba kernels
     are compiled (or loaded from numba's cache) outside the timed run, or None; units:
-    {output name: unit} written with the outputs and on plot axes (:meth:`output_units`).
+    {output name: unit} written with the outputs and on plot axes (:meth:`output_units`);
+    variants: {label: (what, make)} — scenes that differ in one modelling choice (e.g.
+    "modal truncation": (f"{2n} modes", a maker of the scene with twice the modes)),
+    each run once more by the job's accuracy check to estimate that part of the error.
     """
 
     system: object
@@ -67,6 +70,7 @@ class Scene:
     description: str = ""
     warmup: tuple | None = None
     units: dict = field(default_factory=dict)
+    variants: dict = field(default_factory=dict)
 
     def __post_init__(self):
         fault = name_fault(self.name)

@@ -94,7 +94,7 @@ def contours(model, data, dt):
 def detect(model, data, dt):
     """Stage 4: locate the live contacts; closed flags, the closed set-valued contacts
     (``closed_idx``, ``n_closed``, ``m`` rows with the joints) and the largest
-    penetration max(0, −g_N) [m]."""
+    penetration max(0, −g_N) [m] (−g_N − δ of a compliant contact: its effective gap)."""
     n_closed = 0
     last = data.last
     m = model.n_c
@@ -115,6 +115,8 @@ def detect(model, data, dt):
                 m += model.dims[i]
             if model.unilateral[i]:
                 pen = -c.kinematics.g_N
+                if model.residual is not None and model.residual.compliant[i] and data.warm[i]:
+                    pen -= data.comp_delta[model.lam_at[i]]         # the effective gap g_N + δ
                 if pen > last[1]:
                     last[1] = pen
     data.n_closed, data.m = n_closed, m

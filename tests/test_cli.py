@@ -170,7 +170,8 @@ def test_main_job_runs_the_point_mass_on_the_beam(tmp_path):
     res = ffrmbs("run", "--out", str(tmp_path / "out"))
     assert res.returncode == 0, res.stderr
     text = res.stdout
-    for key in ("contact: closed in", "maximum penetration", "energy: initial 0.01 J", "accuracy", "cost:"):
+    for key in ("contact: closed in", "maximum penetration", "energy: initial 0.01 J", "accuracy (time step",
+                "accuracy (modal truncation: max |run - run with 40 modes|)", "cost:"):
         assert key in text
     with h5py.File(tmp_path / "out" / "point_mass_beam.h5") as f:
         t, y, vy = f["t"][()], f["outputs/y"][()], f["outputs/vy"][()]
@@ -183,7 +184,9 @@ def test_main_job_runs_the_point_mass_on_the_beam(tmp_path):
     assert np.allclose(y[before], 0.052 - 0.2 * t[before], atol=1e-12) and np.all(vy[before] == -0.2)
     e = summary["energy_J"]
     assert e["initial"] == pytest.approx(0.5 * 0.5 * 0.2 ** 2) and abs(e["residual"]) < 1e-3 * e["initial"]
-    assert e["impulse_work"] < 0 and 0 < summary["max_penetration_m"] <= 0.2 * 1e-5
+    # e = 0 on the contour's residual flexibility: the spring stores and returns the energy of
+    # the impact, so the impulses do almost no net work (O((ω Δt)²) per contact phase)
+    assert abs(e["impulse_work"]) < 1e-4 * e["initial"] and 0 < summary["max_penetration_m"] <= 0.2 * 1e-5
     assert (tmp_path / "out" / "point_mass_beam.png").stat().st_size > 10_000
     pvd = tmp_path / "out" / "point_mass_beam-paraview" / "point_mass_beam.pvd"
     assert pvd.is_file() and pvd.read_text().count("<DataSet") >= 1001
