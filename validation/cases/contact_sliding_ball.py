@@ -17,7 +17,8 @@ Every row's config says ``"residual_flexibility": "on"`` or ``"off"``; only chec
 run both: 1 and 2 have no contact, and 4 checks the contour's smoothness at its knots,
 which the correction leaves alone (it adds no geometry; its C(η) = N(η)ᵀ G_P N(η) is as
 smooth as the contour's basis). The first run in a fresh cache pays the
-projection of the beam's static flexibility on the axis (cached in the scene cache).
+projection of the beam's static flexibility on the axis (≈ 2 s CPU; then cached in the
+scene cache, so the rows' CPU seconds leave it out).
 
 Checks (rows: error against CPU seconds of the simulation):
 
