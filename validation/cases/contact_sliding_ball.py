@@ -227,7 +227,7 @@ def _frequency_rows(result):
     for k in range(4):
         err = omega[k] / ref[k] - 1
         result.rows.append(make_row(NAME, {"check": "mesh", "mode": k + 1, "mesh": "tet10 30x1x1",
-                                                "residual_flexibility": "off"}, cpu, err,
+                                           "residual_flexibility": "off"}, cpu, err,
                                     "rel. y-bending frequency", f"Euler-Bernoulli ({ref[k]:.3f} rad/s)",
                                     value=omega[k]))
         table.append(f"| {k + 1} | {omega[k]:.4f} | {ref[k]:.4f} | {err:+.3%} |")
