@@ -52,7 +52,7 @@ from ffrmbs.errors import ModelError
 from mbs import FlexibleBodyFFR, Force, PointMass, PrescribedFrameMotion, System
 from mbs.moving_force import MovingContourForce
 
-from .cache import cached_body
+from .cache import cache_dir, cached_body
 
 LENGTH, HEIGHT, WIDTH = 1.5, 0.05, 0.05           # [m] along x, y, z
 DENSITY, YOUNG, POISSON = 920.0, 5e7, 0.3         # [kg/m³], [Pa], [-]
@@ -103,12 +103,17 @@ def bending_modes(data, direction=1):
     return idx, np.sqrt(data.eigenvalues[idx])
 
 
-def _beam(system, data, modes, degree):
+def _beam(system, data, modes, degree, residual_flexibility=False):
     n = data.n_modes if modes == "all" else int(modes)
     beam = system.add(FlexibleBodyFFR(data, modes=n, frame=PrescribedFrameMotion.fixed(), name="beam"))
-    axis = Contour1sNeutralFFR.along_line(beam, AXIS, (1, 0, 0), normal=(0, 1, 0), degree=degree,
-                                          name="neutral axis")
-    return beam, axis
+    return beam, _axis(beam, degree, residual_flexibility)
+
+
+def _axis(beam, degree, residual_flexibility):
+    """The degree-``degree`` neutral contour through the centre-axis nodes, with the
+    dropped modes' static compliance when ``residual_flexibility``."""
+    return Contour1sNeutralFFR.along_line(beam, AXIS, (1, 0, 0), normal=(0, 1, 0), degree=degree,
+                                          name="neutral axis", residual_flexibility=residual_flexibility)
 
 
 def eta_at(axis, x) -> float:
@@ -147,36 +152,45 @@ class Scene:
         return self.beam.data.u0[self.axis.nodes, 0]
 
 
-def build(modes=20, start=BALL_START, velocity=BALL_VELOCITY, degree=DEGREE, data=None) -> Scene:
+def build(modes=20, start=BALL_START, velocity=BALL_VELOCITY, degree=DEGREE, data=None,
+          residual_flexibility=False) -> Scene:
     """The sliding ball (module docstring) with ``modes`` (int or "all") clamped modes and
-    a degree-``degree`` axis contour; ``data`` the body data (default: cached)."""
+    a degree-``degree`` axis contour; ``data`` the body data (default: cached);
+    ``residual_flexibility``: the axis carries the dropped modes' static compliance
+    (:mod:`contours.residual`), so the constraint holding the ball acts through it — a
+    massless spring in series in its rows [n, t2] (:mod:`mbs.residual_contact`; the
+    System caches the compliance in the scene cache)."""
     data = default_beam_data() if data is None else data
     system = System()
-    beam, axis = _beam(system, data, modes, degree)
+    system.cache_dir = cache_dir()
+    beam, axis = _beam(system, data, modes, degree, residual_flexibility)
     ball = system.add(PointMass(BALL_MASS, position=start, velocity=velocity, name="ball"))
     constraint = system.add(CurveConstraint(PointOnCurveConstraint(PointContour(ball.point), axis),
                                             name="ball on axis"))
     return Scene(system, beam, ball, axis, constraint)
 
 
-def build_bent(tip_force, speed, x_start=0.1, modes=20, degree=DEGREE, data=None) -> Scene:
+def build_bent(tip_force, speed, x_start=0.1, modes=20, degree=DEGREE, data=None,
+               residual_flexibility=False) -> Scene:
     """The knot-crossing variant: the beam held bent in static equilibrium by a constant
     tip force ``tip_force`` [N] along +y at the tip axis node (initial elastic coordinates
     q_f = K_ff⁻¹ Φ_tipᵀ F, at rest), the ball put on the bent axis at x_start [m] with the
     speed ``speed`` [m/s] along the axis tangent. On a C² axis the ball then feels only
     the smooth centripetal force m v² κ (κ(x) = F (L − x)/(EI) in Euler–Bernoulli theory)
     and the beam's smooth reaction to it; a kink of the contour at a node (degree 1)
-    gives a velocity jump ≈ v · (change of slope) each time the ball crosses one."""
+    gives a velocity jump ≈ v · (change of slope) each time the ball crosses one.
+    ``residual_flexibility`` as in :func:`build` (the tip force acts on a node, not
+    through the axis, so only the ball's constraint sees the compliance)."""
     data = default_beam_data() if data is None else data
     system = System()
+    system.cache_dir = cache_dir()
     n = data.n_modes if modes == "all" else int(modes)
     beam = FlexibleBodyFFR(data, modes=n, frame=PrescribedFrameMotion.fixed(), name="beam")
     tip = data.node_at((LENGTH, AXIS[1], AXIS[2]))
     q_f = np.linalg.solve(beam.K_ff, beam.phi_nodes[tip][1] * float(tip_force))
     beam.set_initial(q_f=q_f)
     system.add(beam)
-    axis = Contour1sNeutralFFR.along_line(beam, AXIS, (1, 0, 0), normal=(0, 1, 0), degree=degree,
-                                          name="neutral axis")
+    axis = _axis(beam, degree, residual_flexibility)
     system.add(Force(beam.node(tip), (0.0, float(tip_force), 0.0)))
     p = axis.evaluate(axis.new_point(), eta_at(axis, x_start))
     ball = system.add(PointMass(BALL_MASS, position=p.r.copy(), velocity=speed * p.t1, name="ball"))
