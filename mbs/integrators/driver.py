@@ -27,6 +27,7 @@ from .. import state_arrays
 from .._kernels import finite_sum
 from ..model import Data, compile_model
 from ..probes import FramePosition, probe
+from ..residual_contact import spring_energy
 from ..result import Result
 from ..step_failure import StepFailure
 from ..validity import SpinMonitor
@@ -146,6 +147,11 @@ class Integrator:
         self.plan = plan
         self.model = compile_model(self.system, plan, **self.model_options())
         self.data = Data(self.model)
+
+    def spring_energy(self) -> float:
+        """½ Σ Fᵀδ [J] of the compliant contacts' springs (:mod:`mbs.residual_contact`),
+        part of the potential energy recorded with ``energies``."""
+        return spring_energy(self.model, self.data)
 
     def collect(self, prefix, arrays: dict, kinds: dict) -> None:
         """The integrator's own run state (its ``run_state``) under ``prefix/…``."""
@@ -367,7 +373,7 @@ class Integrator:
             for key in ("kinetic", "potential"):
                 res.energy.setdefault(key, np.full(n, np.nan))
             res.energy["kinetic"][i] = sys.kinetic_energy(self.t, q, u)
-            res.energy["potential"][i] = sys.potential_energy(self.t, q)
+            res.energy["potential"][i] = sys.potential_energy(self.t, q) + self.spring_energy()
         if st.energies and not math.isfinite(res.energy["kinetic"][i] + res.energy["potential"][i]):
             raise non_finite(self.t, self.steps, "energy")
         if st.contacts:

@@ -138,6 +138,7 @@ class MoreauTimeStepping(Integrator):
             if energy is None:
                 sys = self.system
                 energy = sys.kinetic_energy(data.t, data.q, data.u) + sys.potential_energy(data.t, data.q)
+            energy += self.spring_energy()                   # compliant contacts' springs (contact.compliance)
             if not math.isfinite(energy):
                 raise non_finite(self.t, self.steps, "energy")
             for key, value in zip(TRACE_KEYS, (self.t, h, *last, energy)):

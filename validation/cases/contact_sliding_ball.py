@@ -50,8 +50,8 @@ Checks (rows: error against CPU seconds of the simulation):
      quasi-stationary frequency applies (it changes by 0.7 % between x = 0.75 and 0.8 m);
    - *energy drift*: max_k |E_k − E_1| / E_vib with E = beam kinetic + elastic + ball
      kinetic energy + the residual spring's ½ Fᵀδ (:func:`mbs.residual_contact.spring_energy`,
-     sampled from the integrator's state at each output by :class:`SpringEnergy`; zero
-     without the correction), E_1 after the first step (the first step projects the ball's
+     part of the potential energy the run records; zero without the correction; its
+     largest share is sampled by :class:`SpringEnergy`), E_1 after the first step (the first step projects the ball's
      −0.002 m/s normal velocity inelastically onto the beam) and E_vib = E_1 − ½ m
      v_x,1² the energy of the vibration (the ball's ½ m v_x² dominates E and is nearly
      constant). No gravity, no damping: the exact E is constant (with the correction up to
@@ -312,7 +312,7 @@ def _ball_rows(result, quick, data, figure_data):
         w_ref = point_mass_frequency(x_mean)
         result.rows.append(make_row(NAME, config, cpu, w_fit / w_ref - 1, "ball y frequency, rel.",
                                     f"EB cantilever + 1 kg at x={x_mean:.4f} m ({w_ref:.4f} rad/s)", value=w_fit))
-        E = res.total_energy() + spring.values
+        E = res.total_energy()                              # the spring's ½ Fᵀδ included
         E_vib = E[1] - 0.5 * sb.BALL_MASS * res["vx"][1] ** 2
         drift = np.abs(E[1:] - E[1]).max() / E_vib
         spring_share = spring.values.max() / E_vib
@@ -348,8 +348,8 @@ def _ball_rows(result, quick, data, figure_data):
         "projection excites (θ = 0.5 keeps them ringing); the knot check below isolates knot impulses. "
         "max |g|: the constraint drift, ≈ Δt/2 · 0.002 m/s from the first step; with residual flexibility "
         "the ball is held δ = C F off the modal axis by design (the spring's deflection), and |g| includes δ. "
-        "Energy: kinetic + elastic + the spring's ½ Fᵀδ (recorded from the integrator's state at each "
-        "output, SpringEnergy); max spring energy / E_vib says how much of it the spring holds.\n\n"
+        "Energy: kinetic + elastic + the spring's ½ Fᵀδ (part of the recorded potential energy); max spring "
+        "energy / E_vib (sampled at each output, SpringEnergy) says how much of it the spring holds.\n\n"
         + "\n".join(table))
 
 
