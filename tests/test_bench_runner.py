@@ -17,11 +17,11 @@ SUMMARY_KEYS = {"module", "status", "wall_s", "verdicts"}
 
 @pytest.fixture
 def tiny_point_mass_beam(monkeypatch, tmp_path):
-    """The point-mass benchmark at its smallest (two coarse meshes, 11 ms, 3 mode rows), its
+    """The point-mass benchmark at its smallest (two coarse meshes, 11 ms, 4 mode rows), its
     body data cached under tmp_path."""
     monkeypatch.setenv("FFRMBS_CACHE", str(tmp_path / "cache"))
-    monkeypatch.setattr(pmb_bench, "MODE_CONFIGS", [(10, "2s", "moreau"), (20, "2s", "moreau"),
-                                                    (20, "2s", "moreau-adaptive")])
+    monkeypatch.setattr(pmb_bench, "MODE_CONFIGS", [(10, "2s", "moreau", False), (20, "2s", "moreau", False),
+                                                    (20, "2s", "moreau", True), (20, "2s", "moreau-adaptive", False)])
     monkeypatch.setattr(pmb_bench, "QUICK", {"repeats": 1, "node_repeats": 1, "t_end": 0.011, "node_t_end": 0.011,
                                              "divisions": ((10, 4, 4), (12, 4, 4))})
 
