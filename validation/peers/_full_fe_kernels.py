@@ -164,7 +164,7 @@ def forces(dt, k, m_p, indptr, indices, data, inv_m3, X, faces, tol, u, v, xp, v
     it acts as λ n on the mass and −N_a λ n on the face nodes.
 
     ``work`` (30,) is scratch for the projection (:func:`_unpack`); after the call its
-    N and normal are those of the contact. Returns (λ [N], g_n [m], face index or −1).
+    N and normal are those of the contact. Returns (λ [N], g_n [m]; inf off the faces).
     """
     csr_matvec(indptr, indices, data, u, f)
     for i in range(a.shape[0]):
@@ -174,7 +174,7 @@ def forces(dt, k, m_p, indptr, indices, data, inv_m3, X, faces, tol, u, v, xp, v
     N, dN, x, tangents, normal = _unpack(work)
     face, _, _, gap = project_on_faces(xp, X, u, faces, tol, N, dN, x, tangents, normal)
     if face < 0:
-        return 0.0, gap, face
+        return 0.0, gap
     w = 1.0 / m_p
     gd = 0.0
     for d in range(3):
@@ -186,7 +186,7 @@ def forces(dt, k, m_p, indptr, indices, data, inv_m3, X, faces, tol, u, v, xp, v
             gd -= N[b] * normal[d] * (v[3 * j + d] + dt * a[3 * j + d])
     g_pred = gap + dt * gd
     if g_pred >= 0.0:
-        return 0.0, gap, face
+        return 0.0, gap
     lam = -k * g_pred / (1.0 + k * dt * dt * w)
     for d in range(3):
         ap[d] = lam * normal[d] / m_p
@@ -194,7 +194,7 @@ def forces(dt, k, m_p, indptr, indices, data, inv_m3, X, faces, tol, u, v, xp, v
         j = faces[face, b]
         for d in range(3):
             a[3 * j + d] -= inv_m3[3 * j + d] * N[b] * lam * normal[d]
-    return lam, gap, face
+    return lam, gap
 
 
 @njit(cache=True)
@@ -214,8 +214,8 @@ def advance(n_steps, dt, k, m_p, indptr, indices, data, inv_m3, X, faces, tol, u
         a_{n+1} = :func:`forces` at (u_{n+1}, v_{n+1/2}, ...).
 
     On entry and exit u, xp hold step n, v, vp step n − 1/2 and a, ap, f the forces of
-    step n. ``track`` (5,) is updated with the per-step extremes and the last contact:
-    [min xp_y [m], max |u[node_dof]| [m], min g_n [m], last λ [N], last g_n [m]].
+    step n. ``track`` (4,) is updated with the per-step extremes and the last gap:
+    [min xp_y [m], max |u[node_dof]| [m], min g_n [m], last g_n [m]].
     """
     for _ in range(n_steps):
         for i in range(u.shape[0]):
@@ -224,10 +224,8 @@ def advance(n_steps, dt, k, m_p, indptr, indices, data, inv_m3, X, faces, tol, u
         for d in range(3):
             vp[d] += dt * ap[d]
             xp[d] += dt * vp[d]
-        lam, gap, _ = forces(dt, k, m_p, indptr, indices, data, inv_m3, X, faces, tol, u, v, xp, vp, f, a, ap,
-                             work)
+        gap = forces(dt, k, m_p, indptr, indices, data, inv_m3, X, faces, tol, u, v, xp, vp, f, a, ap, work)[1]
         track[0] = min(track[0], xp[1])
         track[1] = max(track[1], abs(u[node_dof]))
         track[2] = min(track[2], gap)
-        track[3] = lam
-        track[4] = gap
+        track[3] = gap
