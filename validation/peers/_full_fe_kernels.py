@@ -1,5 +1,5 @@
 """numba kernels of the full-FE contact peer (:mod:`validation.peers.full_fe_contact`):
-the sparse internal force, the point-to-face projection, and blocks of explicit steps with
+the sparse internal force, the projection of a point on the faces, and blocks of explicit steps with
 the semi-implicit penalty contact. Allocation-free; plain-numpy references of each are
 written out in ``tests/test_full_fe_contact.py`` and compared there.
 
@@ -13,8 +13,11 @@ corners c0, c1, c2 at (ξ, η) = (0, 0), (1, 0), (0, 1), then the mid-edge nodes
 (c0, c1), (c1, c2), (c2, c0)); with L0 = 1 − ξ − η, L1 = ξ, L2 = η:
 
     N = (L0 (2 L0 − 1), L1 (2 L1 − 1), L2 (2 L2 − 1), 4 L0 L1, 4 L1 L2, 4 L2 L0),
-    x(ξ, η) = Σ_a N_a (X_a + u_a),   n = x_ξ × x_η / |x_ξ × x_η|   (outward: faces are
-    counter-clockwise seen from outside).
+    x(ξ, η) = Σ_a N_a (X_a + u_a).
+
+The faces of one contact surface are coplanar at rest; ``axes`` (2, 3) are orthonormal
+axes of that plane, ordered so that n0 = axes[0] × axes[1] is its outward normal (for the
+beam's top face (e_z, e_x), n0 = e_y).
 """
 
 from __future__ import annotations
@@ -24,7 +27,7 @@ import math
 import numpy as np
 from numba import njit
 
-NEWTON_ITERATIONS = 30      # Gauss–Newton iterations of the projection (converges in 2–4)
+NEWTON_ITERATIONS = 30      # Newton iterations of the projection (converges in 2–4)
 NEWTON_TOL = 1e-14          # stop when the step |Δ(ξ, η)| falls below this
 
 
@@ -74,22 +77,25 @@ def _face_point(X, u, face, N, dN, x, tangents):
 
 
 @njit(cache=True)
-def _newton(xp, X, u, face, xi, eta, N, dN, x, tangents):
-    """Closest point of ``xp`` on the deformed quadratic face: Gauss–Newton on
-    ½ |x(ξ, η) − xp|², (JᵀJ) Δ = −Jᵀ (x − xp) with J = (x_ξ, x_η), from (ξ, η)."""
+def _newton(xp, X, u, face, axes, xi, eta, N, dN, x, tangents):
+    """(ξ, η) where the ray through ``xp`` along the faces' reference normal meets the
+    deformed quadratic face: Newton on the two in-plane conditions
+    F = A (x(ξ, η) − xp) = 0, A = ``axes`` (2, 3) (orthonormal, spanning the faces'
+    reference plane), J = A (x_ξ, x_η), J Δ = −F, from (ξ, η)."""
     for _ in range(NEWTON_ITERATIONS):
         tri6_shape(xi, eta, N, dN)
         _face_point(X, u, face, N, dN, x, tangents)
-        a = b = c = r0 = r1 = 0.0
+        j00 = j01 = j10 = j11 = f0 = f1 = 0.0
         for d in range(3):
-            a += tangents[0, d] * tangents[0, d]
-            b += tangents[0, d] * tangents[1, d]
-            c += tangents[1, d] * tangents[1, d]
-            r0 += tangents[0, d] * (x[d] - xp[d])
-            r1 += tangents[1, d] * (x[d] - xp[d])
-        det = a * c - b * b
-        dxi = -(c * r0 - b * r1) / det
-        deta = -(a * r1 - b * r0) / det
+            j00 += axes[0, d] * tangents[0, d]
+            j01 += axes[0, d] * tangents[1, d]
+            j10 += axes[1, d] * tangents[0, d]
+            j11 += axes[1, d] * tangents[1, d]
+            f0 += axes[0, d] * (x[d] - xp[d])
+            f1 += axes[1, d] * (x[d] - xp[d])
+        det = j00 * j11 - j01 * j10
+        dxi = -(j11 * f0 - j01 * f1) / det
+        deta = -(j00 * f1 - j10 * f0) / det
         xi += dxi
         eta += deta
         if math.sqrt(dxi * dxi + deta * deta) < NEWTON_TOL:
@@ -98,36 +104,38 @@ def _newton(xp, X, u, face, xi, eta, N, dN, x, tangents):
 
 
 @njit(cache=True)
-def project_on_faces(xp, X, u, faces, tol, N, dN, x, tangents, normal):
-    """Project the point ``xp`` (3,) [m] onto the deformed quadratic faces ``faces`` (T, 6).
+def project_on_faces(xp, X, u, faces, axes, tol, N, dN, x, tangents, normal):
+    """Project the point ``xp`` (3,) [m] onto the deformed quadratic faces ``faces`` (T, 6)
+    along their reference normal n0 = axes[0] × axes[1] (module docstring).
 
-    Candidates: faces whose flat corner triangle contains the point's projection on its
-    plane up to ``tol`` in barycentric units (max(−s, −t, s + t − 1) ≤ tol). On each,
-    :func:`_newton` from the flat (s, t); the face whose closest point lies least outside
-    its triangle wins (first on ties: a point on a shared edge has the same x on both).
-    Returns (face index, ξ, η, gap g = n·(xp − x(ξ, η)) [m]) and fills N (6,), the
-    outward unit ``normal`` (3,) and ``x`` (3,); face index −1 (and g = inf) when no face
-    has the point within ``tol`` of its triangle (off the faces' footprint).
+    Candidates: faces whose deformed corner triangle, seen along the ray, contains xp up
+    to ``tol`` in barycentric units (max(−s, −t, s + t − 1) ≤ tol). On each,
+    :func:`_newton` from the flat (s, t); the face whose point lies least outside its
+    triangle wins (first on ties: on a shared edge both faces give the same x, the
+    surface being C0). Returns (face index, ξ, η, gap g = n0·(xp − x(ξ, η)) [m]) and
+    fills N (6,), x (3,) and ``normal`` = n0 (3,); face index −1 (and g = inf) when no
+    face has the point within ``tol`` of its triangle (off the faces' footprint).
     """
     best, best_out, best_xi, best_eta = -1, np.inf, 0.0, 0.0
     for f in range(faces.shape[0]):
         c0, c1, c2 = faces[f, 0], faces[f, 1], faces[f, 2]
-        a = b = c = r0 = r1 = 0.0
+        a00 = a01 = a10 = a11 = r0 = r1 = 0.0
         for d in range(3):
             p0 = X[c0, d] + u[3 * c0 + d]
             e1 = X[c1, d] + u[3 * c1 + d] - p0
             e2 = X[c2, d] + u[3 * c2 + d] - p0
-            a += e1 * e1
-            b += e1 * e2
-            c += e2 * e2
-            r0 += e1 * (xp[d] - p0)
-            r1 += e2 * (xp[d] - p0)
-        det = a * c - b * b
-        s = (c * r0 - b * r1) / det
-        t = (a * r1 - b * r0) / det
+            a00 += axes[0, d] * e1
+            a01 += axes[0, d] * e2
+            a10 += axes[1, d] * e1
+            a11 += axes[1, d] * e2
+            r0 += axes[0, d] * (xp[d] - p0)
+            r1 += axes[1, d] * (xp[d] - p0)
+        det = a00 * a11 - a01 * a10
+        s = (a11 * r0 - a01 * r1) / det
+        t = (a00 * r1 - a10 * r0) / det
         if max(-s, -t, s + t - 1.0) > tol:
             continue
-        xi, eta = _newton(xp, X, u, faces[f], s, t, N, dN, x, tangents)
+        xi, eta = _newton(xp, X, u, faces[f], axes, s, t, N, dN, x, tangents)
         outside = max(-xi, -eta, xi + eta - 1.0)
         if outside < best_out:
             best, best_out, best_xi, best_eta = f, outside, xi, eta
@@ -135,19 +143,17 @@ def project_on_faces(xp, X, u, faces, tol, N, dN, x, tangents, normal):
         return -1, 0.0, 0.0, np.inf
     tri6_shape(best_xi, best_eta, N, dN)
     _face_point(X, u, faces[best], N, dN, x, tangents)
-    normal[0] = tangents[0, 1] * tangents[1, 2] - tangents[0, 2] * tangents[1, 1]
-    normal[1] = tangents[0, 2] * tangents[1, 0] - tangents[0, 0] * tangents[1, 2]
-    normal[2] = tangents[0, 0] * tangents[1, 1] - tangents[0, 1] * tangents[1, 0]
-    length = math.sqrt(normal[0] ** 2 + normal[1] ** 2 + normal[2] ** 2)
+    normal[0] = axes[0, 1] * axes[1, 2] - axes[0, 2] * axes[1, 1]
+    normal[1] = axes[0, 2] * axes[1, 0] - axes[0, 0] * axes[1, 2]
+    normal[2] = axes[0, 0] * axes[1, 1] - axes[0, 1] * axes[1, 0]
     gap = 0.0
     for d in range(3):
-        normal[d] /= length
         gap += normal[d] * (xp[d] - x[d])
     return best, best_xi, best_eta, gap
 
 
 @njit(cache=True)
-def forces(dt, k, m_p, indptr, indices, data, inv_m3, X, faces, tol, u, v, xp, vp, f, a, ap, work):
+def forces(dt, k, m_p, indptr, indices, data, inv_m3, X, faces, axes, tol, u, v, xp, vp, f, a, ap, work):
     """Accelerations at step n: ``a`` (3N,) [m/s²] of the mesh, ``ap`` (3,) of the point
     mass, from the state (u_n, v_{n−1/2}, xp_n, vp_{n−1/2}); ``f`` (3N,) receives K u_n [N].
 
@@ -172,7 +178,7 @@ def forces(dt, k, m_p, indptr, indices, data, inv_m3, X, faces, tol, u, v, xp, v
     for d in range(3):
         ap[d] = 0.0
     N, dN, x, tangents, normal = _unpack(work)
-    face, _, _, gap = project_on_faces(xp, X, u, faces, tol, N, dN, x, tangents, normal)
+    face, _, _, gap = project_on_faces(xp, X, u, faces, axes, tol, N, dN, x, tangents, normal)
     if face < 0:
         return 0.0, gap
     w = 1.0 / m_p
@@ -206,7 +212,7 @@ def _unpack(work):
 
 
 @njit(cache=True)
-def advance(n_steps, dt, k, m_p, indptr, indices, data, inv_m3, X, faces, tol, u, v, a, xp, vp, ap, f,
+def advance(n_steps, dt, k, m_p, indptr, indices, data, inv_m3, X, faces, axes, tol, u, v, a, xp, vp, ap, f,
             work, node_dof, track):
     """``n_steps`` central-difference steps (leapfrog) of mesh and point mass, in place:
 
@@ -224,7 +230,8 @@ def advance(n_steps, dt, k, m_p, indptr, indices, data, inv_m3, X, faces, tol, u
         for d in range(3):
             vp[d] += dt * ap[d]
             xp[d] += dt * vp[d]
-        gap = forces(dt, k, m_p, indptr, indices, data, inv_m3, X, faces, tol, u, v, xp, vp, f, a, ap, work)[1]
+        gap = forces(dt, k, m_p, indptr, indices, data, inv_m3, X, faces, axes, tol, u, v, xp, vp, f, a, ap,
+                     work)[1]
         track[0] = min(track[0], xp[1])
         track[1] = max(track[1], abs(u[node_dof]))
         track[2] = min(track[2], gap)
