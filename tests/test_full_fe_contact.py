@@ -56,13 +56,11 @@ def free_vibration(model):
 
 
 def test_central_differences_keep_the_energy_of_a_free_vibration(free_vibration):
-    """Central differences conserve a modified energy; the energy read with the mean
-    half-step velocities oscillates by O((ω Δt)²) for the modes excited (a smooth static
-    deflection: mostly the low ones) and does not drift."""
+    """Central differences conserve E_n = ½ v_{n−1/2}ᵀ M v_{n+1/2} + ½ u_nᵀ K u_n exactly
+    (the peer's docstring): to rounding over 6000 steps (measured 3e-12)."""
     e = free_vibration.energy
     assert np.all(free_vibration.penalty == 0.0) and np.all(free_vibration.y == 1.0)
-    assert np.abs(e - e[0]).max() < 1e-4 * e[0]
-    assert abs(e[-200:].mean() - e[:200].mean()) < 1e-5 * e[0]
+    assert np.abs(e - e[0]).max() < 1e-10 * e[0]
 
 
 def test_free_vibration_has_the_first_bending_frequency_of_the_mesh(model, free_vibration):
