@@ -7,7 +7,8 @@
 - FE model: a structured tet4 mesh of 10 x 4 x 4 divisions (275 nodes, every face a
   node grid, a node at (250, 50, 25) mm: the thesis's "node 19"), all 750 clamped modes
   by a dense eigensolve, so the sweeps choose any number of modes and the reference
-  can take them all.
+  can take them all. ``default_beam_data(divisions=..., order=2)`` builds finer and tet10
+  meshes of the same beam (the meshes of the full-FE peer).
 - Point mass 0.5 kg at (235, 52, 25) mm (setup A, on the beam's middle plane z = 25 mm)
   or (235, 52, 40) mm (setup B), velocity (0, −0.2, 0) m/s; no gravity (thesis
   Sec. 5.2.1).
@@ -48,30 +49,38 @@ OUTPUT_UNITS = {"y": "m", "vy": "m/s", "node19": "m"}
 CONTACT = "impact"                                # the contact's name, whatever its law
 
 
-def recipe(divisions=DIVISIONS, modes="all") -> dict:
-    """The cache key of :func:`default_beam_data` (:func:`ffrmbs_app.scenes.cache.cached_body`)."""
-    return {"scene": "point_mass_beam", "size": [LENGTH, HEIGHT, WIDTH], "divisions": list(divisions),
-            "material": [DENSITY, YOUNG, POISSON], "clamp": "x0", "modes": modes, "version": 1}
+def recipe(divisions=DIVISIONS, modes="all", order=1) -> dict:
+    """The cache key of :func:`default_beam_data` (:func:`ffrmbs_app.scenes.cache.cached_body`);
+    ``"order": 2`` is in it only for tet10, so the tet4 beams keep the keys they always had."""
+    key = {"scene": "point_mass_beam", "size": [LENGTH, HEIGHT, WIDTH], "divisions": list(divisions),
+           "material": [DENSITY, YOUNG, POISSON], "clamp": "x0", "modes": modes, "version": 1}
+    if order == 2:
+        key["order"] = 2
+    return key
 
 
-def default_beam_data(log=None, divisions=DIVISIONS, modes="all"):
+def default_beam_data(log=None, divisions=DIVISIONS, modes="all", order=1):
     """The beam's body data, preprocessed once and cached
     (:func:`ffrmbs_app.scenes.cache.cached_body`).
 
-    Default: the 10 x 4 x 4 mesh with all its clamped modes (dense eigensolve).
+    Default: the 10 x 4 x 4 tet4 mesh with all its clamped modes (dense eigensolve).
     ``divisions`` (nx, ny, nz) meshes the same 250 x 50 x 50 mm beam more finely (nz
-    even, so that node 19 at z = 25 mm is a node); ``modes`` is "all" (dense, at most
-    6000 free DOFs) or the number of lowest clamped modes, found by the sparse
-    shift-invert solver (:func:`preprocess.build_body`) — the way for large meshes.
+    even, so that node 19 at z = 25 mm is a node); ``order`` 2 meshes it with tet10
+    (the mesh of the full-FE peer :mod:`validation.peers.full_fe_contact`, node for
+    node); ``modes`` is "all" (dense, at most 6000 free DOFs) or the number of lowest
+    clamped modes, found by the sparse shift-invert solver
+    (:func:`preprocess.build_body`) — the way for large meshes.
     """
-    params = recipe(tuple(divisions), modes)
+    if order not in (1, 2):
+        raise ModelError(f"order must be 1 (tet4) or 2 (tet10), not {order!r}")
+    params = recipe(tuple(divisions), modes, order)
 
     def build():
         from preprocess import Material, build_body
         from preprocess.geometry import box
         from preprocess.modes import all_modes
 
-        mesh = box(LENGTH, HEIGHT, WIDTH, None, order=1, divisions=tuple(divisions))
+        mesh = box(LENGTH, HEIGHT, WIDTH, None, order=order, divisions=tuple(divisions))
         material = Material(DENSITY, YOUNG, POISSON)
         if modes != "all":
             return build_body(mesh, material, n_modes=int(modes), clamp="x0", params=params)
