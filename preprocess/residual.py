@@ -88,14 +88,14 @@ class StaticFlexibility:
         f = np.asarray(forces, dtype=float).reshape(self.n_dof, -1)
         if self.clamped:
             u = np.zeros_like(f)
-            u[self.free] = self._lu.solve(np.ascontiguousarray(f[self.free]))
+            u[self.free] = self._lu.solve(np.asfortranarray(f[self.free]))
             return u
-        rhs = np.vstack([f, np.zeros((6, f.shape[1]))])
+        rhs = np.asfortranarray(np.vstack([f, np.zeros((6, f.shape[1]))]))
         return self._lu.solve(rhs)[:self.n_dof]
 
 
 #: load columns solved at once by :func:`projected_flexibility` (bounds its memory)
-CHUNK = 256
+CHUNK = 64
 
 
 def projected_flexibility(flexibility: StaticFlexibility, transfer) -> np.ndarray:
