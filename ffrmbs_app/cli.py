@@ -268,7 +268,7 @@ def build_parser():
                           f"{_percent(run_limits.MEMORY_SHARE)} of the physical memory (ffrmbs_app.limits)")
     default = run.add_argument_group("default scene")
     default.add_argument("--setup", choices=("A", "B"), help="initial position of the point mass (default A)")
-    default.add_argument("--modes", type=int, help="elastic modes of the beam (1..750, default 20)")
+    default.add_argument("--modes", type=int, help="elastic modes of the beam (1..40, default 20)")
     default.add_argument("--law", choices=("impact", "penalty"),
                          help="set-valued Newton impact (default) or linear penalty k = 1e7 N/m")
     default.add_argument("--e", type=float, help="coefficient of restitution of the impact law (default 0)")

@@ -1,6 +1,7 @@
 """The main job: the embedded default scene — the point mass dropped on the clamped
-flexible beam (thesis Sec. 5.2, setup A; :mod:`ffrmbs_app.scenes.point_mass_beam`) —
-run by ``ffrmbs run`` with no scene file, as a job of :mod:`ffrmbs_app.job`.
+flexible beam (thesis Sec. 5.2, setup A; :mod:`ffrmbs_app.scenes.point_mass_beam`) on
+its tet10 mesh of 12.5 mm (:data:`~ffrmbs_app.scenes.point_mass_beam.TET10`, 40 stored
+modes) — run by ``ffrmbs run`` with no scene file, as a job of :mod:`ffrmbs_app.job`.
 
 Moreau time-stepping (θ = 0.5: no numerical damping of the elastic forces), 1001
 output samples of the point mass's y position ``y`` [m] and velocity ``vy`` [m/s], node
@@ -10,9 +11,11 @@ output samples of the point mass's y position ``y`` [m] and velocity ``vy`` [m/s
 Written to ``out``: ``point_mass_beam.h5`` (the result file, :mod:`mbs.result_file`),
 ``point_mass_beam.png`` and ``point_mass_beam-paraview/``. The contour carries the
 residual flexibility of the modes left out (:mod:`contours.residual`; with the impact
-law). The job's accuracy check runs the scene at Δt/2 (time step) and with twice the
-modes (modal truncation); the validation case ``contact_point_mass_beam`` sweeps the
-modes against all 750.
+law). The job's accuracy check runs the scene at Δt/2 (time step), with twice the
+modes (modal truncation) and on the 25 mm tet10 mesh (mesh: the difference to a mesh
+twice as coarse, which overstates the error of this one); the validation cases
+``contact_point_mass_beam`` (modes against all of them) and ``contact_full_fe`` (against a
+full-FE run of each mesh) measure these parts independently.
 """
 
 from __future__ import annotations
@@ -67,13 +70,15 @@ class JobSettings:
             raise ModelError("default scene: " + "; ".join(faults))
 
 
-def default_scene(settings: JobSettings, data=None):
-    """The default scene as a :class:`~ffrmbs_app.scene.Scene` (``data``: the beam's body data,
-    preprocessed and cached on first use when None)."""
+def default_scene(settings: JobSettings, data=None, beam=None):
+    """The default scene as a :class:`~ffrmbs_app.scene.Scene` on ``beam`` (a
+    :class:`~ffrmbs_app.scenes.point_mass_beam.Beam`, default the main job's TET10);
+    ``data``: its body data, preprocessed and cached on first use when None."""
     from ffrmbs_app.scene import Scene
     from ffrmbs_app.scenes import point_mass_beam as pmb
 
-    data = pmb.default_beam_data() if data is None else data
+    beam = pmb.TET10 if beam is None else beam
+    data = beam.default_beam_data() if data is None else data
     if settings.modes > data.n_modes:
         raise ModelError(f"default scene: modes must be in 1..{data.n_modes} (the beam's modes), "
                          f"got {settings.modes}")
@@ -84,15 +89,20 @@ def default_scene(settings: JobSettings, data=None):
         f"thesis Sec. 5.2 setup {settings.setup}: point mass {pmb.MASS} kg at "
         f"({', '.join(f'{1e3 * x:g}' for x in pmb.SETUPS[settings.setup])}) mm, v = {pmb.VELOCITY} m/s, on the "
         f"{1e3 * pmb.LENGTH:g} x {1e3 * pmb.HEIGHT:g} x {1e3 * pmb.WIDTH:g} mm beam clamped at x = 0 "
-        f"(E = {pmb.YOUNG / 1e6:g} MPa, ρ = {pmb.DENSITY:g} kg/m³, ν = {pmb.POISSON}); {settings.modes} of "
+        f"(E = {pmb.YOUNG / 1e6:g} MPa, ρ = {pmb.DENSITY:g} kg/m³, ν = {pmb.POISSON}), "
+        f"{'tet10' if beam.order == 2 else 'tet4'} of {1e3 * beam.element_size:g} mm; {settings.modes} of "
         f"{data.n_modes} modes" + (" with residual flexibility" if residual else "")
         + f", {settings.contour} contour, law {settings.law}"
         + (f" (e = {settings.e})" if settings.law == "impact" else f" (k = {pmb.PENALTY_K:g} N/m)")
         + f"; Moreau, dt = {settings.dt:g} s, θ = {settings.theta}, {settings.t_end:g} s")
     variants = {}
     more = min(2 * settings.modes, data.n_modes)
-    if more > settings.modes:
+    if beam == pmb.TET10 and more > settings.modes:
         variants["modal truncation"] = (f"{more} modes", lambda: default_scene(replace(settings, modes=more), data))
+    if beam == pmb.TET10:
+        coarse = pmb.TET10_COARSE
+        variants["mesh"] = (f"the {1e3 * coarse.element_size:g} mm mesh",
+                            lambda: default_scene(settings, coarse.default_beam_data(), coarse))
     return Scene(built.system, settings.t_end, settings.dt, "moreau", {"theta": settings.theta},
                  n_out=settings.n_out, outputs=built.outputs(), energies=True, name="point_mass_beam",
                  description=description, warmup=(0.0125, 1e-4), units=dict(pmb.OUTPUT_UNITS), variants=variants)
@@ -106,6 +116,6 @@ def run_job(settings: JobSettings, out, log=print, resume=False, checkpoint_ever
     from ffrmbs_app.scenes import point_mass_beam as pmb
 
     settings.validate()
-    data = pmb.default_beam_data(log=log)
+    data = pmb.TET10.default_beam_data(log=log)
     return run_scene(lambda: default_scene(settings, data), out, check=settings.check, resume=resume,
                      checkpoint_every=checkpoint_every, export=export, log=log, no_limits=no_limits)

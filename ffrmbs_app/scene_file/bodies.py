@@ -20,7 +20,8 @@ from preprocess.bodyfiles import body_files
 from .schema import BODY, BODY_HEAD, BUILTIN, FIXED_FRAME_REFUSES, GROUND
 from .tables import Table, describe, is_int
 
-BUILTIN_BODIES = {"point_mass_beam": point_mass_beam, "sliding_ball": sliding_ball}
+BUILTIN_BODIES = {"point_mass_beam": point_mass_beam, "point_mass_beam_tet10": point_mass_beam.TET10,
+                  "sliding_ball": sliding_ball}
 
 
 @dataclass

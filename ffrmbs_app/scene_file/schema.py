@@ -87,8 +87,10 @@ other keys take the default shown.
 - "flexible": an FFR body (:class:`mbs.FlexibleBodyFFR`).
   ``source`` *req.* is a body directory (the thesis's text files, or ``body.h5``) or
   an ``.h5``/``.hdf5`` file. A relative path is taken from the scene file's
-  directory. ``"builtin:point_mass_beam"`` and ``"builtin:sliding_ball"`` are the
-  cached thesis beams of :mod:`ffrmbs_app.scenes`.
+  directory. ``"builtin:point_mass_beam"`` (tet4, 275 nodes, all 750 modes),
+  ``"builtin:point_mass_beam_tet10"`` (tet10 of 12.5 mm, 3321 nodes, 40 modes: the main
+  job's beam) and ``"builtin:sliding_ball"`` are the cached thesis beams of
+  :mod:`ffrmbs_app.scenes`.
   ``units`` ("si"): the unit system of text files (``"si-mm"``).
   ``modes``: a number n (the first n), a list of 0-based mode indices, or "all".
   Omitted, the body keeps all modes and the planner may drop some.
