@@ -148,7 +148,7 @@ def test_default_and_example_scene_name_and_mean_their_outputs_alike(default_run
     position would add (0.25, 0.05, 0.025) m)."""
     from ffrmbs_app.scenes import point_mass_beam as pmb
 
-    data = pmb.default_beam_data()
+    data = pmb.TET10.default_beam_data()                                  # the main job's beam
     j = data.node_at(pmb.NODE_19)
     phi_19 = data.phi[3 * j:3 * j + 3, :20]                               # the 20 modes both scenes keep
     for path in (default_run[0] / "point_mass_beam.h5", example_run / "point_mass_beam.h5"):

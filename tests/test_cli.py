@@ -185,8 +185,11 @@ def test_main_job_runs_the_point_mass_on_the_beam(tmp_path):
     e = summary["energy_J"]
     assert e["initial"] == pytest.approx(0.5 * 0.5 * 0.2 ** 2) and abs(e["residual"]) < 1e-3 * e["initial"]
     # e = 0 on the contour's residual flexibility: the spring stores and returns the energy of
-    # the impact, so the impulses do almost no net work (O((ω Δt)²) per contact phase)
-    assert abs(e["impulse_work"]) < 1e-4 * e["initial"] and 0 < summary["max_penetration_m"] <= 0.2 * 1e-5
+    # the impact, so the impulses do little net work: O((ω Δt)²) per contact phase, plus the
+    # ½ Fᵀ dC F a point sliding over the contour exchanges (contact.compliance; 1.6e-3 here)
+    # largest penetration of the effective gap g_N + δ: the closing step's 0.2 m/s · Δt, plus
+    # the change of δ between the step's start (δ_k) and its midpoint (g_N(q_m))
+    assert abs(e["impulse_work"]) < 1e-2 * e["initial"] and 0 < summary["max_penetration_m"] <= 1.5 * 0.2 * 1e-5
     assert (tmp_path / "out" / "point_mass_beam.png").stat().st_size > 10_000
     pvd = tmp_path / "out" / "point_mass_beam-paraview" / "point_mass_beam.pvd"
     assert pvd.is_file() and pvd.read_text().count("<DataSet") >= 1001
