@@ -233,9 +233,9 @@ def test_penalty_contact_agrees_with_ffrmbs_all_modes(model, ffrmbs_run):
     trapezoidal, phase error (ωΔt)²/12 ~ 1e-3 for the contact mode ω ≈ 950 rad/s) against
     central differences at 1.7e-5 s whose penalty carries the numerical damper kΔt/2 of
     the semi-implicit contact (module docstring; ~1 % of the energy lost over the impact at
-    k = 1e5). Measured: 0.34 % (v_y RMS / 0.2 m/s) and 0.27 % (node-19 RMS / peak), of
-    which the full FE's step makes 0.29 % / 0.21 % (at Δt/4 the difference is 0.09 % /
-    0.08 %: what is left of (a) and Moreau's step); tolerance 1 %."""
+    k = 1e5). Measured: 0.32 % (v_y RMS / 0.2 m/s) and 0.25 % (node-19 RMS / peak), of
+    which the full FE's step makes 0.29 % / 0.21 % (at Δt/4 the difference is 0.08 % /
+    0.07 %: what is left of (a) and Moreau's step); tolerance 1 %."""
     _, res = ffrmbs_run
     fe = ffe.run(model, pmb.SETUPS["A"], pmb.VELOCITY, k=K_SOFT, t_end=T_ORACLE, n_out=301)
     peak = np.abs(fe.node19).max()
