@@ -98,7 +98,8 @@ def smooth_displacement(model, scale=2e-3):
 
 
 def reference_projection(xp, X, u, faces):
-    """(face, ξ, η, gap y_p − y_face, N, x_face): on every face near xp, scipy's root of the ray
+    """(face, ξ, η, gap y_p − y_face, N, x_face, normal scaled to unit y): on every face near
+    xp, scipy's root of the ray
     condition (x(ξ, η) − xp)_{x, z} = 0 (x_face straight below or above xp), from the
     centroid; the face whose point is inside its triangle (smallest violation) wins.
     Faces whose centroid is more than 30 mm (an element) from xp in x-z are skipped."""
@@ -113,8 +114,10 @@ def reference_projection(xp, X, u, faces):
         if best is None or outside < best[0] - 1e-12:
             best = (outside, f, xi, eta)
     _, f, xi, eta = best
-    x = tri6(xi, eta) @ pos[faces[f]]
-    return f, xi, eta, xp[1] - x[1], tri6(xi, eta), x
+    P, h = pos[faces[f]], 1e-30                      # complex-step tangents: exact to rounding
+    m = np.cross((tri6(xi + 1j * h, eta) @ P).imag / h, (tri6(xi, eta + 1j * h) @ P).imag / h)
+    x = tri6(xi, eta) @ P
+    return f, xi, eta, xp[1] - x[1], tri6(xi, eta), x, m / m[1]
 
 
 def scratch():
@@ -133,18 +136,19 @@ def test_csr_matvec_equals_scipy(model):
                                 (0.2375, 0.05, 0.0125)])
 def test_projection_equals_scipy_root(model, xp):
     """The point of the deformed quadratic top face straight below (or above) xp: face,
-    (ξ, η), gap y_p − y_face, N and x_face against scipy, the normal e_y; on a shared edge
+    (ξ, η), gap y_p − y_face, N, x_face and the scaled normal against scipy; on a shared edge
     or a node (the first and last points) faces tie in x and gap."""
     xp = np.array(xp)
     u = smooth_displacement(model)
     N, dN, x, tang, normal = scratch()
     f, xi, eta, gap = kern.project_on_faces(xp, model.points, u, model.faces, ffe.TOP_AXES, ffe.FACE_TOL, N, dN, x,
                                             tang, normal)
-    rf, rxi, reta, rgap, rN, rx = reference_projection(xp, model.points, u, model.faces)
+    rf, rxi, reta, rgap, rN, rx, rm = reference_projection(xp, model.points, u, model.faces)
     assert abs(gap - rgap) < 1e-12 and np.allclose(x, rx, rtol=0, atol=1e-12)
-    assert np.array_equal(normal, [0.0, 1.0, 0.0])
+    assert normal[1] == pytest.approx(1.0, abs=1e-15)
     if f == rf:
         assert abs(xi - rxi) < 1e-9 and abs(eta - reta) < 1e-9 and np.allclose(N, rN, atol=1e-9)
+        assert np.allclose(normal, rm, rtol=0, atol=1e-9)
     assert np.allclose((xp - x)[[0, 2]], 0.0, atol=1e-14)                  # xp − x along the ray e_y
 
 
@@ -158,13 +162,12 @@ def reference_step_loop(model, xp, vp, k, dt, n_steps, m_p=pmb.MASS):
     def accelerations(u, v, xp, vp):
         a = -inv_m3 * (K @ u)
         ap = np.zeros(3)
-        f, _, _, gap, N, _ = reference_projection(xp, model.points, u, model.faces)
-        n = np.array([0.0, 1.0, 0.0])
+        f, _, _, gap, N, _, n = reference_projection(xp, model.points, u, model.faces)
         nodes = model.faces[f]
         dofs = (3 * nodes[:, None] + np.arange(3)).ravel()
         W = np.zeros(K.shape[0])
         W[dofs] = -(N[:, None] * n).ravel()
-        w = 1 / m_p + W @ (inv_m3 * W)
+        w = n @ n / m_p + W @ (inv_m3 * W)
         g_pred = gap + dt * (n @ vp + W @ (v + dt * a))
         lam = -k * g_pred / (1 + k * dt * dt * w) if g_pred < 0 else 0.0
         return a + inv_m3 * W * lam, ap + lam * n / m_p
@@ -230,9 +233,9 @@ def test_penalty_contact_agrees_with_ffrmbs_all_modes(model, ffrmbs_run):
     trapezoidal, phase error (ωΔt)²/12 ~ 1e-3 for the contact mode ω ≈ 950 rad/s) against
     central differences at 1.7e-5 s whose penalty carries the numerical damper kΔt/2 of
     the semi-implicit contact (module docstring; ~1 % of the energy lost over the impact at
-    k = 1e5). Measured: 0.34 % (v_y RMS / 0.2 m/s) and 0.27 % (node-19 RMS / peak), of
-    which the full FE's step makes 0.29 % / 0.21 % (at Δt/4 the difference is 0.09 % /
-    0.08 %: what is left of (a) and Moreau's step); tolerance 1 %."""
+    k = 1e5). Measured: 0.32 % (v_y RMS / 0.2 m/s) and 0.25 % (node-19 RMS / peak), of
+    which the full FE's step makes 0.29 % / 0.21 % (at Δt/4 the difference is 0.08 % /
+    0.07 %: what is left of (a) and Moreau's step); tolerance 1 %."""
     _, res = ffrmbs_run
     fe = ffe.run(model, pmb.SETUPS["A"], pmb.VELOCITY, k=K_SOFT, t_end=T_ORACLE, n_out=301)
     peak = np.abs(fe.node19).max()

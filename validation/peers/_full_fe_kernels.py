@@ -113,8 +113,10 @@ def project_on_faces(xp, X, u, faces, axes, tol, N, dN, x, tangents, normal):
     :func:`_newton` from the flat (s, t); the face whose point lies least outside its
     triangle wins (first on ties: on a shared edge both faces give the same x, the
     surface being C0). Returns (face index, ξ, η, gap g = n0·(xp − x(ξ, η)) [m]) and
-    fills N (6,), x (3,) and ``normal`` = n0 (3,); face index −1 (and g = inf) when no
-    face has the point within ``tol`` of its triangle (off the faces' footprint).
+    fills N (6,), x (3,) and ``normal`` m = (x_ξ × x_η) / (n0·(x_ξ × x_η)) (3,), the
+    deformed face's normal scaled to unit n0-component (so g = m·(xp − x) too, xp − x
+    being along n0, and m is ∂g/∂xp); face index −1 (and g = inf) when no face has the
+    point within ``tol`` of its triangle (off the faces' footprint).
     """
     best, best_out, best_xi, best_eta = -1, np.inf, 0.0, 0.0
     for f in range(faces.shape[0]):
@@ -143,11 +145,16 @@ def project_on_faces(xp, X, u, faces, axes, tol, N, dN, x, tangents, normal):
         return -1, 0.0, 0.0, np.inf
     tri6_shape(best_xi, best_eta, N, dN)
     _face_point(X, u, faces[best], N, dN, x, tangents)
-    normal[0] = axes[0, 1] * axes[1, 2] - axes[0, 2] * axes[1, 1]
-    normal[1] = axes[0, 2] * axes[1, 0] - axes[0, 0] * axes[1, 2]
-    normal[2] = axes[0, 0] * axes[1, 1] - axes[0, 1] * axes[1, 0]
+    n0_0 = axes[0, 1] * axes[1, 2] - axes[0, 2] * axes[1, 1]
+    n0_1 = axes[0, 2] * axes[1, 0] - axes[0, 0] * axes[1, 2]
+    n0_2 = axes[0, 0] * axes[1, 1] - axes[0, 1] * axes[1, 0]
+    normal[0] = tangents[0, 1] * tangents[1, 2] - tangents[0, 2] * tangents[1, 1]
+    normal[1] = tangents[0, 2] * tangents[1, 0] - tangents[0, 0] * tangents[1, 2]
+    normal[2] = tangents[0, 0] * tangents[1, 1] - tangents[0, 1] * tangents[1, 0]
+    scale = normal[0] * n0_0 + normal[1] * n0_1 + normal[2] * n0_2
     gap = 0.0
     for d in range(3):
+        normal[d] /= scale
         gap += normal[d] * (xp[d] - x[d])
     return best, best_xi, best_eta, gap
 
@@ -159,15 +166,15 @@ def forces(dt, k, m_p, indptr, indices, data, inv_m3, X, faces, axes, tol, u, v,
 
     Elastic part: a = −M⁻¹ K u_n (``inv_m3`` = 0 on clamped DOFs). Contact (the
     semi-implicit penalty of :mod:`validation.peers.full_fe_contact`): with the gap g_n,
-    normal n and shape functions N_a of the projection of xp_n, the gap Jacobian
-    W = (n on the mass, −N_a n on face node a), its Delassus number
-    w = Wᵀ M⁻¹ W = 1/m_p + Σ_a N_a² / m_a and the gap predicted without contact force,
+    normal m and shape functions N_a of the projection of xp_n, the gap Jacobian
+    W = (m on the mass, −N_a m on face node a), its Delassus number
+    w = Wᵀ M⁻¹ W = |m|² (1/m_p + Σ_a N_a² / m_a) and the gap predicted without contact force,
     g̃ = g_n + Δt Wᵀ (v_{n−1/2} + Δt a), the force
 
         λ = k max(0, −g̃) / (1 + k Δt² w)   [N]
 
     is the penalty force k max(0, −g_{n+1}) of the end-of-step gap linearized in W;
-    it acts as λ n on the mass and −N_a λ n on the face nodes.
+    it acts as λ m on the mass and −N_a λ m on the face nodes.
 
     ``work`` (30,) is scratch for the projection (:func:`_unpack`); after the call its
     N and normal are those of the contact. Returns (λ [N], g_n [m]; inf off the faces).
@@ -181,13 +188,14 @@ def forces(dt, k, m_p, indptr, indices, data, inv_m3, X, faces, axes, tol, u, v,
     face, _, _, gap = project_on_faces(xp, X, u, faces, axes, tol, N, dN, x, tangents, normal)
     if face < 0:
         return 0.0, gap
-    w = 1.0 / m_p
+    mm = normal[0] ** 2 + normal[1] ** 2 + normal[2] ** 2
+    w = mm / m_p
     gd = 0.0
     for d in range(3):
         gd += normal[d] * vp[d]
     for b in range(6):
         j = faces[face, b]
-        w += N[b] * N[b] * inv_m3[3 * j]
+        w += mm * N[b] * N[b] * inv_m3[3 * j]
         for d in range(3):
             gd -= N[b] * normal[d] * (v[3 * j + d] + dt * a[3 * j + d])
     g_pred = gap + dt * gd
