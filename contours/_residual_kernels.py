@@ -47,7 +47,7 @@ def compliance_between_reference(G, Ba, ia, ka, Bb, ib, kb):
 
 @numba.njit(cache=True)
 def neutral_weights(dim, knots_e, ints, dom, knots_x, eta, xi, Be, Bx, offset, w, index):
-    """The scalar weights N_i (k,) of eq. C1 (B_i = N_i I on a neutral contour) and the
+    """The blocks B_i = N_i I (k, 3, 3) of eq. C1 on a neutral contour into ``w`` and the
     control points' indices in G_P (their ``offset`` added) at (η, ξ) of a 1s (``dim``
     1) or 2s contour with the geometry arrays of its space (``ints`` = p, n_ctrl, closed
     per direction, ``dom`` the domains); returns k. Be, Bx (3, p + 1) work."""
@@ -56,7 +56,7 @@ def neutral_weights(dim, knots_e, ints, dom, knots_x, eta, xi, Be, Bx, offset, w
     k = 0
     if dim == 1:
         for a in range(pe + 1):
-            w[k] = Be[0, a]
+            _diagonal(w[k], Be[0, a])
             index[k] = offset + se - pe + a
             k += 1
         return k
@@ -64,7 +64,7 @@ def neutral_weights(dim, knots_e, ints, dom, knots_x, eta, xi, Be, Bx, offset, w
     sx = NK.locate(knots_x, px, nx, cx, dom[2], dom[3], xi, Bx)
     for a in range(pe + 1):
         for b in range(px + 1):
-            w[k] = Be[0, a] * Bx[0, b]
+            _diagonal(w[k], Be[0, a] * Bx[0, b])
             index[k] = offset + (se - pe + a) * nx + (sx - px + b)
             k += 1
     return k
@@ -74,31 +74,22 @@ def neutral_weights(dim, knots_e, ints, dom, knots_x, eta, xi, Be, Bx, offset, w
 def neutral_between(G, knots_ea, ints_a, dom_a, knots_xa, off_a, eta_a, xi_a,
                     knots_eb, ints_b, dom_b, knots_xb, off_b, eta_b, xi_b, B, w, index, out):
     """c(a, b) (3, 3) [m/N] of two points of neutral contours (eq. C2 with B_i = N_i I):
-    each point's weights by :func:`neutral_weights` (a contour is 1s when its ints hold
-    one direction), then :func:`compliance_scalar`. Work: B (2, 3, p + 1), w and index
-    (2, (p + 1)²)."""
+    each point's blocks by :func:`neutral_weights` (a contour is 1s when its ints hold
+    one direction), then :func:`compliance_between`. Work: B (2, 3, p + 1), w (2,
+    (p + 1)², 3, 3) and index (2, (p + 1)²)."""
     dim_a = 1 if ints_a.shape[0] == 3 else 2
     dim_b = 1 if ints_b.shape[0] == 3 else 2
     ka = neutral_weights(dim_a, knots_ea, ints_a, dom_a, knots_xa, eta_a, xi_a, B[0], B[1], off_a, w[0], index[0])
     kb = neutral_weights(dim_b, knots_eb, ints_b, dom_b, knots_xb, eta_b, xi_b, B[0], B[1], off_b, w[1], index[1])
-    compliance_scalar(G, w[0], index[0], ka, w[1], index[1], kb, out)
+    compliance_between(G, w[0], index[0], ka, w[1], index[1], kb, out)
 
 
 @numba.njit(cache=True)
-def compliance_scalar(G, wa, ia, ka, wb, ib, kb, out):
-    """out (3, 3) = Σ_i Σ_j wa_i wb_j G[3 ia_i:+3, 3 ib_j:+3] [m/N]: eq. C2 with the
-    blocks B = N I of neutral contours."""
+def _diagonal(block, value):
+    """block (3, 3) ← value · I."""
     for r in range(3):
         for c in range(3):
-            out[r, c] = 0.0
-    for i in range(ka):
-        I = 3 * ia[i]
-        for j in range(kb):
-            J = 3 * ib[j]
-            f = wa[i] * wb[j]
-            for r in range(3):
-                for c in range(3):
-                    out[r, c] += f * G[I + r, J + c]
+            block[r, c] = value if r == c else 0.0
 
 
 @numba.njit(cache=True)

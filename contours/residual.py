@@ -91,7 +91,7 @@ class ResidualCompliance:
         if max(d.p for d in self._dirs) > p_max:
             raise ModelError(f"{contour.name}: residual flexibility supports degrees up to {p_max}")
         self._Bc = np.zeros((2, 3, p_max + 1))
-        self._w = np.zeros((2, (p_max + 1) ** 2))
+        self._w = np.zeros((2, (p_max + 1) ** 2, 3, 3))
         self._index = np.zeros((2, (p_max + 1) ** 2), dtype=np.int64)
 
     @property
