@@ -41,6 +41,7 @@ from ffrmbs.errors import ModelError
 from preprocess.residual import (StaticFlexibility, clamped_nodes_of, projected_flexibility,
                                  residual_flexibility)
 
+from . import _offset_kernels as OK
 from . import _residual_kernels as RK
 from .derived import OffsetContour, offset_frame
 from .neutral import _kernels as NK
@@ -80,9 +81,9 @@ class ResidualCompliance:
         n_w = int(np.prod([d.p + 1 for d in self._dirs]))
         self._B = [np.zeros((3, d.p + 1)) for d in self._dirs]
         self._work = np.zeros((2, n_w, 3, 3)), np.zeros((2, n_w), dtype=np.int64)
-        offset = isinstance(contour, OffsetContour)
-        self._offset = contour.offset_law if offset else None
-        self._ctrl0 = self.neutral._local_position.ctrl0.reshape(self.n_P, 3) if offset else None
+        derived = isinstance(contour, OffsetContour)
+        self._offset = contour.offset_law if derived else None        # (law, size) of the offsets
+        self._ctrl0 = self.neutral._local_position.ctrl0.reshape(self.n_P, 3) if derived else None
         # the compiled route of a neutral contour (B_i = N_i I): knots η, ints, domains,
         # knots ξ (η's again on a curve), bases, weights
         g = space.geometry
@@ -128,8 +129,6 @@ class ResidualCompliance:
 
     def _offset_blocks(self, xi, B, index, blocks):
         """B_i += N'_i Ğ of a point at offset (α, β)(ξ) from the undeformed neutral curve."""
-        from . import _offset_kernels as OK
-
         al, be = OK.offsets(*self._offset, float(xi))[:2]
         u_eta = B[1] @ self._ctrl0[index]
         _, _, _, Dt2, Dn = offset_frame(u_eta, self.neutral.normal_ref)
