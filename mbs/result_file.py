@@ -482,10 +482,14 @@ def per_sample(name) -> bool:
 
 
 def attribute(obj, name, default=None):
-    """An HDF5 attribute of ``obj`` as a Python str/number (bytes decoded), or ``default``."""
+    """An HDF5 attribute of ``obj`` as a Python str/number (bytes decoded; bytes that are
+    not UTF-8, which h5py hands over as surrogate escapes in a str, replaced by U+FFFD),
+    or ``default``."""
     value = obj.attrs.get(name, default)
     if isinstance(value, bytes):
         value = value.decode("utf-8", "replace")
+    elif isinstance(value, str):
+        value = value.encode("utf-8", "surrogateescape").decode("utf-8", "replace")
     elif isinstance(value, np.generic):
         value = value.item()
     return value
