@@ -15,8 +15,8 @@ its :class:`~mbs.model.Data` that reads the arrays the previous stages wrote:
    g_N, frame, point Jacobians; a fused detection, :mod:`mbs.fused_detection`, updates
    its contours and does all this in one compiled call); a unilateral contact is closed where
    g_N(q_θ) <= its ``closing_tol``, or while the spring of a compliant contact still
-   pushes (:mod:`contact.compliance`: the effective gap is g_N + δ) → ``closed``, the closed set-valued contacts in
-   ``closed_idx``, the largest penetration;
+   pushes (:mod:`contact.compliance`: the effective gap is g_N + δ) → ``closed``, the
+   closed set-valued contacts in ``closed_idx``, the largest penetration;
 5. :func:`constraints`: the contact laws at the located contacts — single-valued
    (penalty) forces into h; M̂ = M + θΔt D + θ²Δt² K factored (once per step size when
    constant) and a penalty contact's stiffness checked against the step;
