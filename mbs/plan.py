@@ -139,8 +139,8 @@ def _correction(contact) -> str:
     for contour in contact.contours():
         if getattr(contour, "residual_flexibility", False):
             body = contour.body
-            n_dof = 3 * (body.data.n_nodes - clamped_nodes_of(body.data).size) - (0 if clamped_nodes_of(
-                body.data).size else 6)
+            clamped = clamped_nodes_of(body.data).size
+            n_dof = 3 * (body.data.n_nodes - clamped) - (0 if clamped else 6)     # the FE model's modes
             notes.append(f"; on {contour.name!r} it acts through the static compliance of all the modes body "
                          f"{body.name!r} leaves out (residual flexibility: {body.n_modes} of its FE model's "
                          f"{n_dof} modes kept, no extra coordinates)")
