@@ -37,9 +37,9 @@ class SpinMonitor:
     Parameters
     ----------
     system : mbs.System
-        Its FFR bodies (:class:`~mbs.FlexibleBodyFFR` with at least one mode) whose frame
-        can rotate — a free frame, or a prescribed frame motion that is not
-        :meth:`~mbs.PrescribedFrameMotion.fixed` — are watched.
+        Its FFR bodies (:class:`~mbs.FlexibleBodyFFR` with at least one mode and without
+        geometric stiffening) whose frame can rotate — a free frame, or a prescribed frame
+        motion that is not :meth:`~mbs.PrescribedFrameMotion.fixed` — are watched.
     ratio : float
         Warn when |Ω| > ratio · ω1 [-]; default :data:`SPIN_RATIO` = 0.2.
 
