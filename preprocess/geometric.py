@@ -52,8 +52,9 @@ from preprocess.residual import StaticFlexibility
 #: the load parameters p of eq. G2, in the order of the stored matrices
 LOAD_CASES = ("Omega_xx", "Omega_yy", "Omega_zz", "Omega_xy", "Omega_xz", "Omega_yz",
               "dOmega_x", "dOmega_y", "dOmega_z", "a_x", "a_y", "a_z")
-#: elements per vectorized block of the K_σ assembly (memory: block * 27 points * 12 cases * 9)
-_CHUNK = 2000
+#: elements per vectorized block of the K_σ assembly: its σ ∇N array holds
+#: 12 cases x block x 27 points x 3 x 30 doubles (117 MB at 500 tet10 elements)
+_CHUNK = 500
 
 
 def inertia_load_fields(u0) -> np.ndarray:
