@@ -1,9 +1,10 @@
 """FlexibleBodyFFR: a flexible body in the floating frame of reference (thesis Sec. 2.4, 4.3).
 
 Built from the body files of :mod:`preprocess` (ū0, Φ, lumped masses or the consistent
-mass matrix M_s when the body has one, K) and a mode selection. The shape integrals (thesis eq. 2.53, 2.54, 2.65) are summed once; after that
-the mass matrix (eq. 2.44–2.69) and the quadratic velocity vector (eq. 2.77–2.79) cost
-O(n_f²) per evaluation, whatever the node count. Elastic forces K q (eq. 2.36) use the
+mass matrix M_s when the body has one, K) and a mode selection. The shape integrals
+(thesis eq. 2.53, 2.54, 2.65; eq. C1 of :mod:`mbs.shape_integrals` with M_s) are summed
+once; after that the mass matrix (eq. 2.44–2.69) and the quadratic velocity vector
+(eq. 2.77–2.79) cost O(n_f²) per evaluation, whatever the node count. Elastic forces K q (eq. 2.36) use the
 modal stiffness K_ff = Φᵀ K Φ; damping is Rayleigh, D = α M_ff + β K_ff, or modal,
 D = 2 ζ_i ω_i per mode (report Sec. 7.1).
 

@@ -26,8 +26,8 @@ Layout (N nodes, n_f modes, indices 0-based)::
 
 :func:`read_hdf5` checks the format attributes, the presence, shape, type and
 finiteness of every dataset, magnitudes (at most :data:`~preprocess.body.MAX_MAGNITUDE`),
-index ranges, the symmetry of K and of M_s and M_s's positive diagonal; any fault (also a file that is not a regular HDF5
-file) raises :class:`~ffrmbs.errors.InputFileError` naming the dataset.
+index ranges, the symmetry of K and of M_s and M_s's positive diagonal; any fault
+(also a file that is not a regular HDF5 file) raises :class:`~ffrmbs.errors.InputFileError` naming the dataset.
 """
 
 from __future__ import annotations
