@@ -218,3 +218,19 @@ def test_cli_mass_consistent_writes_a_body_file_with_the_mass_matrix(tmp_path):
     assert body.mass_matrix is not None and body.params["mass"] == "consistent"
     assert body.total_mass == pytest.approx(1000 * 0.01, rel=1e-13)
     assert not any((tmp_path / name).exists() for name in TEXT_FILES)
+
+
+def test_ffr_inertia_case_blocks_are_the_stepped_beam():
+    """The validation case's exact stepped-beam inertia (two blocks) against the mesh: equal
+    volume, and the consistent-mass inertia of the mesh equal to the blocks' to rounding."""
+    from preprocess import stepped_beam
+    from validation.cases.ffr_inertia import exact_blocks, fe_inertia, stepped_beam_blocks
+
+    mesh = stepped_beam(10.0, order=1).scaled(1e-3)
+    blocks = stepped_beam_blocks()
+    assert mesh.element_volumes().sum() == pytest.approx(sum(np.prod(hi - lo) for lo, hi in blocks), rel=1e-12)
+    m0, c0, J0 = exact_blocks(blocks, RHO)
+    m, c, J = fe_inertia(mesh, RHO, "consistent")
+    assert m == pytest.approx(m0, rel=1e-12)
+    np.testing.assert_allclose(c, c0, rtol=0, atol=1e-14)
+    np.testing.assert_allclose(J, J0, rtol=0, atol=1e-12 * np.abs(J0).max())
