@@ -234,3 +234,41 @@ def test_ffr_inertia_case_blocks_are_the_stepped_beam():
     assert m == pytest.approx(m0, rel=1e-12)
     np.testing.assert_allclose(c, c0, rtol=0, atol=1e-14)
     np.testing.assert_allclose(J, J0, rtol=0, atol=1e-12 * np.abs(J0).max())
+
+
+def test_inertia_relief_with_consistent_mass_is_the_elastic_modal_flexibility(tet4_box):
+    """Free body: the bordered solve (eq. R3 of preprocess.residual, M R with the consistent
+    M) equals Σ_elastic φ φᵀ f / ω² over ALL elastic modes of a dense eigensolve."""
+    from preprocess.residual import StaticFlexibility
+
+    K = fe.stiffness_matrix(tet4_box, 210e9, 0.3)
+    M = fe.consistent_mass_matrix(tet4_box, RHO)
+    w2, phi = modes.all_modes(K, M, None, tet4_box.points)
+    f = np.random.default_rng(5).standard_normal((K.shape[0], 2))
+    u = StaticFlexibility(K, M, tet4_box.points).solve(f)
+    expected = phi @ ((phi.T @ f) / w2[:, None])
+    np.testing.assert_allclose(u, expected, rtol=0, atol=1e-8 * np.abs(expected).max())
+
+
+def test_modal_basis_and_decision_use_the_consistent_mass():
+    """ModalBasis of a free consistent-mass box: exact rigid inertia, Pᵀ M (P r) = r,
+    CoupledRB's B0 = Σ_ab M_ab b_a b_bᵀ, and the α response of free modes vanishes
+    (inertia relief, mbs.modal.decision docstring) only with the consistent loads."""
+    from mbs.modal import ModalBasis
+    from mbs.modal.coupled_rb import CouplingIntegrals
+    from mbs.modal.decision import alpha_response
+
+    data = build_body(box(LX, LY, LZ, None, order=2, divisions=(1, 2, 4)), STEEL, 4, clamp=None,
+                      mass="consistent")
+    basis = ModalBasis.from_body(data)
+    m0 = RHO * LX * LY * LZ
+    J0 = m0 / 12 * np.diag([LY ** 2 + LZ ** 2, LX ** 2 + LZ ** 2, LX ** 2 + LY ** 2])
+    np.testing.assert_allclose(basis.inertia, J0, rtol=0, atol=1e-13 * J0.max())
+    r = np.array([1.0, -2.0, 0.5, 3.0])
+    np.testing.assert_allclose(basis.project_field(basis.P @ r), r, rtol=1e-12)
+    B0 = J0.trace() / 2 * np.eye(3) - J0                 # Σ M b bᵀ from J = tr(B) 1 − B
+    np.testing.assert_allclose(CouplingIntegrals(basis).B0, B0, rtol=0, atol=1e-13 * J0.max())
+    phi = basis.P.reshape(-1, 4)
+    consistent = alpha_response(basis.b0, data.mass_matrix, phi, basis.omega2)
+    lumped = alpha_response(basis.b0, data.masses, phi, basis.omega2)
+    assert np.abs(consistent).max() < 1e-10 * np.abs(lumped).max()
