@@ -105,6 +105,13 @@ class Body:
         """Constant −∂h/∂u (nu, nu), or None."""
         return None
 
+    #: True when the body adds tangents that change with (t, q, u) (:meth:`add_tangents`)
+    varying_tangents = False
+
+    def add_tangents(self, t, q, u, K, D) -> None:
+        """Add the varying −∂h/∂q and −∂h/∂u at the body's (q, u, t) into its blocks ``K``,
+        ``D`` (nu, nu) (nothing unless :attr:`varying_tangents`)."""
+
     def linear_forces(self):
         """(K, D) when h = −K q − D u with constant K (nu, nu) and D (nu, nu) or None
         (undamped) and q ⊕ Δu = q + Δu — the body stage then evaluates h of all such

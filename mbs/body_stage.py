@@ -92,6 +92,7 @@ class BodyStage:
             else:
                 self._loads.append(("element", f))
         self._force_tangents = [f for f in self.forces if f.has_tangents]
+        self._varying = [b for b in self.active if b.varying_tangents]
         self.K0 = np.zeros((self.nu, self.nu))      # the bodies' constant tangents
         self.D0 = np.zeros((self.nu, self.nu))
         for b in self.active:
@@ -163,8 +164,20 @@ class BodyStage:
 
     @property
     def constant_tangents(self) -> bool:
-        """True when K and D do not change (no active force element has tangents)."""
+        """True when K and D do not change (no active force element has tangents and no
+        active body's tangents vary, e.g. a stiffened FFR body on a moving frame)."""
+        return not self._force_tangents and not self._varying
+
+    @property
+    def block_tangents(self) -> bool:
+        """True when the tangents couple no two bodies (no active force element has
+        tangents): M̂ is then block diagonal by body."""
         return not self._force_tangents
+
+    @property
+    def varying_body_tangents(self) -> bool:
+        """True when an active body's tangents change with (t, q, u)."""
+        return bool(self._varying)
 
     @property
     def constant_iteration_matrix(self) -> bool:
@@ -228,9 +241,13 @@ class BodyStage:
     def tangents(self, t, q, u, K, D) -> None:
         """Write the tangents K = −∂h/∂q (in velocity-increment coordinates) and
         D = −∂h/∂u (nu, nu) into ``K`` and ``D``: the bodies' constant elastic and damping
-        tangents plus the force elements' (springs)."""
+        tangents, their varying ones (:meth:`~mbs.body.Body.add_tangents`) and the force
+        elements' (springs)."""
         K[...] = self.K0
         D[...] = self.D0
+        for b in self._varying:
+            us = b.u_slice
+            b.add_tangents(t, q[b.q_slice], u[us], K[us, us], D[us, us])
         for f in self._force_tangents:
             f.add_tangents(t, q, u, K, D)
 

@@ -41,8 +41,10 @@ class Equations:
     def constant_iteration_matrix(self) -> bool:
         """True when M, the bodies' tangents K and D and the links' (none) do not change:
         every active body has a constant mass matrix (point masses, FFR bodies on a
-        prescribed frame) and no active force element has tangents."""
-        return all(b.constant_mass for b in self.active) and not any(f.has_tangents for f in self.forces)
+        prescribed frame), no active body's tangents vary and no active force element has
+        tangents."""
+        return (all(b.constant_mass and not b.varying_tangents for b in self.active)
+                and not any(f.has_tangents for f in self.forces))
 
     # --- kinematics ---------------------------------------------------------------------
     def qdot(self, q, u):
@@ -108,7 +110,7 @@ class Equations:
             f.add_forces(t, q, u, out)
 
     def tangents(self, t, q, u):
-        """(K_t, D_t) (nu, nu): constant elastic and damping tangents plus link tangents,
+        """(K_t, D_t) (nu, nu): elastic and damping tangents (constant and varying) plus link tangents,
         for the iteration matrix of implicit integrators."""
         K = np.zeros((self.nu, self.nu))
         D = np.zeros((self.nu, self.nu))
@@ -118,6 +120,8 @@ class Equations:
                 K[b.u_slice, b.u_slice] += Kb
             if Db is not None:
                 D[b.u_slice, b.u_slice] += Db
+            us = b.u_slice
+            b.add_tangents(t, q[b.q_slice], u[us], K[us, us], D[us, us])
         for f in self.forces:
             f.add_tangents(t, q, u, K, D)
         return K, D

@@ -4,9 +4,10 @@ Built from the body files of :mod:`preprocess` (ū0, Φ, lumped masses or the co
 mass matrix M_s when the body has one, K) and a mode selection. The shape integrals
 (thesis eq. 2.53, 2.54, 2.65; eq. C1 of :mod:`mbs.shape_integrals` with M_s) are summed
 once; after that the mass matrix (eq. 2.44–2.69) and the quadratic velocity vector
-(eq. 2.77–2.79) cost O(n_f²) per evaluation, whatever the node count. Elastic forces K q (eq. 2.36) use the
-modal stiffness K_ff = Φᵀ K Φ; damping is Rayleigh, D = α M_ff + β K_ff, or modal,
-D = 2 ζ_i ω_i per mode (report Sec. 7.1).
+(eq. 2.77–2.79) cost O(n_f²) per evaluation, whatever the node count. Elastic forces
+K q (eq. 2.36) use the modal stiffness K_ff = Φᵀ K Φ, plus, with ``geometric_stiffening``,
+the stiffening by the frame's inertia loads K_geo(Ω, Ω̇, a) (:mod:`mbs.geometric_stiffening`);
+damping is Rayleigh, D = α M_ff + β K_ff, or modal, D = 2 ζ_i ω_i per mode (report Sec. 7.1).
 
 State layout (free frame, quaternion default): q = (R (3), p (4), q_f (n_f)),
 u = (Ṙ (3), ω̄ (3), q̇_f (n_f)); with ``rotation="cardan"`` q = (R, θ, q_f), u = q̇;
@@ -24,6 +25,7 @@ from preprocess import BodyData, read_body
 from .body import Frame
 from ._kernels import elastic_h_into, ffr_free_mass_and_h, ffr_mass_and_qv, ffr_prescribed_mass_and_h
 from .floating_frame import FloatingFrameBody
+from .geometric_stiffening import N_CASES, add_geometric_tangents, load_parameters_into, sub_geometric_force
 from .shape_integrals import ShapeIntegrals
 
 
@@ -58,11 +60,16 @@ class FlexibleBodyFFR(FloatingFrameBody):
         Rayleigh damping D = α M_ff + β K_ff.
     modal_damping : float or (n_f,) or None
         Damping ratios ζ_i: D = M_ff Ψ diag(2 ζ_i ω_i) Ψᵀ M_ff with the modal eigenvectors Ψ.
+    geometric_stiffening : bool
+        Add the stiffening by the frame's inertia loads, K_geo(p) q_f (eq. S1 of
+        :mod:`mbs.geometric_stiffening`), from the body file's geometric stiffness
+        (``ffrmbs preprocess --geometric-stiffness``). Needed once the spin approaches the
+        lowest bending frequency (:class:`mbs.validity.SpinMonitor`).
     name : str
     """
 
     def __init__(self, data: BodyData, modes=None, frame="free", rotation="quaternion",
-                 rayleigh=None, modal_damping=None, name="flexible"):
+                 rayleigh=None, modal_damping=None, name="flexible", geometric_stiffening=False):
         self.data = data
         self.modes_fixed = modes is not None      # None: all modes, which the planner may reduce
         self.rayleigh, self.modal_damping = rayleigh, modal_damping
@@ -75,6 +82,11 @@ class FlexibleBodyFFR(FloatingFrameBody):
         self.K_ff = 0.5 * (self.K_ff + self.K_ff.T)
         self.D_ff = self._damping(rayleigh, modal_damping)
         self.damped = bool(self.D_ff.any())       # zero damping: D q̇_f is not evaluated
+        self.geometric_stiffening = bool(geometric_stiffening)
+        self.K_cases = self._geometric_cases() if self.geometric_stiffening else None
+        self._p = np.zeros(N_CASES)               # the load parameters p of eq. S1 (workspace)
+        self._eye = np.eye(3)                     # an unread orientation for a free frame's p
+        self._p_time = None                       # the time p of a prescribed frame was taken at
         self.phi_nodes = self.phi.reshape(data.n_nodes, 3, self.n_modes)  # (N, 3, n_f) view of phi
         lo, hi = data.u0.min(axis=0), data.u0.max(axis=0)
         self._box_centre = 0.5 * (lo + hi)
@@ -86,6 +98,49 @@ class FlexibleBodyFFR(FloatingFrameBody):
     def from_file(cls, path, modes=None, units="si", **kw) -> "FlexibleBodyFFR":
         """Read the body files at ``path`` (directory or .h5, see :func:`preprocess.read_body`)."""
         return cls(read_body(path, units), modes, **kw)
+
+    def _geometric_cases(self):
+        """The body file's Φᵀ K_σ,c Φ on the selected modes (12, n_f, n_f), symmetrized."""
+        G = self.data.geometric_stiffness
+        if G is None:
+            raise ModelError(f"{self.name}: geometric_stiffening needs the geometric stiffness in the body file; "
+                             "preprocess the body with --geometric-stiffness (ffrmbs preprocess) or "
+                             "build_body(..., geometric_stiffness=True)")
+        idx = self.mode_indices
+        G = G[:, idx][:, :, idx]
+        return np.ascontiguousarray(0.5 * (G + G.transpose(0, 2, 1)))
+
+    @property
+    def varying_tangents(self) -> bool:
+        """True when the stiffness tangent changes with the frame motion (stiffening on a
+        moving frame): the integrators then take it from :meth:`add_tangents`."""
+        return self.geometric_stiffening and not self.frame_at_rest
+
+    def _frame_loads(self, q, u, t):
+        """(ω̄ holder, its offset; read on a free frame only) with the load parameters p of eq. S1 at the body's own
+        (q, u, t) written into ``self._p``: a prescribed frame's ω̄, ω̄̇, Aᵀ R̈; a free
+        frame's ω̄ (u[3:6] of a quaternion frame, T u_r of a Cardan one)."""
+        if self.motion is not None:
+            if t != self._p_time:                 # p of a prescribed frame depends on t alone
+                A, w, wd = (np.asarray(x, dtype=float) for x in self.motion.rotation(t))
+                load_parameters_into(w, 0, wd, A, np.asarray(self.motion.translation(t)[2], dtype=float), True,
+                                     self._p)
+                self._p_time = t
+            return self._p, 0
+        w, wi = (u, 3) if self.free_quaternion else (self._frame(q, u, t)[3], 0)
+        load_parameters_into(w, wi, self._p, self._eye, self._p, False, self._p)
+        self._p_time = None
+        return w, wi
+
+    def add_tangents(self, t, q, u, K, D):
+        """K_geo(p) into the body's tangent block ``K`` (nu, nu) at its own (q, u, t); on a
+        free quaternion frame also the −∂h_f/∂ω̄ coupling into ``D`` (nu, nu)
+        (:mod:`mbs.geometric_stiffening`)."""
+        if not self.varying_tangents:
+            return
+        w, wi = self._frame_loads(q, u, t)
+        add_geometric_tangents(self.K_cases, self._p, q, self._f.start, self.free_quaternion, w, wi, K, D,
+                               self._fu.start, 3)
 
     def _damping(self, rayleigh, modal_damping):
         n = self.n_modes
@@ -160,15 +215,31 @@ class FlexibleBodyFFR(FloatingFrameBody):
         if self.free_quaternion:
             ffr_free_mass_and_h(q, u, si.mass, si.I1, si.S_bar, si.I_kl, si.I_bar, si.S_kl, si.M_ff, si.S_skew,
                                 self.K_ff, self.D_ff, self.damped, work[0], work[1], M, h)
+            if self.geometric_stiffening:
+                load_parameters_into(u, 3, self._p, self._eye, self._p, False, self._p)
+                self._p_time = None
+                sub_geometric_force(self.K_cases, self._p, q, 7, h, 6)
         elif self.motion is not None:
-            a_R = self.motion.translation(t)[2]
-            A, w, wd = self.motion.rotation(t)
-            ffr_prescribed_mass_and_h(np.asarray(A, dtype=float), np.asarray(w, dtype=float),
-                                      np.asarray(a_R, dtype=float), np.asarray(wd, dtype=float), q, u, si.mass,
+            a_R = np.asarray(self.motion.translation(t)[2], dtype=float)
+            A, w, wd = (np.asarray(x, dtype=float) for x in self.motion.rotation(t))
+            ffr_prescribed_mass_and_h(A, w, a_R, wd, q, u, si.mass,
                                       si.I1, si.S_bar, si.I_kl, si.I_bar, si.S_kl, si.M_ff, si.S_skew, self.K_ff,
                                       self.D_ff, self.damped, work[1], work[2], work[3], M, h)
+            if self.geometric_stiffening:
+                load_parameters_into(w, 0, wd, A, a_R, True, self._p)
+                self._p_time = t
+                sub_geometric_force(self.K_cases, self._p, q, 0, h, 0)
         else:
             super().mass_and_h_into(q, u, t, M, h, work)
+
+    def mass_and_h(self, q, u, t=0.0):
+        """(M, h) of :meth:`FloatingFrameBody.mass_and_h` with h_f −= K_geo(p) q_f when the
+        stiffening is on and the frame moves (the generic, allocating path)."""
+        M, h = super().mass_and_h(q, u, t)
+        if self.varying_tangents:
+            self._frame_loads(q, u, t)
+            sub_geometric_force(self.K_cases, self._p, q, self._f.start, h, self._fu.start)
+        return M, h
 
     def h_into(self, q, u, t, h, work=None):
         if self.frame_at_rest:      # Q_v = 0 with the frame at rest (eq. 4.2)

@@ -26,6 +26,7 @@ with T = blockdiag(1, T(q_r), 1).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Callable
 
@@ -57,6 +58,45 @@ class PrescribedFrameMotion:
         A = np.eye(3) if A is None else np.asarray(A, dtype=float)
         zero = np.zeros(3)
         return cls(lambda t: (R, zero, zero), lambda t: (A, zero, zero), at_rest=True)
+
+    @classmethod
+    def spin_up(cls, omega, ramp_time, axis=2, R=(0.0, 0.0, 0.0)) -> "PrescribedFrameMotion":
+        """The frame at R [m] turning about its body axis ``axis`` (0, 1, 2), spun up
+        smoothly from rest to ``omega`` [rad/s] in ``ramp_time`` T [s] (Kane, Ryan &
+        Banerjee, J. Guid. Control Dyn. 10 (1987) 139–151, eq. 46): the angle
+
+            θ(t) = (Ω/T) [t²/2 + (T/2π)² (cos(2πt/T) − 1)]   for t <= T,
+            θ(t) = Ω (t − T/2)                                 after,
+
+        so θ̇ = (Ω/T)[t − (T/2π) sin(2πt/T)] and θ̈ = (Ω/T)[1 − cos(2πt/T)] rise from 0
+        and reach Ω and 0 at T, continuously."""
+        if axis not in (0, 1, 2):
+            raise ModelError(f"spin_up axis must be 0, 1 or 2, not {axis!r}")
+        for name, value in (("spin_up omega", omega), ("spin_up ramp_time", ramp_time)):
+            if not (np.isfinite(value) and value > 0):
+                raise ModelError(f"{name} must be positive and finite, not {value!r}")
+        R = np.asarray(R, dtype=float)
+        zero = np.zeros(3)
+        i, j = [k for k in range(3) if k != axis]
+        k = 2.0 * math.pi / ramp_time
+        rate0 = omega / ramp_time
+
+        def rotation(t):
+            if t <= ramp_time:
+                ck = math.cos(k * t)
+                theta = rate0 * (0.5 * t * t + (ck - 1.0) / (k * k))
+                rate, acc = rate0 * (t - math.sin(k * t) / k), rate0 * (1.0 - ck)
+            else:
+                theta, rate, acc = omega * (t - 0.5 * ramp_time), omega, 0.0
+            c, s = math.cos(theta), math.sin(theta)
+            A = np.zeros((3, 3))
+            A[axis, axis] = 1.0
+            A[i, i], A[i, j], A[j, i], A[j, j] = c, -s, s, c
+            w, wd = np.zeros(3), np.zeros(3)
+            w[axis], wd[axis] = rate, acc
+            return A, w, wd
+
+        return cls(lambda t: (R, zero, zero), rotation)
 
 
 class FloatingFrameBody(Body):

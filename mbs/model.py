@@ -180,7 +180,7 @@ def compile_model(system, plan=None, theta=0.5, solver=None) -> Model:
     owners = np.array([i for _, owners, _, _ in table for i in owners], dtype=np.int64)
     body_stage = BodyStage.of_equations(equations)
     blocks = None
-    if body_stage.constant_tangents:
+    if body_stage.block_tangents:
         blocks = np.array([[b.u_slice.start, b.u_slice.stop] for b in body_stage.active], dtype=np.int64)
         blocks = blocks.reshape(-1, 2)
     idle_rows = np.array([i for b in equations.idle for i in range(b.u_slice.start, b.u_slice.stop)],

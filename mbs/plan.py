@@ -165,6 +165,8 @@ def _plan_body(system, body, forces, joined, touching, t_end, tolerance) -> Body
                         "(a callable, a linear table or a torque)")
     if body.motion is not None and not body.frame_at_rest:
         blockers.append("its frame moves on a prescribed path")
+    if body.geometric_stiffening and not body.frame_at_rest:
+        blockers.append("its geometric stiffening follows the frame's motion")
     if body.is_free and (body.data.params or {}).get("clamp"):
         blockers.append("its modes are clamped, not free-free")
     if blockers:

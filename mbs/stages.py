@@ -282,8 +282,12 @@ def _factor(model, data, dt, out):
     th = model.theta
     K, D, M = data.K, data.D, data.M
     stage = model.body_stage
-    if model.blocks is not None:            # constant tangents: M̂ and its factor in one kernel
-        info = block_iteration_factor(M, stage.K0, stage.D0, th * dt, th * th * dt * dt, model.blocks, D, out)
+    if model.blocks is not None:            # block-diagonal tangents: M̂ and its factor in one kernel
+        if stage.varying_body_tangents:
+            stage.tangents(data.t_m, data.q_m, data.u, K, D)
+            info = block_iteration_factor(M, K, D, th * dt, th * th * dt * dt, model.blocks, D, out)
+        else:
+            info = block_iteration_factor(M, stage.K0, stage.D0, th * dt, th * th * dt * dt, model.blocks, D, out)
         if info != 0:
             raise StepFailure(f"M + θΔt D + θΔt² K is not positive definite (pivot of row {info - 1})")
         return out

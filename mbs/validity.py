@@ -5,7 +5,9 @@ motion with the mode shapes and the stiffness K_ff of the *unloaded* structure (
 Sec. 2.4, eq. 2.24, 2.36). It has no geometric stiffness: the stiffening of a structure
 under the centrifugal prestress of its own spin is missing. :class:`SpinMonitor` watches
 the frame spin |Ω| of every FFR body whose frame can rotate and warns once per body when
-|Ω| exceeds ``ratio`` ω1, ω1 the lowest frequency of the body's retained modes.
+|Ω| exceeds ``ratio`` ω1, ω1 the lowest frequency of the body's retained modes. A body
+with ``geometric_stiffening`` (:mod:`mbs.geometric_stiffening`) carries that stiffness and
+is not watched.
 """
 
 from __future__ import annotations
@@ -35,9 +37,9 @@ class SpinMonitor:
     Parameters
     ----------
     system : mbs.System
-        Its FFR bodies (:class:`~mbs.FlexibleBodyFFR` with at least one mode) whose frame
-        can rotate — a free frame, or a prescribed frame motion that is not
-        :meth:`~mbs.PrescribedFrameMotion.fixed` — are watched.
+        Its FFR bodies (:class:`~mbs.FlexibleBodyFFR` with at least one mode and without
+        geometric stiffening) whose frame can rotate — a free frame, or a prescribed frame
+        motion that is not :meth:`~mbs.PrescribedFrameMotion.fixed` — are watched.
     ratio : float
         Warn when |Ω| > ratio · ω1 [-]; default :data:`SPIN_RATIO` = 0.2.
 
@@ -82,7 +84,7 @@ class SpinMonitor:
         for body in system.bodies:
             if not isinstance(body, FlexibleBodyFFR) or body.n_modes == 0:
                 continue
-            if body.motion is not None and body.motion.at_rest:
+            if (body.motion is not None and body.motion.at_rest) or body.geometric_stiffening:
                 continue
             w2 = scipy.linalg.eigvalsh(body.K_ff, body.integrals.M_ff)
             w1 = math.sqrt(max(float(w2[0]), 0.0))
@@ -112,9 +114,10 @@ class SpinMonitor:
                 entry[2] = None           # warned: not checked again
                 self.events.append((float(t), body.name, w, w1))
                 msg = (f"body {body.name!r} at t = {t:.6g} s spins at |Ω| = {w:.4g} rad/s > {self.ratio:g} ω1 "
-                       f"(ω1 = {w1:.4g} rad/s, its lowest retained elastic frequency): linear FFR has no "
-                       f"geometric stiffening, its bending frequencies are off by about Ω²/ω1² = "
-                       f"{(w / w1) ** 2:.1%} in ω² and more as the spin grows")
+                       f"(ω1 = {w1:.4g} rad/s, its lowest retained elastic frequency): without geometric "
+                       f"stiffening its bending frequencies are off by about Ω²/ω1² = {(w / w1) ** 2:.1%} "
+                       f"in ω² and more as the spin grows; turn on geometric_stiffening (body file "
+                       f"preprocessed with --geometric-stiffness)")
                 logger.warning(msg)
                 warnings.warn(FFRValidityWarning(msg), stacklevel=2)
 

@@ -28,6 +28,9 @@ Conventions
   quadratic meshes (corners first, then mid-edge nodes), 0-based; or None.
 * ``material``: dict with ``density`` [kg/m³], ``young`` [Pa], ``poisson`` [-], or {}.
 * ``params``: the preprocessing parameters (JSON-serializable dict), or {}.
+* ``geometric_stiffness``: the modal geometric stiffness matrices Φᵀ K_σ,c Φ of the
+  twelve inertia load cases of :mod:`preprocess.geometric` (eq. G4), shape
+  (12, n_f, n_f), or None when not computed.
 """
 
 from __future__ import annotations
@@ -82,6 +85,7 @@ class BodyData:
     surface_triangles: np.ndarray | None = None
     material: dict = field(default_factory=dict)
     params: dict = field(default_factory=dict)
+    geometric_stiffness: np.ndarray | None = None
 
     @property
     def n_nodes(self) -> int:

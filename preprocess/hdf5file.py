@@ -23,6 +23,8 @@ Layout (N nodes, n_f modes, indices 0-based)::
     /node_groups/<name>    (n,) i8          node indices of the group (one dataset per group)
     /surface/triangles     (T, 3|6) i8      surface faces            (optional)
     /material              group, attrs density [kg/m³], young [Pa], poisson [-] (those known)
+    /geometric_stiffness   (12, n_f, n_f) f8  Φᵀ K_σ,c Φ of the inertia load cases of
+                                            :mod:`preprocess.geometric`      (optional)
 
 :func:`read_hdf5` checks the format attributes, the presence, shape, type and
 finiteness of every dataset, magnitudes (at most :data:`~preprocess.body.MAX_MAGNITUDE`),
@@ -68,6 +70,8 @@ def write_hdf5(path, body: BodyData) -> None:
             groups[name] = np.asarray(nodes, dtype="i8")
         if body.surface_triangles is not None:
             f["surface/triangles"] = np.asarray(body.surface_triangles, dtype="i8")
+        if body.geometric_stiffness is not None:
+            f["geometric_stiffness"] = np.asarray(body.geometric_stiffness, dtype="f8")
         f.create_group("material").attrs.update(
             {key: float(value) for key, value in body.material.items()})
 
@@ -208,9 +212,11 @@ def _read(r: _Reader) -> BodyData:
         params = None
     if not isinstance(params, dict):
         r.fail("root attribute 'params' is not a JSON object string")
+    geometric = (r.array("geometric_stiffness", shape=(12, phi.shape[1], phi.shape[1]))
+                 if "geometric_stiffness" in r.f else None)
     return BodyData(u0=u0, phi=phi, masses=masses, stiffness=stiffness, eigenvalues=eigenvalues,
                     mass_matrix=mass_matrix, node_groups=node_groups, surface_triangles=surface, material=material,
-                    params=params)
+                    params=params, geometric_stiffness=geometric)
 
 
 def read_hdf5(path) -> BodyData:

@@ -18,6 +18,7 @@ import numpy as np
 from ffrmbs.errors import InputFileError, ModelError
 from preprocess import fe, geometry, limits, modes, units as unitsys
 from preprocess.body import BodyData
+from preprocess.geometric import geometric_stiffness as geometric_stiffness_of
 from preprocess.inputfiles import regular_file
 from preprocess.mesh import Mesh, check_meshing_options, read_mesh
 
@@ -153,7 +154,7 @@ def mesh_source(spec: str, order=None, mesh_size=None, check_limits=True, announ
 
 def build_body(mesh: Mesh, material: Material, n_modes: int, clamp: str | None = None,
                units: str = "si", params: dict | None = None, log=None, progress=None,
-               check_limits: bool = True, mass: str = "lumped") -> BodyData:
+               check_limits: bool = True, geometric_stiffness: bool = False, mass: str = "lumped") -> BodyData:
     """Assemble K and the masses, compute ``n_modes`` modes, return SI body data.
 
     ``clamp`` names a node group to clamp (thesis Sec. 2.4.4 (a)); None gives
@@ -161,11 +162,13 @@ def build_body(mesh: Mesh, material: Material, n_modes: int, clamp: str | None =
     progress lines with timings; ``progress(label)`` is called as each long step begins
     ("assembling K", "computing modes"), e.g. a stage bar's ``stage`` (ffrmbs_app.progress).
     ``check_limits``: a mesh whose assembly and modes are estimated over the limits of
-    :mod:`preprocess.limits` is a ModelError before assembly. ``mass`` (:data:`MASS_KINDS`):
-    "lumped" (default) — the modes and all inertia from the lumped node masses; "consistent" —
-    from the consistent mass matrix M_s (:func:`preprocess.fe.consistent_mass_matrix`),
-    stored as ``BodyData.mass_matrix`` (the lumped masses are kept too); recorded as
-    ``params["mass"]``.
+    :mod:`preprocess.limits` is a ModelError before assembly. ``geometric_stiffness``: also
+    the modal geometric stiffness of the frame's inertia loads (:mod:`preprocess.geometric`),
+    which a rotating body needs for its stiffening.
+    ``mass`` (:data:`MASS_KINDS`): "lumped" (default) — the modes and all inertia from the
+    lumped node masses; "consistent" — from the consistent mass matrix M_s
+    (:func:`preprocess.fe.consistent_mass_matrix`), stored as ``BodyData.mass_matrix`` (the
+    lumped masses are kept too); recorded as ``params["mass"]``.
     """
     log = log or (lambda msg: None)
     progress = progress or (lambda label: None)
@@ -197,6 +200,12 @@ def build_body(mesh: Mesh, material: Material, n_modes: int, clamp: str | None =
     log(f"computed {len(eig)} {'clamped' if clamped is not None else 'free-free'} modes "
         f"in {time.perf_counter() - t0:.2f} s")
 
+    geometric = None
+    if geometric_stiffness:
+        progress("geometric stiffness")
+        geometric = geometric_stiffness_of(mesh_si, K, mat.young, mat.poisson, masses if M_s is None else M_s, phi,
+                                           clamped, log=log)
+
     all_params = dict(params or {})
     all_params.update(n_modes=int(n_modes), clamp=clamp, free=clamp is None, units_in=units,
                       element_order=mesh.order, n_elements=mesh.n_elements, mass=mass)
@@ -205,7 +214,7 @@ def build_body(mesh: Mesh, material: Material, n_modes: int, clamp: str | None =
         node_groups={k: np.asarray(v, dtype=np.int64) for k, v in mesh.node_groups.items()},
         surface_triangles=mesh.surface_triangles(),
         material=dict(density=mat.density, young=mat.young, poisson=mat.poisson),
-        params=all_params,
+        params=all_params, geometric_stiffness=geometric,
     )
 
 

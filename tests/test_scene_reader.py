@@ -449,6 +449,8 @@ def assert_fault_at(path, text, old, new, fragment, line):
 
 # (what, the text replaced, its replacement, message fragments, text on the faulty line)
 FAULTS = [
+    ("stiffening without the data", "modal_damping = 0.02", "modal_damping = 0.02\ngeometric_stiffening = true",
+     ["body 'clamped'", "preprocess it with --geometric-stiffness"], "geometric_stiffening"),
     ("unknown key", "modal_damping = 0.02", "modal_dampin = 0.02",
      ["body 'clamped'", "unknown key 'modal_dampin'", "allowed: name, kind, source"], "modal_dampin"),
     ("missing key", "mass = 2.0\n", "\n", ["body 'block'", "missing required key 'mass'"], "[[body]]"),

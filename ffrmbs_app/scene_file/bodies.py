@@ -94,6 +94,10 @@ class BodyReader:
         if t.has("modal_damping"):
             zeta = (t.number("modal_damping", low=0.0) if not isinstance(t.data["modal_damping"], list)
                     else _modal(t, "modal_damping", n_modes, low=0.0))
+        stiffening = t.get("geometric_stiffening")
+        if stiffening and body_data.geometric_stiffness is None:
+            t.fail("geometric_stiffening", "geometric_stiffening needs a body file with the geometric stiffness: "
+                                           "preprocess it with --geometric-stiffness")
 
         def make():
             motion = "free"
@@ -102,7 +106,7 @@ class BodyReader:
                                                        ((0.0, 0.0, 0.0) if R is None else R, A)))
             body = BODIES["flexible"](body_data, modes=selection, frame=motion, rotation=rotation,
                                       rayleigh=None if rayleigh is None else tuple(rayleigh), modal_damping=zeta,
-                                      name=name)
+                                      name=name, geometric_stiffening=stiffening)
             if frame == "free":
                 body.set_initial(R=R, A=A, v=v, omega=w)
             return body.set_initial(q_f=q_f, qdot_f=qd_f)

@@ -106,6 +106,9 @@ other keys take the default shown.
   the initial elastic coordinates and their rates.
   ``rayleigh`` ([α [1/s], β [s]]) and ``modal_damping`` (ζ, one value or one per
   mode): the damping. Both are off by default.
+  ``geometric_stiffening`` (false): true adds the stiffening of the body by the inertia
+  loads of its spinning frame (:mod:`mbs.geometric_stiffening`); the body file must hold
+  the geometric stiffness (``ffrmbs preprocess ... --geometric-stiffness``).
 - "rigid": :class:`mbs.RigidBody`. ``mass`` *req.* [kg] > 0. ``inertia`` *req.*
   [kg m²] about the centre of mass in body axes: a 3 x 3 matrix, or 3 principal
   values. ``com`` ([0, 0, 0]) [m] in the body frame. ``rotation``, ``position``,
@@ -378,6 +381,8 @@ BODY = {
         "modal_velocities": Key("special", None, unit="1/s", doc="one value per selected mode"),
         "rayleigh": Key("numbers", None, low=0.0, size=2, doc="[α [1/s], β [s]]"),
         "modal_damping": Key("special", None, doc="ζ >= 0: one value or one per selected mode"),
+        "geometric_stiffening": Key("boolean", False, doc="stiffening by the frame's inertia loads "
+                                                          "(body file preprocessed with --geometric-stiffness)"),
     },
     "rigid": {
         **BODY_HEAD,
