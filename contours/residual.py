@@ -196,9 +196,10 @@ def transfer_matrix(contour) -> sp.csr_matrix:
 
 def static_flexibility(body) -> StaticFlexibility:
     """The static flexibility of a flexible body's FE model (clamped or inertia relief,
-    :class:`preprocess.residual.StaticFlexibility`), factored once."""
+    :class:`preprocess.residual.StaticFlexibility`), factored once; a free-free body's
+    inertia relief with the mass the body uses (lumped or consistent, ``BodyData.mass``)."""
     data = body.data
-    return StaticFlexibility(data.stiffness, data.masses, data.u0, clamped_nodes_of(data))
+    return StaticFlexibility(data.stiffness, data.mass, data.u0, clamped_nodes_of(data))
 
 
 def residual_compliances(contours, flexibility=None, cache_dir=None) -> list:
@@ -241,7 +242,8 @@ def residual_compliance(contour, flexibility=None, cache_dir=None) -> ResidualCo
 
 
 def _key(data, neutrals) -> str:
-    """Hash of what Tᵀ G T depends on: K, the masses, the node positions, the supports,
+    """Hash of what Tᵀ G T depends on: K, the masses (and the consistent mass matrix if
+    the body has one), the node positions, the supports,
     and per contour its nodes, knots and the fitting matrix F, fingerprinted by the
     control points of a fixed pseudo-random nodal field (F r: equal for two F only if
     they are equal, with probability one)."""
@@ -249,6 +251,10 @@ def _key(data, neutrals) -> str:
     K = sp.csr_matrix(data.stiffness)
     for a in (K.indptr, K.indices, K.data, data.masses, data.u0, clamped_nodes_of(data)):
         h.update(np.ascontiguousarray(a).tobytes())
+    if data.mass_matrix is not None:
+        M = sp.csr_matrix(data.mass_matrix)
+        for a in (M.indptr, M.indices, M.data):
+            h.update(np.ascontiguousarray(a).tobytes())
     for n in neutrals:
         nodes = np.asarray(n.nodes)
         field = np.random.default_rng(12345).standard_normal(nodes.shape + (2,))

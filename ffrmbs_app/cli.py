@@ -79,21 +79,24 @@ def _stage(label, fn, *args, announce_in=None, on_start=None, **kwargs):
 
 
 def _preprocess(spec, modes, clamp, units, density, young, poisson, order, mesh_size, out, check_limits=True,
-                structured=None, geometric_stiffness=False):
+                structured=None, geometric_stiffness=False, mass="lumped"):
     from preprocess.bodyfiles import write_body
-    from preprocess.pipeline import Material, build_body, check_n_modes, mesh_source, mesh_statistics
+    from preprocess.pipeline import Material, build_body, check_mass_kind, check_n_modes, mesh_source, \
+        mesh_statistics
 
     from ffrmbs_app.progress import stage_bar, write
 
     material = Material(density, young, poisson)        # every option checked before meshing:
     check_n_modes(modes)                                # these here, the mesh options by mesh_source
+    check_mass_kind(mass)
     with stage_bar(3 + (out is not None) + bool(geometric_stiffness), "preprocess") as bar:
         mesh = _stage(f"meshing {spec}", mesh_source, spec, order, mesh_size, check_limits,
                       announce_in="announce", on_start=lambda: bar.stage("meshing"), structured=structured)
         write(mesh_statistics(mesh), sys.stdout)
         params = dict(input=spec, mesh_size=mesh_size, structured=structured)
         body = build_body(mesh, material, modes, clamp=clamp, units=units, params=params, log=_log,
-                          progress=bar.stage, check_limits=check_limits, geometric_stiffness=geometric_stiffness)
+                          progress=bar.stage, check_limits=check_limits, geometric_stiffness=geometric_stiffness,
+                          mass=mass)
         if out is not None:
             bar.stage("writing body files")
             _stage(f"writing body files to {out}", write_body, out, body)
@@ -104,7 +107,7 @@ def _preprocess(spec, modes, clamp, units, density, young, poisson, order, mesh_
 def cmd_preprocess(args):
     _preprocess(args.input, args.modes, None if args.free else args.clamp, args.units,
                 args.density, args.young, args.poisson, args.order, args.mesh_size, args.out, not args.no_limits,
-                args.structured, args.geometric_stiffness)
+                args.structured, args.geometric_stiffness, args.mass)
 
 
 def cmd_info(args):
@@ -236,6 +239,9 @@ def build_parser():
     pre.add_argument("--geometric-stiffness", action="store_true",
                      help="also store the geometric stiffness of the frame's inertia loads (for bodies that spin: "
                           "geometric_stiffening in the FFR body); in body.h5 only")
+    pre.add_argument("--mass", choices=("lumped", "consistent"), default="lumped",
+                     help="inertia from lumped node masses (default) or the consistent mass matrix "
+                          "(written to body.h5 only: the text files hold node masses)")
     pre.add_argument("--out", type=output_dir, required=True, help="output directory")
     pre.add_argument("--no-limits", action="store_true",
                      help=f"mesh and solve even when the mesh is estimated over {mesh_limits.MAX_NODES:.0e} nodes "

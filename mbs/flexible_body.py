@@ -1,12 +1,13 @@
 """FlexibleBodyFFR: a flexible body in the floating frame of reference (thesis Sec. 2.4, 4.3).
 
-Built from the body files of :mod:`preprocess` (ū0, Φ, lumped masses, K) and a mode
-selection. The shape integrals (thesis eq. 2.53, 2.54, 2.65) are summed once; after that
-the mass matrix (eq. 2.44–2.69) and the quadratic velocity vector (eq. 2.77–2.79) cost
-O(n_f²) per evaluation, whatever the node count. Elastic forces K q (eq. 2.36) use the
-modal stiffness K_ff = Φᵀ K Φ, plus, with ``geometric_stiffening``, the stiffening by the
-frame's inertia loads K_geo(Ω, Ω̇, a) (:mod:`mbs.geometric_stiffening`); damping is
-Rayleigh, D = α M_ff + β K_ff, or modal, D = 2 ζ_i ω_i per mode (report Sec. 7.1).
+Built from the body files of :mod:`preprocess` (ū0, Φ, lumped masses or the consistent
+mass matrix M_s when the body has one, K) and a mode selection. The shape integrals
+(thesis eq. 2.53, 2.54, 2.65; eq. C1 of :mod:`mbs.shape_integrals` with M_s) are summed
+once; after that the mass matrix (eq. 2.44–2.69) and the quadratic velocity vector
+(eq. 2.77–2.79) cost O(n_f²) per evaluation, whatever the node count. Elastic forces
+K q (eq. 2.36) use the modal stiffness K_ff = Φᵀ K Φ, plus, with ``geometric_stiffening``,
+the stiffening by the frame's inertia loads K_geo(Ω, Ω̇, a) (:mod:`mbs.geometric_stiffening`);
+damping is Rayleigh, D = α M_ff + β K_ff, or modal, D = 2 ζ_i ω_i per mode (report Sec. 7.1).
 
 State layout (free frame, quaternion default): q = (R (3), p (4), q_f (n_f)),
 u = (Ṙ (3), ω̄ (3), q̇_f (n_f)); with ``rotation="cardan"`` q = (R, θ, q_f), u = q̇;
@@ -75,7 +76,8 @@ class FlexibleBodyFFR(FloatingFrameBody):
         self.mode_indices = select_modes(data.n_modes, modes)
         super().__init__(name, len(self.mode_indices), frame, rotation)
         self.phi = np.ascontiguousarray(data.phi[:, self.mode_indices])
-        self.integrals = ShapeIntegrals.from_nodes(data.u0, self.phi, data.masses)
+        self.integrals = (ShapeIntegrals.from_nodes(data.u0, self.phi, data.masses) if data.mass_matrix is None
+                          else ShapeIntegrals.from_mass_matrix(data.u0, self.phi, data.mass_matrix))
         self.K_ff = self.phi.T @ (data.stiffness @ self.phi)
         self.K_ff = 0.5 * (self.K_ff + self.K_ff.T)
         self.D_ff = self._damping(rayleigh, modal_damping)

@@ -198,11 +198,13 @@ def _vanishing_terms(body) -> list:
 
 
 def _gravity_loads(body, gravity):
-    """Gravity as nodal forces m_j g from t = 0 (inertial axes; body axes on a frame at rest)."""
+    """Gravity as nodal forces w_j g from t = 0 (inertial axes; body axes on a frame at rest),
+    w = M_s 1 the row sums of the body's mass (its lumped masses when lumped): the
+    consistent load M (1 ⊗ g), so φᵀ f is exact for either mass."""
     from .modal import StepLoads
 
     g = gravity if body.is_free else body.orientation(body.q_init).T @ gravity
-    f = body.data.masses[:, None] * g[None, :]
+    f = body.data.node_weights()[:, None] * g[None, :]
     return StepLoads([0.0], np.arange(body.data.n_nodes), f[None], "inertial" if body.is_free else "body")
 
 
@@ -251,7 +253,7 @@ def _coupling(body, loads, t_end):
     from .modal.decision import alpha_response, omega_response
 
     basis = ModalBasis.from_body(body.data, body.mode_indices)
-    b, inertia, m = basis.b0, basis.inertia, basis.masses
+    b, inertia, m = basis.b0, basis.inertia, basis.mass
     inv = np.linalg.inv(inertia)
     n_inv, n_I = np.linalg.norm(inv, 2), np.linalg.norm(inertia, 2)
     starts = np.unique(np.concatenate([ld.times for ld in loads] + [[0.0]]))

@@ -413,12 +413,12 @@ def coordinate_units(body, q_f_units="SI") -> tuple[str, str]:
 
 def modal_units(body) -> tuple[str, str]:
     """(units of the mode shapes Φ, of the modal coordinates q_f): Φ q_f is in m. Modes
-    normalized to the lumped mass (Φᵀ M Φ = I, as :mod:`preprocess.modes` writes them)
+    normalized to the body's mass, lumped or consistent (Φᵀ M Φ = I, as :mod:`preprocess.modes` writes them)
     give Φ [kg^(-1/2)] and q_f [kg^(1/2) m]; other normalizations are "SI"."""
-    masses = getattr(getattr(body, "data", None), "masses", None)
-    if masses is None:
+    data = getattr(body, "data", None)
+    if getattr(data, "masses", None) is None:
         return "SI", "SI"
-    if mass_normalized(body.phi, masses):
+    if mass_normalized(body.phi, data.mass):
         return "kg^(-1/2)", "kg^(1/2) m"
     return "SI", "SI"
 

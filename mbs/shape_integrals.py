@@ -10,6 +10,14 @@ Thesis eq. 2.53, 2.54 and 2.65 define, for lumped node masses m_j, undeformed po
     I_bar   = Σ m_j x_k Φ_l                   (2.65)  [kg^½ m]      (3, 3, n_f)
     S_kl    = Σ m_j Φ_kᵀ Φ_l                  (2.65)  [-]           (3, 3, n_f, n_f)
 
+With a consistent mass matrix M_FE = M_s ⊗ 1₃ (:func:`preprocess.fe.consistent_mass_matrix`)
+the node sums become double sums over node pairs (a, b), ∫ ρ ... dV = Σ_ab M_ab ...:
+
+    m = 1ᵀ M_s 1,  I1 = Σ_ab M_ab ū0_b,  S_bar = Σ_ab M_ab Φ_b,
+    I_kl = Σ_ab M_ab x_ak x_bl,  I_bar = Σ_ab M_ab x_ak Φ_bl,  S_kl = Σ_ab M_ab Φ_akᵀ Φ_bl   (C1)
+
+(:meth:`ShapeIntegrals.from_mass_matrix`); lumped masses are the case M_s = diag(m_j).
+
 Everything the equations of motion need per step follows from these by contractions
 with q_f and q̇_f, never by a loop over nodes. One auxiliary array carries most of it,
 
@@ -60,6 +68,37 @@ class ShapeIntegrals:
             S_bar=mP.sum(axis=0),
             I_kl=(m[:, None] * u0).T @ u0,
             I_bar=np.einsum("jk,jla->kla", m[:, None] * u0, P),
+            S_kl=S_kl,
+            M_ff=S_kl[0, 0] + S_kl[1, 1] + S_kl[2, 2],
+            S_skew=S_skew,
+        )
+
+    @classmethod
+    def from_mass_matrix(cls, u0, phi, mass_matrix) -> "ShapeIntegrals":
+        """The shape integrals (C1) of a scalar mass matrix ``mass_matrix`` M_s (N, N)
+        [kg] (sparse or dense, symmetric): ``u0`` (N, 3) [m], ``phi`` (3N, n_f)
+        node-major. With Y = M_s X for X = [1, ū0, Φ] each integral is a product XᵀY;
+        cost O(nnz(M_s) n_f + N n_f²), paid once per body."""
+        u0 = np.asarray(u0, dtype=float)
+        n = u0.shape[0]
+        n_f = phi.shape[1]
+        P = np.asarray(phi, dtype=float).reshape(n, 3, n_f)
+        MP = np.asarray(mass_matrix @ P.reshape(n, 3 * n_f)).reshape(n, 3, n_f)   # Σ_b M_ab Φ_b
+        Mu = np.asarray(mass_matrix @ u0)                                         # Σ_b M_ab ū0_b
+        w = np.asarray(mass_matrix.sum(axis=1)).ravel()                           # Σ_b M_ab
+        S_kl = np.empty((3, 3, n_f, n_f))
+        for k in range(3):
+            for l in range(3):
+                S_kl[k, l] = P[:, k, :].T @ MP[:, l, :]
+        S_kl = 0.5 * (S_kl + S_kl.transpose(1, 0, 3, 2))      # S_kl[k, l] = S_kl[l, k]ᵀ exactly
+        S_skew = np.stack([S_kl[2, 1] - S_kl[1, 2], S_kl[0, 2] - S_kl[2, 0], S_kl[1, 0] - S_kl[0, 1]])
+        I_kl = u0.T @ Mu
+        return cls(
+            mass=float(w.sum()),
+            I1=w @ u0,
+            S_bar=MP.sum(axis=0),
+            I_kl=0.5 * (I_kl + I_kl.T),
+            I_bar=np.einsum("jk,jlf->klf", u0, MP),
             S_kl=S_kl,
             M_ff=S_kl[0, 0] + S_kl[1, 1] + S_kl[2, 2],
             S_skew=S_skew,

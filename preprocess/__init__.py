@@ -10,7 +10,7 @@ Public surface::
 
 from preprocess.body import BodyData
 from preprocess.bodyfiles import read_body, write_body
-from preprocess.fe import face_load, lumped_masses, stiffness_matrix
+from preprocess.fe import consistent_mass_matrix, face_load, lumped_masses, stiffness_matrix
 from preprocess.geometry import box, cylinder, grooved_block, spherical_cap, stepped_beam
 from preprocess.mesh import Mesh, read_mesh
 from preprocess.modes import clamped_modes, free_modes
@@ -18,7 +18,8 @@ from preprocess.pipeline import Material, build_body, mesh_source
 from preprocess.statics import solve_static
 
 __all__ = [
-    "BodyData", "Material", "Mesh", "box", "build_body", "clamped_modes", "cylinder", "face_load",
+    "BodyData", "Material", "Mesh", "box", "build_body", "clamped_modes", "consistent_mass_matrix", "cylinder",
+    "face_load",
     "free_modes", "grooved_block", "lumped_masses", "mesh_source", "read_body", "read_mesh",
     "solve_static", "spherical_cap", "stepped_beam", "stiffness_matrix", "write_body",
 ]

@@ -9,9 +9,16 @@ Conventions
 * ``u0``: undeformed node positions ū0 in the body frame, shape (N, 3) [m].
 * ``phi``: mode shapes Φ, shape (3N, n_f), row ``3*i + k`` is node i, direction k
   (the layout of thesis Listing 4.2, 0-based). Clamped nodes have zero rows.
-  Produced by :mod:`preprocess.modes` mass-normalized: Φᵀ M Φ = I with the lumped M,
-  so Φ has units kg^-1/2.
-* ``masses``: lumped node masses m_j, shape (N,) [kg] (thesis Listing 4.3).
+  Produced by :mod:`preprocess.modes` mass-normalized: Φᵀ M Φ = I with the mass M the
+  body uses (below), so Φ has units kg^-1/2.
+* ``masses``: lumped node masses m_j, shape (N,) [kg] (thesis Listing 4.3); always
+  present, used wherever a mass per node is needed (e.g. a node's point load of gravity
+  in the text files).
+* ``mass_matrix``: the scalar consistent mass matrix M_s, scipy CSR (N, N) [kg], with
+  M_FE = M_s ⊗ 1₃ in the numbering of ``phi`` (:func:`preprocess.fe.consistent_mass_matrix`),
+  or None: the body's inertia is the lumped M_FE = diag(m_j, each repeated 3x). The mass
+  actually used (:attr:`BodyData.mass`) is M_s when present, else the lumped masses; the
+  modes, eigenvalues, total mass and centre of mass all refer to it.
 * ``stiffness``: the unconstrained stiffness matrix K, scipy CSR, shape (3N, 3N)
   [N/m], same DOF numbering as ``phi`` (thesis Listings 4.4-4.5).
 * ``eigenvalues``: ω² of the modes [rad²/s²], shape (n_f,), or None when unknown
@@ -44,10 +51,23 @@ SYMMETRY_RTOL = 1e-9
 NORMALIZED_TOL = 1e-6
 
 
-def mass_normalized(phi: np.ndarray, masses: np.ndarray) -> bool:
-    """Whether the mode shapes ``phi`` (3N, n_f) are normalized to the lumped ``masses``
-    (N,): max|Φᵀ M Φ − I| < NORMALIZED_TOL with M = diag(masses, each repeated 3x)."""
-    gram = phi.T @ (np.repeat(masses, 3)[:, None] * phi)
+def mass_times(mass, V) -> np.ndarray:
+    """M_FE V [kg × units of V] for ``V`` (3N,) or (3N, m) in the DOF numbering 3*j + k,
+    with ``mass`` either lumped node masses (N,) [kg] — M_FE = diag(m_j, each repeated
+    3x) — or a scalar sparse mass matrix M_s (N, N) [kg] — M_FE = M_s ⊗ 1₃, i.e.
+    (M_FE V)_(3a+k) = Σ_b M_s,ab V_(3b+k)."""
+    V = np.asarray(V, dtype=float)
+    if sp.issparse(mass):
+        return (mass @ V.reshape(mass.shape[0], -1)).reshape(V.shape)
+    m3 = np.repeat(np.asarray(mass, dtype=float), 3)
+    return m3[:, None] * V if V.ndim == 2 else m3 * V
+
+
+def mass_normalized(phi: np.ndarray, mass) -> bool:
+    """Whether the mode shapes ``phi`` (3N, n_f) are normalized to ``mass`` (lumped masses
+    (N,) or a scalar sparse M_s (N, N), see :func:`mass_times`): max|Φᵀ M_FE Φ − I| <
+    NORMALIZED_TOL."""
+    gram = phi.T @ mass_times(mass, phi)
     return bool(np.abs(gram - np.eye(phi.shape[1])).max() < NORMALIZED_TOL)
 
 
@@ -60,6 +80,7 @@ class BodyData:
     masses: np.ndarray
     stiffness: sp.csr_matrix
     eigenvalues: np.ndarray | None = None
+    mass_matrix: sp.csr_matrix | None = None
     node_groups: dict = field(default_factory=dict)
     surface_triangles: np.ndarray | None = None
     material: dict = field(default_factory=dict)
@@ -77,14 +98,34 @@ class BodyData:
         return self.phi.shape[1]
 
     @property
+    def mass(self):
+        """The mass the body uses: M_s (N, N) sparse when ``mass_matrix`` is set, else the
+        lumped masses (N,) [kg] — the form :mod:`preprocess.modes` and :func:`mass_times` take."""
+        return self.masses if self.mass_matrix is None else self.mass_matrix
+
+    def scalar_mass_matrix(self) -> sp.csr_matrix:
+        """The scalar mass matrix used, CSR (N, N) [kg]: ``mass_matrix``, or diag(masses)."""
+        if self.mass_matrix is not None:
+            return sp.csr_matrix(self.mass_matrix)
+        return sp.diags(self.masses).tocsr()
+
+    def node_weights(self) -> np.ndarray:
+        """w = M_s 1, (N,) [kg]: the row sums of the mass used (the lumped masses when
+        lumped). They give its zeroth and first moments exactly, m = Σ w_j and
+        Σ_ab M_ab ū0_b = Σ w_j ū0_j, and the consistent nodal forces w_j g of gravity g."""
+        return self.masses if self.mass_matrix is None else np.asarray(self.mass_matrix.sum(axis=1)).ravel()
+
+    @property
     def total_mass(self) -> float:
-        """Total mass Σ m_j [kg]."""
-        return float(self.masses.sum())
+        """Total mass m = 1ᵀ M_s 1 = Σ w_j [kg] of the mass used (:meth:`node_weights`)."""
+        return float(self.node_weights().sum())
 
     @property
     def center_of_mass(self) -> np.ndarray:
-        """Centre of mass c = Σ m_j ū0_j / Σ m_j in the body frame, shape (3,) [m]."""
-        return self.masses @ self.u0 / self.masses.sum()
+        """Centre of mass c = Σ w_j ū0_j / Σ w_j in the body frame, shape (3,) [m], w the
+        row sums of the mass used (:meth:`node_weights`; w = m_j when lumped)."""
+        w = self.node_weights()
+        return w @ self.u0 / w.sum()
 
     @property
     def surface_nodes(self) -> np.ndarray:
@@ -108,13 +149,13 @@ class BodyData:
         """ω² of each mode [rad²/s²].
 
         The stored eigenvalues if present, otherwise the Rayleigh quotients
-        ω_i² = φ_iᵀ K φ_i / φ_iᵀ M φ_i with the lumped M (exact for eigenvectors).
+        ω_i² = φ_iᵀ K φ_i / φ_iᵀ M φ_i with the mass M used (:attr:`mass`; exact for
+        eigenvectors).
         """
         if self.eigenvalues is not None:
             return np.asarray(self.eigenvalues, dtype=float)
-        m3 = np.repeat(self.masses, 3)
         num = np.einsum("ij,ij->j", self.phi, self.stiffness @ self.phi)
-        den = np.einsum("ij,i,ij->j", self.phi, m3, self.phi)
+        den = np.einsum("ij,ij->j", self.phi, mass_times(self.mass, self.phi))
         return num / den
 
     def frequencies(self) -> tuple[np.ndarray, np.ndarray]:
@@ -129,7 +170,8 @@ class BodyData:
             f"nodes:          {self.n_nodes}",
             f"surface nodes:  {len(self.surface_nodes) if self.surface_triangles is not None else 'unknown'}",
             f"modes:          {self.n_modes}",
-            f"total mass:     {self.total_mass:.6g} kg",
+            f"total mass:     {self.total_mass:.6g} kg "
+            f"({'lumped' if self.mass_matrix is None else 'consistent'} mass)",
             f"centre of mass: ({c[0]:.6g}, {c[1]:.6g}, {c[2]:.6g}) m",
         ]
         if self.node_groups:

@@ -3,7 +3,8 @@
 A body directory holds ``u0.dat``, ``modeShapeMatrix.dat``, ``mij.dat``,
 ``stiffnessMatrix.dat`` (:mod:`preprocess.textfiles`, Listings 4.1-4.5) and
 ``body.h5`` (:mod:`preprocess.hdf5file`, which also keeps eigenvalues, node groups,
-surface, material and params). :func:`write_body` writes all five atomically;
+surface, material, params and a consistent mass matrix). :func:`write_body` writes all
+five atomically (``body.h5`` alone for a body with a consistent mass matrix);
 :func:`read_body` reads a directory's ``body.h5``, the text files being the fallback.
 """
 
@@ -65,17 +66,23 @@ def write_body(directory, body: BodyData, units: str = "si") -> None:
     all five are in place. On any exception the files already moved are put back (or
     removed if they are new), the temporaries removed and the exception re-raised:
     the directory holds the old set or the new one, never a mix or a half-written file.
+
+    A body with a consistent mass matrix (``body.mass_matrix``), which the text files
+    cannot hold, is written as ``body.h5`` alone; text files of an earlier body in
+    ``directory`` are then removed, so that none is left that disagrees with it.
     """
     unit_system(units)
     directory = Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
     token = uuid.uuid4().hex
-    names = (*TEXT_FILES, HDF5_FILE)
+    text = body.mass_matrix is None
+    names = (*TEXT_FILES, HDF5_FILE) if text else (HDF5_FILE,)
     temporaries = {name: directory / f".{name}.{token}.tmp" for name in names}
     backups = {name: directory / f".{name}.{token}.old" for name in names}
     placed = []
     try:
-        write_text_files({name: temporaries[name] for name in TEXT_FILES}, body, units)
+        if text:
+            write_text_files({name: temporaries[name] for name in TEXT_FILES}, body, units)
         write_hdf5(temporaries[HDF5_FILE], body)
         for name in names:
             target = directory / name
@@ -93,6 +100,9 @@ def write_body(directory, body: BodyData, units: str = "si") -> None:
     finally:
         for path in (*temporaries.values(), *backups.values()):
             path.unlink(missing_ok=True)
+    if not text:
+        for name in TEXT_FILES:
+            (directory / name).unlink(missing_ok=True)
 
 
 def _keep(target: Path, backup: Path) -> None:

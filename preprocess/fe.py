@@ -1,4 +1,4 @@
-"""Linear elastic isotropic solid: stiffness and lumped masses of tet4 / tet10 meshes.
+"""Linear elastic isotropic solid: stiffness, consistent and lumped masses of tet4 / tet10 meshes.
 
 DOF numbering: DOF ``3*j + k`` is node j, direction k (thesis Listing 4.2 layout).
 
@@ -6,6 +6,8 @@ DOF numbering: DOF ``3*j + k`` is node j, direction k (thesis Listing 4.2 layout
   isoparametrically, written per node pair as
   K_(a i)(b j) = ∫ λ ∂_i N_a ∂_j N_b + μ ∂_j N_a ∂_i N_b + μ δ_ij ∇N_a·∇N_b dV
   with Lamé constants λ = Eν/((1+ν)(1−2ν)), μ = E/(2(1+ν)).
+* Consistent mass (Zienkiewicz & Taylor, The FEM vol. 1, eq. 16.25): M_FE = M_s ⊗ 1₃ with
+  the scalar matrix M_s,ab = Σ_e ∫ ρ N_a N_b dV, so (M_FE)_(3a+i)(3b+j) = δ_ij M_s,ab.
 * Lumped masses (report Sec. 3.4.1): row sum of the consistent mass matrix for
   tet4 (ρV/4 per corner); HRZ diagonal scaling for tet10 — the diagonal of the
   consistent mass matrix scaled so that each element keeps its mass ρV_e — since
@@ -140,6 +142,29 @@ def lumped_masses(mesh: Mesh, density) -> np.ndarray:
             share = diag / diag.sum(axis=1, keepdims=True)
         np.add.at(masses, tets, element_mass[:, None] * share)
     return masses
+
+
+def consistent_mass_matrix(mesh: Mesh, density) -> sp.csr_matrix:
+    """The scalar consistent mass matrix M_s,ab = Σ_e ∫ ρ N_a N_b dV [kg for SI input]
+    (module docstring), scipy CSR (N, N), exactly symmetric; M_FE = M_s ⊗ 1₃ in the DOF
+    numbering 3*j + k. Quadrature of degree 2·order (exact for straight-sided elements);
+    its row sums are the tet4 lumped masses, 1ᵀ M_s 1 the body's mass."""
+    check_positive("density", density)
+    n = mesh.tets.shape[1]
+    rows, cols, vals = [], [], []
+    for start in range(0, mesh.n_elements, _CHUNK):
+        tets = mesh.tets[start:start + _CHUNK]
+        wdet, N, _ = _geometry(mesh, tets, 2 * mesh.order)
+        me = density * np.einsum("eq,qa,qb->eab", wdet, N, N)
+        rows.append(np.repeat(tets, n, axis=1).ravel())
+        cols.append(np.tile(tets, (1, n)).ravel())
+        vals.append(me.ravel())
+    M = sp.coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                      shape=(mesh.n_nodes, mesh.n_nodes)).tocsr()
+    M = (M + M.T) * 0.5
+    M.sum_duplicates()
+    M.sort_indices()
+    return M
 
 
 def face_load(mesh: Mesh, nodes, total_force) -> np.ndarray:

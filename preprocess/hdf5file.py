@@ -1,7 +1,8 @@
 """The HDF5 body file: one :class:`~preprocess.body.BodyData` in one file, SI units.
 
 It holds the four text files' data (thesis Sec. 4.2.1) plus what they cannot:
-eigenvalues, node groups, surface triangles, material and preprocessing params.
+eigenvalues, node groups, surface triangles, material, preprocessing params and the
+consistent mass matrix.
 
 Layout (N nodes, n_f modes, indices 0-based)::
 
@@ -14,6 +15,10 @@ Layout (N nodes, n_f modes, indices 0-based)::
         data               (nnz,) f8
         indices            (nnz,) i8        column indices
         indptr             (3N+1,) i8       row pointers
+    /mass_matrix/          group, attr shape = (N, N): the scalar consistent mass matrix
+                           M_s [kg] (M_FE = M_s ⊗ 1₃) in CSR form, datasets as
+                           /stiffness; symmetric, positive diagonal   (optional:
+                           absent means lumped masses, BodyData.mass_matrix None)
     /eigenvalues           (n_f,) f8        ω² [rad²/s²]            (optional)
     /node_groups/<name>    (n,) i8          node indices of the group (one dataset per group)
     /surface/triangles     (T, 3|6) i8      surface faces            (optional)
@@ -23,8 +28,8 @@ Layout (N nodes, n_f modes, indices 0-based)::
 
 :func:`read_hdf5` checks the format attributes, the presence, shape, type and
 finiteness of every dataset, magnitudes (at most :data:`~preprocess.body.MAX_MAGNITUDE`),
-index ranges and the symmetry of K; any fault (also a file that is not a regular HDF5
-file) raises :class:`~ffrmbs.errors.InputFileError` naming the dataset.
+index ranges, the symmetry of K and of M_s and M_s's positive diagonal; any fault
+(also a file that is not a regular HDF5 file) raises :class:`~ffrmbs.errors.InputFileError` naming the dataset.
 """
 
 from __future__ import annotations
@@ -49,18 +54,15 @@ def write_hdf5(path, body: BodyData) -> None:
     bad = [name for name in body.node_groups if "/" in name or name in ("", ".")]
     if bad:
         raise ModelError(f"node group names unusable in HDF5: {bad}")
-    k = sp.csr_matrix(body.stiffness).sorted_indices()
     with h5py.File(path, "w") as f:
         f.attrs.update(format=FORMAT, format_version=FORMAT_VERSION, units="si",
                        params=json.dumps(body.params))
         f["u0"] = np.asarray(body.u0, dtype="f8")
         f["phi"] = np.asarray(body.phi, dtype="f8")
         f["masses"] = np.asarray(body.masses, dtype="f8")
-        stiffness = f.create_group("stiffness")
-        stiffness.attrs["shape"] = np.asarray(k.shape, dtype="i8")
-        stiffness["data"] = k.data.astype("f8")
-        stiffness["indices"] = k.indices.astype("i8")
-        stiffness["indptr"] = k.indptr.astype("i8")
+        _write_csr(f, "stiffness", body.stiffness)
+        if body.mass_matrix is not None:
+            _write_csr(f, "mass_matrix", body.mass_matrix)
         if body.eigenvalues is not None:
             f["eigenvalues"] = np.asarray(body.eigenvalues, dtype="f8")
         groups = f.create_group("node_groups")
@@ -72,6 +74,16 @@ def write_hdf5(path, body: BodyData) -> None:
             f["geometric_stiffness"] = np.asarray(body.geometric_stiffness, dtype="f8")
         f.create_group("material").attrs.update(
             {key: float(value) for key, value in body.material.items()})
+
+
+def _write_csr(f: h5py.File, name: str, matrix) -> None:
+    """Group ``name`` holding the sparse ``matrix`` in CSR form (attr shape, data, indices, indptr)."""
+    a = sp.csr_matrix(matrix).sorted_indices()
+    group = f.create_group(name)
+    group.attrs["shape"] = np.asarray(a.shape, dtype="i8")
+    group["data"] = a.data.astype("f8")
+    group["indices"] = a.indices.astype("i8")
+    group["indptr"] = a.indptr.astype("i8")
 
 
 class _Reader:
@@ -126,23 +138,39 @@ class _Reader:
         return value.decode() if isinstance(value, bytes) else value
 
 
-def _stiffness(r: _Reader, n_dof: int) -> sp.csr_matrix:
-    """The CSR stiffness matrix of group 'stiffness', shape (n_dof, n_dof)."""
-    shape = tuple(np.asarray(r.group("stiffness", required=True).attrs.get("shape", ())).tolist())
-    if shape != (n_dof, n_dof):
-        r.fail(f"group 'stiffness' must have attribute shape = ({n_dof}, {n_dof}), found {shape}")
-    parts = (r.array("stiffness/data", shape=(None,)),
-             r.array("stiffness/indices", integer=True, shape=(None,)),
-             r.array("stiffness/indptr", integer=True, shape=(n_dof + 1,)))
+def _symmetric_csr(r: _Reader, name: str, n: int, label: str, symbol: str) -> sp.csr_matrix:
+    """The symmetric CSR matrix (n, n) of group ``name`` (the ``label`` ``symbol`` in messages)."""
+    shape = tuple(np.asarray(r.group(name, required=True).attrs.get("shape", ())).tolist())
+    if shape != (n, n):
+        r.fail(f"group '{name}' must have attribute shape = ({n}, {n}), found {shape}")
+    parts = (r.array(f"{name}/data", shape=(None,)),
+             r.array(f"{name}/indices", integer=True, shape=(None,)),
+             r.array(f"{name}/indptr", integer=True, shape=(n + 1,)))
     try:
         k = sp.csr_matrix(parts, shape=shape)
         k.check_format(full_check=True)
     except ValueError as exc:
-        r.fail(f"group 'stiffness' is not a valid CSR matrix: {exc}")
+        r.fail(f"group '{name}' is not a valid CSR matrix: {exc}")
     if k.nnz and abs(k - k.T).max() > SYMMETRY_RTOL * abs(k).max():
-        r.fail("the stiffness matrix in group 'stiffness' is not symmetric "
-               f"(relative tolerance {SYMMETRY_RTOL:g} of max|K|)")
+        r.fail(f"the {label} in group '{name}' is not symmetric "
+               f"(relative tolerance {SYMMETRY_RTOL:g} of max|{symbol}|)")
     return k
+
+
+def _stiffness(r: _Reader, n_dof: int) -> sp.csr_matrix:
+    """The CSR stiffness matrix of group 'stiffness', shape (n_dof, n_dof)."""
+    return _symmetric_csr(r, "stiffness", n_dof, "stiffness matrix", "K")
+
+
+def _mass_matrix(r: _Reader, n: int) -> sp.csr_matrix | None:
+    """The scalar consistent mass matrix M_s (n, n) of the optional group 'mass_matrix'
+    (None when absent), symmetric with a positive diagonal."""
+    if "mass_matrix" not in r.f:
+        return None
+    m = _symmetric_csr(r, "mass_matrix", n, "mass matrix", "M_s")
+    if not (m.diagonal() > 0).all():
+        r.fail("the mass matrix in group 'mass_matrix' has a non-positive diagonal entry")
+    return m
 
 
 def _read(r: _Reader) -> BodyData:
@@ -160,6 +188,7 @@ def _read(r: _Reader) -> BodyData:
         r.fail("dataset 'masses' holds non-positive masses")
     phi = r.array("phi", shape=(3 * n, None))
     stiffness = _stiffness(r, 3 * n)
+    mass_matrix = _mass_matrix(r, n)
     eigenvalues = (r.array("eigenvalues", shape=(phi.shape[1],)) if "eigenvalues" in r.f
                    else None)
     groups = r.group("node_groups")
@@ -186,7 +215,7 @@ def _read(r: _Reader) -> BodyData:
     geometric = (r.array("geometric_stiffness", shape=(12, phi.shape[1], phi.shape[1]))
                  if "geometric_stiffness" in r.f else None)
     return BodyData(u0=u0, phi=phi, masses=masses, stiffness=stiffness, eigenvalues=eigenvalues,
-                    node_groups=node_groups, surface_triangles=surface, material=material,
+                    mass_matrix=mass_matrix, node_groups=node_groups, surface_triangles=surface, material=material,
                     params=params, geometric_stiffness=geometric)
 
 

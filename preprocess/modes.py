@@ -1,4 +1,9 @@
-"""Mode shapes: lowest eigenpairs of K φ = ω² M φ with the lumped M (thesis Sec. 2.4.4, report eq. 2-3).
+"""Mode shapes: lowest eigenpairs of K φ = ω² M φ (thesis Sec. 2.4.4, report eq. 2-3).
+
+The mass ``masses`` of every function here is either the lumped node masses (N,) [kg],
+M = diag(m_j, each repeated 3x), or the scalar consistent mass matrix M_s (N, N) [kg]
+as a scipy sparse matrix, M = M_s ⊗ 1₃ (:func:`preprocess.fe.consistent_mass_matrix`,
+:func:`preprocess.body.mass_times`). The modes are normalized with the mass given.
 
 Two ways, as thesis Sec. 2.4.4 describes:
 
@@ -22,15 +27,25 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as sla
 
 from ffrmbs.errors import ModelError
+from preprocess.body import mass_times
 
 RIGID_TOL = 1e-6  # eigenvalues below RIGID_TOL × largest computed one count as rigid
 
 
+def dof_mass_matrix(masses) -> sp.csr_matrix:
+    """M (3N, 3N) sparse of lumped masses (N,) (diagonal) or of a scalar sparse M_s (M_s ⊗ 1₃)."""
+    if sp.issparse(masses):
+        return sp.kron(masses, sp.identity(3), format="csr")
+    return sp.diags(np.repeat(masses, 3)).tocsr()
+
+
 def rigid_body_modes(u0, masses):
     """The six rigid-body modes (3N, 6), M-orthonormal: three translations, three
-    rotations about the centre of mass (report eq. 13-14)."""
-    n = len(masses)
-    c = masses @ u0 / masses.sum()
+    rotations about the centre of mass c = Σ w_j ū0_j / Σ w_j, w = M_s 1 the row sums
+    (the masses themselves when lumped) (report eq. 13-14)."""
+    n = masses.shape[0]
+    w = masses if not sp.issparse(masses) else np.asarray(masses.sum(axis=1)).ravel()
+    c = w @ u0 / w.sum()
     r = u0 - c
     R = np.zeros((n, 3, 6))
     R[:, [0, 1, 2], [0, 1, 2]] = 1.0
@@ -39,23 +54,26 @@ def rigid_body_modes(u0, masses):
         e[k] = 1.0
         R[:, :, 3 + k] = np.cross(e, r)
     R = R.reshape(3 * n, 6)
-    return _mass_orthonormalize(R, np.repeat(masses, 3))
+    return _mass_orthonormalize(R, masses)
 
 
-def _mass_orthonormalize(V, m3):
-    """Columns of V made M-orthonormal (M = diag(m3)) by a Cholesky factor of Vᵀ M V."""
-    G = V.T @ (m3[:, None] * V)
+def _mass_orthonormalize(V, mass):
+    """Columns of V made M-orthonormal by a Cholesky factor of Vᵀ M V; ``mass``: lumped
+    masses (N,), or any sparse M of V's rows (``mass`` of :func:`preprocess.body.mass_times`)."""
+    if sp.issparse(mass) and mass.shape[0] == V.shape[0]:
+        G = V.T @ (mass @ V)
+    else:
+        G = V.T @ mass_times(mass, V)
     L = la.cholesky(0.5 * (G + G.T), lower=True)
     return la.solve_triangular(L, V.T, lower=True).T
 
 
-def _eigsh(K, m, k, sigma):
+def _eigsh(K, M, k, sigma):
     """Shift-invert Lanczos from a fixed generic start vector: without one ARPACK draws it
     from a generator whose state depends on earlier calls, and the same mesh gave modes
     differing in the last digits from one run (or call order) to the next. A singular
     K − σM (which the mesh checks of :func:`preprocess.pipeline.build_body` should have
-    caught) is a ModelError."""
-    M = sp.diags(m)
+    caught) is a ModelError. ``M``: the sparse mass matrix of K's DOFs."""
     v0 = np.random.default_rng(0).standard_normal(K.shape[0])
     try:
         vals, vecs = sla.eigsh(K.tocsc(), k=k, M=M.tocsc(), sigma=sigma, which="LM", v0=v0)
@@ -88,9 +106,9 @@ def clamped_modes(K, masses, n_modes, clamped_nodes):
     free = ~fixed
     if n_modes >= free.sum():
         raise ModelError(f"{n_modes} modes requested but only {free.sum() - 1} can be computed")
-    m3 = np.repeat(masses, 3)
-    vals, vecs = _eigsh(K[free][:, free], m3[free], n_modes, sigma=0.0)
-    vecs = _mass_orthonormalize(vecs, m3[free])
+    M = dof_mass_matrix(masses)[free][:, free]
+    vals, vecs = _eigsh(K[free][:, free], M, n_modes, sigma=0.0)
+    vecs = _mass_orthonormalize(vecs, M)
     phi = np.zeros((ndof, vecs.shape[1]))
     phi[free] = vecs
     return vals, phi
@@ -104,12 +122,12 @@ def free_modes(K, masses, u0, n_modes):
     found, or a ModelError reports the eigenvalues (a mechanism, or a body made of
     unconnected parts, has more). Returns (ω² (n,), Φ (3N, n)), Φᵀ M Φ = I.
     """
-    m3 = np.repeat(masses, 3)
+    M = dof_mass_matrix(masses)
     if n_modes + 6 >= K.shape[0]:
         raise ModelError(f"{n_modes} elastic modes requested but the mesh has only {K.shape[0]} DOFs")
     # shift below zero: K − σM is positive definite although K is singular
-    sigma = -1e-6 * (K.diagonal().mean() / m3.mean())
-    vals, vecs = _eigsh(K, m3, n_modes + 6, sigma=sigma)
+    sigma = -1e-6 * (K.diagonal().mean() / M.diagonal().mean())
+    vals, vecs = _eigsh(K, M, n_modes + 6, sigma=sigma)
     rigid = np.abs(vals) < RIGID_TOL * vals.max()
     if rigid.sum() != 6:
         raise ModelError(
@@ -118,8 +136,8 @@ def free_modes(K, masses, u0, n_modes):
             "is the mesh connected and free of mechanisms?")
     vals, vecs = vals[~rigid], vecs[:, ~rigid]
     R = rigid_body_modes(u0, masses)
-    vecs = vecs - R @ (R.T @ (m3[:, None] * vecs))
-    return vals, _mass_orthonormalize(vecs, m3)
+    vecs = vecs - R @ (R.T @ (M @ vecs))
+    return vals, _mass_orthonormalize(vecs, M)
 
 
 def all_modes(stiffness, masses, clamped_nodes=None, u0=None, max_dof=6000):
@@ -128,7 +146,8 @@ def all_modes(stiffness, masses, clamped_nodes=None, u0=None, max_dof=6000):
     The reference "all modes" set of the 90 % effective-mass criterion (report
     eq. 36, Sec. 5.3). K φ = ω² M φ with the lumped M = diag(m3) is solved as the
     equivalent symmetric standard problem (M^-1/2 K M^-1/2) ψ = ω² ψ, φ = M^-1/2 ψ,
-    with scipy.linalg.eigh; the φ are then exactly M-orthonormal, Φᵀ M Φ = I.
+    with scipy.linalg.eigh; with a consistent M (``masses`` a sparse M_s) as the
+    generalized problem by scipy.linalg.eigh(K, M). The φ are M-orthonormal, Φᵀ M Φ = I.
 
     * clamped (``clamped_nodes`` given): the clamped DOFs are removed; rows of Φ
       at clamped nodes are zero, as in :func:`clamped_modes`.
@@ -138,16 +157,17 @@ def all_modes(stiffness, masses, clamped_nodes=None, u0=None, max_dof=6000):
       needed to drop them, as :func:`free_modes` does by eigenvalue.
 
     Parameters: ``stiffness`` K (3N, 3N) [N/m] (sparse or dense), ``masses`` (N,)
-    [kg], ``clamped_nodes`` node indices or None, ``u0`` (N, 3) [m].
+    [kg] or sparse M_s (N, N) [kg] (module docstring), ``clamped_nodes`` node indices
+    or None, ``u0`` (N, 3) [m].
     Returns (ω² (n,) [rad²/s²] ascending, Φ (3N, n) [kg^-1/2]) with n = free DOFs
     (clamped) or 3N − 6 (free). A ModelError is raised above ``max_dof`` free DOFs
     (the solve holds about five dense n x n matrices of 8 n² bytes each and takes
     O(n³) time) and when a zero eigenvalue remains (a mechanism, unconnected parts,
     or an empty clamp).
     """
-    masses = np.asarray(masses, dtype=float)
-    m3 = np.repeat(masses, 3)
-    ndof = m3.size
+    if not sp.issparse(masses):
+        masses = np.asarray(masses, dtype=float)
+    ndof = 3 * masses.shape[0]
     if stiffness.shape != (ndof, ndof):
         raise ModelError(f"stiffness is {stiffness.shape}, expected ({ndof}, {ndof}) for {ndof // 3} nodes")
     free = np.ones(ndof, dtype=bool) if clamped_nodes is None else ~clamped_dofs(ndof, clamped_nodes)
@@ -159,18 +179,41 @@ def all_modes(stiffness, masses, clamped_nodes=None, u0=None, max_dof=6000):
     if clamped_nodes is None and u0 is None:
         raise ModelError("all_modes of a free body needs the node positions u0 to remove the rigid-body modes")
     K = stiffness.toarray() if sp.issparse(stiffness) else np.asarray(stiffness, dtype=float)
-    s = 1.0 / np.sqrt(m3[free])
-    A = s[:, None] * K[np.ix_(free, free)] * s[None, :]
-    if clamped_nodes is None:
-        Q = la.qr(np.sqrt(m3)[:, None] * rigid_body_modes(np.asarray(u0, float), masses), mode="full")[0][:, 6:]
-        vals, V = la.eigh(Q.T @ A @ Q)
-        V = Q @ V
-    else:
-        vals, V = la.eigh(A)
+    solve = _dense_consistent if sp.issparse(masses) else _dense_lumped
+    vals, phi_free = solve(K, masses, free, None if clamped_nodes is not None else np.asarray(u0, float))
     if vals[0] <= 1e-10 * vals[-1]:
         raise ModelError(
             f"all_modes: zero eigenvalue ω² = {vals[0]:.3g} among the elastic modes (largest {vals[-1]:.3g}); "
             "is the mesh connected, free of mechanisms and sufficiently clamped?")
     phi = np.zeros((ndof, vals.size))
-    phi[free] = s[:, None] * V
+    phi[free] = phi_free
     return vals, phi
+
+
+def _dense_lumped(K, masses, free, u0):
+    """(ω², Φ on the free DOFs) of :func:`all_modes` with lumped masses (N,): the standard
+    problem of M^-1/2 K M^-1/2; ``u0`` given (a free body): on the M-orthogonal complement
+    of the rigid modes."""
+    m3 = np.repeat(masses, 3)
+    s = 1.0 / np.sqrt(m3[free])
+    A = s[:, None] * K[np.ix_(free, free)] * s[None, :]
+    if u0 is not None:
+        Q = la.qr(np.sqrt(m3)[:, None] * rigid_body_modes(u0, masses), mode="full")[0][:, 6:]
+        vals, V = la.eigh(Q.T @ A @ Q)
+        V = Q @ V
+    else:
+        vals, V = la.eigh(A)
+    return vals, s[:, None] * V
+
+
+def _dense_consistent(K, M_s, free, u0):
+    """(ω², Φ on the free DOFs) of :func:`all_modes` with a scalar sparse M_s: the
+    generalized problem K φ = ω² M φ; ``u0`` given (a free body): restricted to the
+    null space Q of (M R)ᵀ (Q orthonormal), eigh(Qᵀ K Q, Qᵀ M Q), Φ = Q V."""
+    M = dof_mass_matrix(M_s).toarray()[np.ix_(free, free)]
+    K = K[np.ix_(free, free)]
+    if u0 is None:
+        return la.eigh(K, M)
+    Q = la.qr(M @ rigid_body_modes(u0, M_s), mode="full")[0][:, 6:]
+    vals, V = la.eigh(Q.T @ K @ Q, Q.T @ M @ Q)
+    return vals, Q @ V

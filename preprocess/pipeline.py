@@ -154,8 +154,8 @@ def mesh_source(spec: str, order=None, mesh_size=None, check_limits=True, announ
 
 def build_body(mesh: Mesh, material: Material, n_modes: int, clamp: str | None = None,
                units: str = "si", params: dict | None = None, log=None, progress=None,
-               check_limits: bool = True, geometric_stiffness: bool = False) -> BodyData:
-    """Assemble K and the lumped masses, compute ``n_modes`` modes, return SI body data.
+               check_limits: bool = True, geometric_stiffness: bool = False, mass: str = "lumped") -> BodyData:
+    """Assemble K and the masses, compute ``n_modes`` modes, return SI body data.
 
     ``clamp`` names a node group to clamp (thesis Sec. 2.4.4 (a)); None gives
     free-free modes with the rigid-body modes removed (b). ``log(msg)`` receives
@@ -165,10 +165,15 @@ def build_body(mesh: Mesh, material: Material, n_modes: int, clamp: str | None =
     :mod:`preprocess.limits` is a ModelError before assembly. ``geometric_stiffness``: also
     the modal geometric stiffness of the frame's inertia loads (:mod:`preprocess.geometric`),
     which a rotating body needs for its stiffening.
+    ``mass`` (:data:`MASS_KINDS`): "lumped" (default) — the modes and all inertia from the
+    lumped node masses; "consistent" — from the consistent mass matrix M_s
+    (:func:`preprocess.fe.consistent_mass_matrix`), stored as ``BodyData.mass_matrix`` (the
+    lumped masses are kept too); recorded as ``params["mass"]``.
     """
     log = log or (lambda msg: None)
     progress = progress or (lambda label: None)
     check_n_modes(n_modes)
+    check_mass_kind(mass)
     if check_limits:
         limits.check(limits.from_mesh(mesh.n_nodes, mesh.n_elements, mesh.order,
                                       float(mesh.element_volumes().sum()), float(np.ptp(mesh.points, axis=0).max())),
@@ -183,32 +188,44 @@ def build_body(mesh: Mesh, material: Material, n_modes: int, clamp: str | None =
     t0 = time.perf_counter()
     K = fe.stiffness_matrix(mesh_si, mat.young, mat.poisson)
     masses = fe.lumped_masses(mesh_si, mat.density)
-    log(f"assembled K ({K.nnz} nonzeros) and lumped masses in {time.perf_counter() - t0:.2f} s")
+    M_s = fe.consistent_mass_matrix(mesh_si, mat.density) if mass == "consistent" else None
+    log(f"assembled K ({K.nnz} nonzeros) and {mass} masses in {time.perf_counter() - t0:.2f} s")
 
     progress("computing modes")
     t0 = time.perf_counter()
     if clamped is not None:
-        eig, phi = modes.clamped_modes(K, masses, n_modes, clamped)
+        eig, phi = modes.clamped_modes(K, masses if M_s is None else M_s, n_modes, clamped)
     else:
-        eig, phi = modes.free_modes(K, masses, mesh_si.points, n_modes)
+        eig, phi = modes.free_modes(K, masses if M_s is None else M_s, mesh_si.points, n_modes)
     log(f"computed {len(eig)} {'clamped' if clamped is not None else 'free-free'} modes "
         f"in {time.perf_counter() - t0:.2f} s")
 
     geometric = None
     if geometric_stiffness:
         progress("geometric stiffness")
-        geometric = geometric_stiffness_of(mesh_si, K, mat.young, mat.poisson, masses, phi, clamped, log=log)
+        geometric = geometric_stiffness_of(mesh_si, K, mat.young, mat.poisson, masses if M_s is None else M_s, phi,
+                                           clamped, log=log)
 
     all_params = dict(params or {})
     all_params.update(n_modes=int(n_modes), clamp=clamp, free=clamp is None, units_in=units,
-                      element_order=mesh.order, n_elements=mesh.n_elements)
+                      element_order=mesh.order, n_elements=mesh.n_elements, mass=mass)
     return BodyData(
-        u0=mesh_si.points, phi=phi, masses=masses, stiffness=K, eigenvalues=eig,
+        u0=mesh_si.points, phi=phi, masses=masses, stiffness=K, eigenvalues=eig, mass_matrix=M_s,
         node_groups={k: np.asarray(v, dtype=np.int64) for k, v in mesh.node_groups.items()},
         surface_triangles=mesh.surface_triangles(),
         material=dict(density=mat.density, young=mat.young, poisson=mat.poisson),
         params=all_params, geometric_stiffness=geometric,
     )
+
+
+#: the masses :func:`build_body` takes
+MASS_KINDS = ("lumped", "consistent")
+
+
+def check_mass_kind(mass) -> None:
+    """ModelError unless ``mass`` is one of :data:`MASS_KINDS`."""
+    if not (isinstance(mass, str) and mass in MASS_KINDS):
+        raise ModelError(f"mass must be 'lumped' or 'consistent', not {mass!r}")
 
 
 def check_n_modes(n_modes) -> None:

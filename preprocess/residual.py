@@ -40,6 +40,7 @@ import scipy.sparse.linalg as sla
 
 from ffrmbs.errors import ModelError
 
+from .body import mass_times
 from .modes import clamped_dofs, rigid_body_modes
 
 
@@ -54,8 +55,9 @@ class StaticFlexibility:
     ----------
     stiffness : (3N, 3N) sparse [N/m]
         The unconstrained stiffness matrix K.
-    masses : (N,) [kg]
-        Lumped node masses (the inertia relief of a free-free body).
+    masses : (N,) or sparse (N, N) [kg]
+        The body's mass, lumped node masses or the scalar consistent M_s (the inertia
+        relief M R of a free-free body, eq. R3; see :mod:`preprocess.modes`).
     u0 : (N, 3) [m]
         Node positions (the rigid modes of a free-free body).
     clamped_nodes : int array or None
@@ -72,8 +74,9 @@ class StaticFlexibility:
                 self.free = ~clamped_dofs(n_dof, clamped_nodes)
                 self._lu = sla.splu(K[self.free][:, self.free].tocsc())
             else:
-                self.rigid = rigid_body_modes(np.asarray(u0, float), np.asarray(masses, float))
-                MR = np.repeat(np.asarray(masses, float), 3)[:, None] * self.rigid
+                mass = masses if sp.issparse(masses) else np.asarray(masses, float)
+                self.rigid = rigid_body_modes(np.asarray(u0, float), mass)
+                MR = mass_times(mass, self.rigid)
                 bordered = sp.bmat([[K, sp.csc_matrix(MR)], [sp.csc_matrix(MR.T), None]], format="csc")
                 self._lu = sla.splu(bordered)
             pivots = np.abs(self._lu.U.diagonal())

@@ -278,8 +278,12 @@ def write_text_files(paths: dict, body: BodyData, units: str = "si") -> None:
     """Write the four text files of ``body`` to ``paths`` (TEXT_FILES name -> path).
 
     Values are converted from SI to ``units``; ModelError if K is zero, or not
-    symmetric (relative tolerance 1e-9), since only its lower triangle is written.
+    symmetric (relative tolerance 1e-9), since only its lower triangle is written, and
+    for a body with a consistent mass matrix, which ``mij.dat`` (node masses) cannot hold.
     """
+    if body.mass_matrix is not None:
+        raise ModelError("a body with a consistent mass matrix cannot be written as text files: "
+                         f"{MASSES_FILE} holds lumped node masses only; write body.h5 instead")
     system = unit_system(units)
     k = sp.csr_matrix(body.stiffness)
     if k.count_nonzero() == 0:

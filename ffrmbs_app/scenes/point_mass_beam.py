@@ -85,7 +85,7 @@ def default_beam_data(log=None, divisions=DIVISIONS, modes="all", order=1):
         if modes != "all":
             return build_body(mesh, material, n_modes=int(modes), clamp="x0", params=params)
         data = build_body(mesh, material, n_modes=1, clamp="x0", params=params)
-        data.eigenvalues, data.phi = all_modes(data.stiffness, data.masses, data.node_groups["x0"])
+        data.eigenvalues, data.phi = all_modes(data.stiffness, data.mass, data.node_groups["x0"])
         data.params["n_modes"] = data.phi.shape[1]
         return data
 

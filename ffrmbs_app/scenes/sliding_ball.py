@@ -96,9 +96,10 @@ def axis_nodes(data) -> np.ndarray:
 
 def bending_modes(data, direction=1):
     """(indices, ω [rad/s]) of the stored modes dominated by displacement along
-    ``direction`` (1: y-bending): more than half the modal mass Σ m_j φ_jd² there."""
-    phi = data.phi.reshape(data.n_nodes, 3, -1)
-    share = np.einsum("j,jf->f", data.masses, phi[:, direction, :] ** 2)
+    ``direction`` (1: y-bending): more than half the modal mass φ_dᵀ M_s φ_d there
+    (Σ m_j φ_jd² when lumped)."""
+    phi_d = data.phi.reshape(data.n_nodes, 3, -1)[:, direction, :]
+    share = np.einsum("jf,jf->f", phi_d, data.scalar_mass_matrix() @ phi_d)
     idx = np.flatnonzero(share > 0.5)
     return idx, np.sqrt(data.eigenvalues[idx])
 

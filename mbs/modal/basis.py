@@ -1,14 +1,16 @@
 """The modal model of one body shared by the modal solvers (report Sec. 2.1, 3.4.1, 4.2).
 
-Built once from preprocessed body data (the same modes, lumped masses and surface
-nodes a :class:`~mbs.FlexibleBodyFFR` uses) and never mutated:
+Built once from preprocessed body data (the same modes, masses and surface nodes a
+:class:`~mbs.FlexibleBodyFFR` uses) and never mutated. The mass M is the body's: the
+lumped ``masses`` (N,), or the consistent ``mass_matrix`` M_s (N, N) when the body has
+one (M = M_s ⊗ 1₃, :mod:`preprocess.fe`); every integral below is taken with it.
 
 * ``P`` — mode shapes, (N, 3, n) [kg^-1/2], mass-normalized: Pᵀ M P = I (eq. 3);
 * ``omega2`` — eigenvalues ω² (n,) [rad²/s²] (eq. 3, Λ = diag ω²);
 * ``b0`` — node positions relative to the centre of mass, (N, 3) [m] (coordinates
   in the body frame B of report Fig. 3);
-* ``inertia`` — the inertia tensor of the lumped masses about the centre of mass
-  (eq. 17, 25), (3, 3) [kg m²];
+* ``inertia`` — the inertia tensor of M about the centre of mass (eq. 17, 25),
+  (3, 3) [kg m²];
 * ``surface`` — the surface node indices (the boundary approach of Sec. 4.2).
 
 For a free body the modes are the elastic ones; ``with_rigid_modes`` adds the six
@@ -22,6 +24,7 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
+import scipy.sparse as sp
 
 from ffrmbs.errors import ModelError
 from preprocess.modes import rigid_body_modes
@@ -38,6 +41,7 @@ class ModalBasis:
     omega2: np.ndarray
     surface: np.ndarray
     clamped: bool
+    mass_matrix: sp.csr_matrix | None = None
 
     @classmethod
     def from_body(cls, data, modes=None, with_rigid_modes=False):
@@ -60,11 +64,12 @@ class ModalBasis:
         if with_rigid_modes:
             if clamped:
                 raise ModelError("ModalBasis: a clamped body has no rigid-body modes")
-            phi = np.hstack([rigid_body_modes(data.u0, data.masses), phi])
+            phi = np.hstack([rigid_body_modes(data.u0, data.mass), phi])
             omega2 = np.concatenate([np.zeros(6), omega2])
         return cls(u0=np.asarray(data.u0, dtype=float), masses=np.asarray(data.masses, dtype=float),
                    P=np.ascontiguousarray(phi.reshape(data.n_nodes, 3, -1)),
-                   omega2=np.asarray(omega2, dtype=float), surface=data.surface_nodes, clamped=clamped)
+                   omega2=np.asarray(omega2, dtype=float), surface=data.surface_nodes, clamped=clamped,
+                   mass_matrix=data.mass_matrix)
 
     # --- sizes and rigid-body quantities ----------------------------------------------
 
@@ -77,14 +82,32 @@ class ModalBasis:
         return self.P.shape[2]
 
     @property
+    def mass(self):
+        """The mass used: ``mass_matrix`` M_s (N, N) if set, else ``masses`` (N,) [kg]
+        (the argument of :func:`preprocess.body.mass_times`)."""
+        return self.masses if self.mass_matrix is None else self.mass_matrix
+
+    def mass_nodal(self, x) -> np.ndarray:
+        """M_s x [kg × units of x] of a nodal array ``x`` (N, ...): Σ_b M_ab x_b, or m_a x_a when lumped."""
+        x = np.asarray(x, dtype=float)
+        if self.mass_matrix is None:
+            return self.masses.reshape((-1,) + (1,) * (x.ndim - 1)) * x
+        return (self.mass_matrix @ x.reshape(x.shape[0], -1)).reshape(x.shape)
+
+    @cached_property
+    def node_weights(self) -> np.ndarray:
+        """w = M_s 1 (N,) [kg] (the masses when lumped): m_tot = Σ w, centre of mass Σ w u0 / Σ w."""
+        return self.masses if self.mass_matrix is None else np.asarray(self.mass_matrix.sum(axis=1)).ravel()
+
+    @property
     def total_mass(self) -> float:
-        """m_tot [kg]."""
-        return float(self.masses.sum())
+        """m_tot = 1ᵀ M_s 1 [kg]."""
+        return float(self.node_weights.sum())
 
     @cached_property
     def center_of_mass(self) -> np.ndarray:
         """Centre of mass of the undeformed body in mesh coordinates, (3,) [m]."""
-        return self.masses @ self.u0 / self.masses.sum()
+        return self.node_weights @ self.u0 / self.node_weights.sum()
 
     @cached_property
     def b0(self) -> np.ndarray:
@@ -93,9 +116,10 @@ class ModalBasis:
 
     @cached_property
     def inertia(self) -> np.ndarray:
-        """Inertia tensor about the centre of mass from the lumped masses (eq. 25), (3, 3)."""
+        """Inertia tensor about the centre of mass of the mass used (eq. 25), (3, 3) [kg m²]:
+        tr(U) 1 − U with U = Σ_ab M_ab b_a b_bᵀ."""
         b = self.b0
-        U = (self.masses[:, None] * b).T @ b
+        U = self.mass_nodal(b).T @ b
         return np.trace(U) * np.eye(3) - U
 
     @property
@@ -116,7 +140,7 @@ class ModalBasis:
         field = np.asarray(field, dtype=float)
         if field.shape != self.u0.shape:
             raise ModelError(f"ModalBasis: a nodal field must have shape {self.u0.shape}, got {field.shape}")
-        return np.einsum("ia,i,ian->n", field, self.masses, self.P)
+        return np.einsum("ia,ian->n", self.mass_nodal(field), self.P)
 
     def output_nodes(self, nodes) -> np.ndarray:
         """Resolve an output selection: "all", "surface" (the boundary approach, Sec. 4.2),

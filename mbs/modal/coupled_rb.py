@@ -16,6 +16,7 @@ Here every per-step quantity comes from shape integrals summed once,
 
     Sb[k, l] = Σ_i m_i P_ik b0_il  (3, 3, n),    S[k, l] = Σ_i m_i P_ikᵀ P_il  (3, 3, n, n),
 
+(with a consistent mass, Σ_i m_i P_i becomes Σ_ij M_ij P_j, :meth:`ModalBasis.mass_nodal`),
 so that Pᵀ f_fict = −Σ_kl A_kl (Sb[k, l] + S[k, l] r) − 2 Σ_kl Ω̃_kl S[k, l] ṙ with
 A = α̃ + Ω̃Ω̃, and Σ_i m_i b_i b_iᵀ = B0 + Sb·r + (Sb·r)ᵀ + rᵀ S r gives Î(r): O(n²) per
 step whatever the node count (the tests check both against the node-by-node sums).
@@ -53,12 +54,13 @@ class CouplingIntegrals:
     """The shape integrals of CoupledRB (module docstring), summed once: O(N n²)."""
 
     def __init__(self, basis: ModalBasis):
-        m, P, b0 = basis.masses, basis.P, basis.b0
+        P, b0 = basis.P, basis.b0
+        MP = basis.mass_nodal(P)         # Σ_j M_ij P_j (m_i P_i when lumped)
         n = basis.n_modes
         self.n = n
-        self.Sb = np.einsum("i,ikn,il->kln", m, P, b0).reshape(9, n)
-        self.S = np.einsum("i,ikn,ilp->klnp", m, P, P).reshape(9 * n, n)
-        self.B0 = (m[:, None] * b0).T @ b0
+        self.Sb = np.einsum("ikn,il->kln", MP, b0).reshape(9, n)
+        self.S = np.einsum("ikn,ilp->klnp", MP, P).reshape(9 * n, n)
+        self.B0 = basis.mass_nodal(b0).T @ b0
 
     def second_moment(self, r) -> np.ndarray:
         """Σ_i m_i b_i b_iᵀ (3, 3) [kg m²] of the deformed body, b = b0 + P r."""

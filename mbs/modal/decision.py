@@ -35,6 +35,12 @@ eq. 10), so the estimate is d ≈ k_dyn (d_alpha |α| + d_omega |Ω|²) with k_d
 default (exact for one dominant mode; 1 gives the static estimate). The report's
 single-number form is |α| + |Ω|² <= d_lim / (k_dyn max(d_alpha, d_omega)).
 
+Mass: ``masses`` is the lumped node masses (N,) or, for a body with a consistent mass
+matrix, the scalar M_s (N, N) sparse; the fictitious loads are then the consistent
+f = −M (α × b) − M (Ω × (Ω × b)) (M = M_s ⊗ 1₃, :func:`preprocess.body.mass_times`) and
+the centre of mass that of M. The force limit (eq. 30-31) is a per-node bound and takes
+the lumped masses only.
+
 Inertia relief: for a free body whose modes are M-orthogonal to the rigid modes
 (preprocess.modes.free_modes), the α part −M(α × b) is M times a rigid rotation
 mode, so Φᵀ f_α = 0 and d_alpha vanishes (to rounding): the torque that causes α
@@ -46,17 +52,25 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
 from scipy.optimize import minimize
 
 from ffrmbs.errors import ModelError
+from preprocess.body import mass_times
 
 SIMPLE, COUPLED, OUTSIDE = "SimpleRB", "CoupledRB", "outside linear elasticity"
 _MONOMIALS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))  # q = (x², y², z², xy, xz, yz)
 
 
 def _positions(u0, masses):
-    """Validated u0 (N, 3) [m], masses (N,) [kg] and b = u0 − centre of mass (N, 3) [m]."""
+    """Validated u0 (N, 3) [m], masses (N,) or sparse M_s (N, N) [kg] and b = u0 − centre
+    of mass (N, 3) [m], the centre of mass Σ w u0 / Σ w with w = M_s 1 (w = masses when lumped)."""
     u0 = np.asarray(u0, dtype=float)
+    if sp.issparse(masses):
+        if u0.ndim != 2 or u0.shape[1] != 3 or masses.shape != (u0.shape[0],) * 2:
+            raise ModelError(f"u0 must be (N, 3) and the mass matrix (N, N), got {u0.shape} and {masses.shape}")
+        w = np.asarray(masses.sum(axis=1)).ravel()
+        return u0, masses, u0 - w @ u0 / w.sum()
     masses = np.asarray(masses, dtype=float)
     if u0.ndim != 2 or u0.shape[1] != 3 or masses.shape != (u0.shape[0],):
         raise ModelError(f"u0 must be (N, 3) and masses (N,), got {u0.shape} and {masses.shape}")
@@ -71,8 +85,11 @@ def force_limit(u0, masses, f_lim) -> float:
     ``u0`` (N, 3) [m], ``masses`` (N,) [kg], ``f_lim`` [N]: the largest fictitious
     node force accepted as negligible; b_n = u0_n − centre of mass. SimpleRB is
     acceptable while |α| + |Ω|² stays below the returned value (eq. 30 bounds every
-    node force by m_n |b_n| (|α| + |Ω|²)).
+    node force by m_n |b_n| (|α| + |Ω|²)). Lumped node masses only (a ModelError for a
+    mass matrix: its node forces are not m_n times a node's acceleration).
     """
+    if sp.issparse(masses):
+        raise ModelError("force_limit takes lumped node masses (N,), not a mass matrix")
     _, masses, b = _positions(u0, masses)
     if not f_lim > 0:
         raise ModelError(f"f_lim must be positive, not {f_lim}")
@@ -87,10 +104,12 @@ def _static_response(phi, omega2, f):
 def alpha_response(b, masses, phi, omega2) -> np.ndarray:
     """U_α (N, 3, 3) [m s²]: node displacement per unit α, u_n = U_α,n α.
 
-    Column k is the static response to f_n = −m_n e_k × b_n (eq. 29, α = e_k).
+    Column k is the static response to f = −M (e_k × b) (eq. 29, α = e_k; f_n =
+    −m_n e_k × b_n when lumped), ``masses`` as :func:`preprocess.body.mass_times` takes it.
     """
-    f = -masses[:, None, None] * np.cross(np.eye(3)[None, :, :], b[:, None, :])  # (N, k, 3)
-    return _static_response(phi, omega2, f.transpose(0, 2, 1).reshape(-1, 3)).reshape(-1, 3, 3)
+    a = -np.cross(np.eye(3)[None, :, :], b[:, None, :])  # (N, k, 3) accelerations
+    f = mass_times(masses, a.transpose(0, 2, 1).reshape(-1, 3))
+    return _static_response(phi, omega2, f).reshape(-1, 3, 3)
 
 
 def omega_response(b, masses, phi, omega2) -> np.ndarray:
@@ -98,14 +117,15 @@ def omega_response(b, masses, phi, omega2) -> np.ndarray:
 
     q(Ω̂) = (x², y², z², xy, xz, yz). The centrifugal force of eq. 29 is the quadratic
     form f_n,i = Σ_kl T_n,ikl Ω̂_k Ω̂_l with the symmetric coefficients
-    T_n,ikl = m_n (δ_kl b_n,i − (δ_ik b_n,l + δ_il b_n,k) / 2) (using |Ω̂| = 1);
+    T_n,ikl = m_n (δ_kl b_n,i − (δ_ik b_n,l + δ_il b_n,k) / 2) (using |Ω̂| = 1), with a
+    mass matrix M applied to the accelerations T_n,ikl / m_n instead;
     column (k, l) of H is the response to T_kk, resp. T_kl + T_lk for k ≠ l.
     """
     eye = np.eye(3)
-    T = masses[:, None, None, None] * (np.einsum("kl,ni->nikl", eye, b)
-                                       - 0.5 * (np.einsum("ik,nl->nikl", eye, b) + np.einsum("il,nk->nikl", eye, b)))
+    T = (np.einsum("kl,ni->nikl", eye, b)
+         - 0.5 * (np.einsum("ik,nl->nikl", eye, b) + np.einsum("il,nk->nikl", eye, b)))
     C = np.stack([T[:, :, k, l] * (1 if k == l else 2) for k, l in _MONOMIALS], axis=-1)  # (N, 3, 6)
-    return _static_response(phi, omega2, C.reshape(-1, 6)).reshape(-1, 3, 6)
+    return _static_response(phi, omega2, mass_times(masses, C.reshape(-1, 6))).reshape(-1, 3, 6)
 
 
 def _monomials(x) -> np.ndarray:
@@ -266,7 +286,8 @@ def decision_boundaries(u0, masses, phi, omega2, d_negligible=1e-6, d_linear=0.0
                         n_directions=1000) -> DecisionBoundaries:
     """Displacement-limited decision boundaries (report eq. 32, derived in the module docstring).
 
-    ``u0`` (N, 3) [m], ``masses`` (N,) [kg], ``phi`` (3N, n) mass-normalized elastic
+    ``u0`` (N, 3) [m], ``masses`` (N,) or sparse M_s (N, N) [kg] (module docstring),
+    ``phi`` (3N, n) mass-normalized elastic
     modes [kg^-1/2], ``omega2`` (n,) [rad²/s²] > 0; b is taken from the centre of
     mass (the B frame origin, report Fig. 3). ``d_negligible`` < ``d_linear`` [m];
     ``k_dyn`` >= 1 the dynamic amplification (2 for a suddenly applied load, 1 for the
@@ -277,8 +298,8 @@ def decision_boundaries(u0, masses, phi, omega2, d_negligible=1e-6, d_linear=0.0
     u0, masses, b = _positions(u0, masses)
     phi = np.asarray(phi, dtype=float)
     omega2 = np.asarray(omega2, dtype=float)
-    if phi.ndim != 2 or phi.shape[0] != 3 * len(masses) or omega2.shape != (phi.shape[1],):
-        raise ModelError(f"phi must be (3N, n) = ({3 * len(masses)}, n) and omega2 (n,), "
+    if phi.ndim != 2 or phi.shape[0] != 3 * len(u0) or omega2.shape != (phi.shape[1],):
+        raise ModelError(f"phi must be (3N, n) = ({3 * len(u0)}, n) and omega2 (n,), "
                          f"got {phi.shape}, {omega2.shape}")
     if np.any(omega2 <= 0):
         raise ModelError("omega2 must be positive: pass the elastic modes only (rigid modes: report Sec. 3.3)")

@@ -43,8 +43,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
 
 from ffrmbs.errors import ModelError
+from preprocess.body import mass_times
 from preprocess.modes import all_modes
 
 WEIGHTINGS = ("static", "report")
@@ -70,7 +72,8 @@ def effective_masses(phi, omega2, masses, forces, weighting="static") -> np.ndar
     phi : (3N, n) mass-normalized elastic modes [kg^-1/2], node-major rows.
     omega2 : (n,) eigenvalues ω² [rad²/s²], all > 0 (rigid modes are treated
         separately, report Sec. 3.3).
-    masses : (N,) lumped node masses [kg].
+    masses : (N,) lumped node masses, or the body's sparse consistent M_s (N, N) [kg]
+        (the mass the modes are normalized with; ``BodyData.mass``).
     forces : (N, 3) nodal forces [N], or a step history (n_t, N, 3).
     weighting : "static" — |φ_jᵀ f| / ω_j², the quasi-static modal amplitude of
         eq. 12 [m kg^1/2]; "report" — eq. 36 literally, |φ_jᵀ M f| / ω_j² [m kg^3/2].
@@ -79,18 +82,20 @@ def effective_masses(phi, omega2, masses, forces, weighting="static") -> np.ndar
     """
     phi = np.asarray(phi, dtype=float)
     omega2 = np.asarray(omega2, dtype=float)
-    masses = np.asarray(masses, dtype=float)
+    if not sp.issparse(masses):
+        masses = np.asarray(masses, dtype=float)
+    n_nodes = masses.shape[0]
     if weighting not in WEIGHTINGS:
         raise ModelError(f"weighting must be one of {WEIGHTINGS}, not {weighting!r}")
-    if phi.ndim != 2 or phi.shape[0] != 3 * masses.size or omega2.shape != (phi.shape[1],):
+    if phi.ndim != 2 or phi.shape[0] != 3 * n_nodes or omega2.shape != (phi.shape[1],):
         raise ModelError(f"phi {phi.shape}, omega2 {omega2.shape} and masses {masses.shape} "
                          "do not fit: need phi (3N, n), omega2 (n,), masses (N,)")
     if np.any(omega2 <= 0):
         raise ModelError(f"modes {np.flatnonzero(omega2 <= 0) + 1} have ω² <= 0; rigid-body modes are "
                          "treated separately (report Sec. 3.3) — pass only the elastic modes")
-    f = _force_history(forces, masses.size)
+    f = _force_history(forces, n_nodes)
     if weighting == "report":
-        f = f * np.repeat(masses, 3)
+        f = mass_times(masses, f.T).T
     return np.abs(f @ phi).max(axis=0) / omega2
 
 
@@ -201,14 +206,14 @@ def auto_select_modes(data, forces, fraction=0.9, weighting="static", order="lar
     reach ``fraction``.
     """
     omega2 = data.modal_eigenvalues()
-    m_eff = effective_masses(data.phi, omega2, data.masses, forces, weighting)
+    m_eff = effective_masses(data.phi, omega2, data.mass, forces, weighting)
     clamped = body_clamped_nodes(data) if clamped_nodes is None else np.asarray(clamped_nodes)
     n_free = 3 * data.n_nodes - (0 if clamped is None else 3 * len(clamped))
     if n_free > max_dof:
         total, kind = m_eff.sum(), "computed modes"
     else:
-        w2_all, phi_all = all_modes(data.stiffness, data.masses, clamped, data.u0, max_dof)
-        m_all = effective_masses(phi_all, w2_all, data.masses, forces, weighting)
+        w2_all, phi_all = all_modes(data.stiffness, data.mass, clamped, data.u0, max_dof)
+        m_all = effective_masses(phi_all, w2_all, data.mass, forces, weighting)
         total, kind = m_all.sum(), "all modes (dense)"
     try:
         indices = select_modes(m_eff, fraction, order, total)

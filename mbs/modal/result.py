@@ -94,7 +94,7 @@ class ModalResult:
         in ``kinetic_vib`` like the elastic ones. With a rigid-body state:
         ``kinetic_rbm`` = ½ m |ρ̇|² + ½ Ωᵀ Î Ω (eq. 21). With the deformation coupled
         (CoupledRB): ``kinetic_coupling`` = Ω · Σ m_i b_i × ḃ_i, the cross term that makes
-        the sum the exact kinetic energy of the lumped masses (eq. 21 and 34 omit it; it
+        the sum the exact kinetic energy of the body's masses (eq. 21 and 34 omit it; it
         is of second order in the deformation). ``total`` is their sum.
         """
         e = {"kinetic_vib": 0.5 * np.einsum("tn,tn->t", self.rdot, self.rdot),
