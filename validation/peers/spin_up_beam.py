@@ -151,7 +151,9 @@ def _hub(t, omega_s, t_s):
 
 def hub_angle(t, omega_s=OMEGA_S, t_s=T_S):
     """The prescribed hub motion (1)-(3): (θ [rad], θ̇ [rad/s], θ̈ [rad/s²]) at the times
-    ``t`` [s] (scalar or array), each shaped like ``t``."""
+    ``t`` [s] (scalar or array), each shaped like ``t`` (floats for a scalar)."""
+    if np.ndim(t) == 0:
+        return _hub(float(t), omega_s, t_s)
     t = np.asarray(t, dtype=float)
     out = np.array([_hub(float(x), omega_s, t_s) for x in t.ravel()]).reshape(t.shape + (3,))
     return out[..., 0], out[..., 1], out[..., 2]
