@@ -16,8 +16,12 @@ x = 0 to a hub whose angle is prescribed [rad], with Ω_s = 6 rad/s, T_s = 15 s:
     (4)  v_tip = −sin θ r_x + cos θ r_y,
 
 r_tip [m] in inertial axes, the hub frame's x axis the undeformed beam axis. A linear
-modal model diverges once θ̇ passes ω1 ≈ 3.8 rad/s; this beam stays bounded and lags
-(v_tip < 0 during the spin-up).
+modal model without geometric stiffening diverges once θ̇ passes ω1 = 3.80 rad/s (its
+stiffness K_E − θ̇² M loses definiteness; Kane et al. 1987); this beam stays bounded and
+lags (v_tip < 0 during the spin-up) by decimetres, not centimetres: the peak is −0.574 m
+at 6.76 s, close to the quasi-static lag under the largest tangential inertia load
+ρA θ̈_max x, θ̈_max = 2Ω_s/T_s = 0.8 rad/s², i.e. 11 ρA θ̈_max L⁵/(120 EI) = 0.63 m,
+less the centrifugal stiffening (θ̇ = 3 rad/s at 7.5 s: ω² from 14.4 to 16.2 rad²/s²).
 
 Element: planar ANCF cable (Berzeri & Shabana 2000; Gerstmayr & Irschik 2008)
 ------------------------------------------------------------------------------
@@ -60,8 +64,10 @@ amplification matrix's spectral radius there is 0.91) while a bending mode at ω
 loses less than 1e-8 of its amplitude per step. It is needed: on this stiff, rotating,
 nonlinear problem the (nearly) undissipative variants are not stable — ρ∞ = 0.99 and 1
 (the midpoint-like case) fail at t ≈ 12 s with 8 elements, Δt = 10 ms (the Newton
-iterations grow from 3 to > 30 as the spin speeds up), and ρ∞ = 0.9 itself fails at
-t ≈ 18.5 s with Δt = 20 ms; Δt ≤ 10 ms with ρ∞ = 0.9 runs. Each step is solved by full
+iterations per step grow from 2 to 6 as the spin speeds up, then stop converging), and
+ρ∞ = 0.9 itself fails at t ≈ 18.5 s with Δt = 20 ms (ρ∞ ≤ 0.8 runs there); Δt ≤ 10 ms
+with ρ∞ = 0.9 runs. Violent motions need small steps too: released from a 2.25 m static
+tip deflection (hub at rest), 8 elements need Δt ≤ 2 ms. Each step is solved by full
 Newton iterations on q_{n+1} (predictor a_{n+1} = a_n) with the Jacobian
 (1 − α_m)/(β Δt²) M_ff + (1 − α_f) K_ff (banded Cholesky, half-bandwidth 7) until
 max |Δq| < 1e-11 m (3 iterations a step on the spin-up); a failed step raises
@@ -89,6 +95,7 @@ fractions of max |v_tip| (RMS / max over 0..20 s):
     32      2.5        3.4e-5      7.9e-5     (the reference)
     64      2.5        3.5e-5      8.1e-5
     32      1.25       7.4e-7      1.7e-6
+    64      1.25       0           0          (the finest)
     ======  =========  ==========  ==========
 
 so the error is the time step's (second order), the 32 elements are converged in space,
@@ -425,13 +432,11 @@ class Beam:
             k[i - d, i] = band[i, d]
         return k
 
-    def static(self, tip_force, q_root=None, n_load_steps=10, tol=1e-10):
+    def static(self, tip_force, n_load_steps=10, tol=1e-10):
         """The static equilibrium Q_f(q) = f_f under ``tip_force`` (2,) [N] at the last
-        node, root clamped at ``q_root`` (default (0, 0, 1, 0)); Newton with load stepping.
-        Returns the full q [m, 1]."""
+        node, root clamped at (0, 0, 1, 0); Newton with load stepping. Returns the full
+        q [m, 1]."""
         q = straight_beam(self.n)
-        if q_root is not None:
-            q[:4] = q_root
         f = np.zeros_like(q)
         for s in range(1, n_load_steps + 1):
             f[-4:-2] = np.asarray(tip_force, float) * s / n_load_steps
@@ -477,9 +482,10 @@ def _t_out_default():
 
 def run(beam: Beam, dt, t_end, q0=None, v0=None, omega_s=OMEGA_S, t_s=T_S, rho_inf=RHO_INF):
     """Integrate (9) with (10) from ``q0``, ``v0`` (default: straight, at rest) to
-    ``t_end`` [s] with steps ``dt`` [s]. Returns t (K,) [s] and the step states (K, 7):
-    tip r_x, r_y [m], ṙ_x, ṙ_y [m/s], θ [rad], θ̇ [rad/s], Newton iterations."""
-    n_steps = int(round(t_end / dt))
+    ``t_end`` [s] (or the first step after it) with steps ``dt`` [s]. Returns t (K,) [s]
+    and the step states (K, 7): tip r_x, r_y [m], ṙ_x, ṙ_y [m/s], θ [rad], θ̇ [rad/s],
+    Newton iterations."""
+    n_steps = int(math.ceil(t_end / dt - 1e-9))
     q0 = straight_beam(beam.n) if q0 is None else np.asarray(q0, float)
     v0 = np.zeros_like(q0) if v0 is None else np.asarray(v0, float)
     out, done = _integrate(q0, v0, beam.n, beam.d1, beam.d2, beam.w, beam.mband, EA, EI, beam.m, float(dt),
@@ -494,7 +500,7 @@ def simulate(n_elements, dt, t_out=None, curvature="exact", rho_inf=RHO_INF):
     """The spin-up run with ``n_elements`` elements and step ``dt`` [s]: (t (K,) [s],
     v_tip (K,) [m]) of (4) at ``t_out`` (default every 0.01 s on 0..20 s)."""
     t_out = _t_out_default() if t_out is None else np.asarray(t_out, float)
-    t, s = run(Beam(n_elements, curvature), dt, float(np.max(t_out)) + 1e-12, rho_inf=rho_inf)
+    t, s = run(Beam(n_elements, curvature), dt, float(np.max(t_out)), rho_inf=rho_inf)
     th, om = s[:, 4], s[:, 5]
     sn, cs = np.sin(th), np.cos(th)
     v = -sn * s[:, 0] + cs * s[:, 1]
