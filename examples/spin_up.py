@@ -11,7 +11,7 @@ stiffness) the tip lags by a bounded amount and then settles.
 Writes the result file DIR/spin_up.h5 with /t [s] and /outputs/v_tip [m] (the tip's
 transverse displacement in the hub frame, every 0.05 s) and prints the largest lag.
 
-Run:  python3 examples/spin_up.py --out DIR [--modes 10] [--dt 0.002] [--no-stiffening]
+Run:  python3 examples/spin_up.py --out DIR [--modes 10] [--dt 0.004] [--no-stiffening]
 """
 
 import argparse
@@ -30,7 +30,7 @@ def main(argv=None, out=sys.stdout):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", required=True, help="output directory (created if missing)")
     parser.add_argument("--modes", type=int, default=10, help="clamped modes of the beam (default 10)")
-    parser.add_argument("--dt", type=float, default=2e-3, help="time step [s] (default 0.002)")
+    parser.add_argument("--dt", type=float, default=4e-3, help="time step [s] (default 0.004)")
     parser.add_argument("--no-stiffening", dest="stiffening", action="store_false",
                         help="linear FFR without geometric stiffening (diverges after t = 8.5 s)")
     args = parser.parse_args(argv)

@@ -20,7 +20,7 @@ def ffrmbs(*args, cwd=None):
 def preprocessed(tmp_path_factory):
     out = tmp_path_factory.mktemp("beam")
     res = ffrmbs("preprocess", "box:1,1,5", "--modes", "4", "--clamp", "z0", "--density", "8000",
-                 "--young", "200e9", "--poisson", "0", "--mesh-size", "0.5", "--out", str(out))
+                 "--young", "200e9", "--poisson", "0", "--mesh-size", "0.5", "--geometric-stiffness", "--out", str(out))
     return out, res
 
 
@@ -35,6 +35,9 @@ def test_preprocess_writes_body_files_and_prints_statistics(preprocessed):
     assert body.frequencies()[0][0] == pytest.approx(197.6, rel=2e-3)
     text = read_text_body(out)
     np.testing.assert_array_equal(text.phi, body.phi)
+    # --geometric-stiffness: a spin about x tensions the beam along z and stiffens its bending pair
+    assert body.geometric_stiffness.shape == (12, 4, 4)
+    assert np.linalg.eigvalsh(body.geometric_stiffness[0, :2, :2]).min() > 0
 
 
 def test_info_reads_directory_and_hdf5(preprocessed):
