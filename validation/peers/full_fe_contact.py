@@ -101,9 +101,8 @@ Outputs, cache, cost
 :func:`simulate` returns a :class:`FullFEResult` at ``n_out`` uniform samples on
 [0, t_end]: t [s], mass y [m], mass v_y [m/s], node-19 u_y [m], the energy terms [J], and
 per-step extremes (lowest mass y, node-19 peak |u_y|, most negative gap). Results are
-cached as ``full_fe_contact-<sha256 of the JSON recipe>.npz`` in
-:func:`ffrmbs_app.scenes.cache.cache_dir`, written atomically (temporary file + rename),
-read without pickle. The step loop is numba (:mod:`validation.peers._full_fe_kernels`:
+cached as ``full_fe_contact-<sha256 of the JSON recipe>.npz``
+(:mod:`validation.peers.result_cache`). The step loop is numba (:mod:`validation.peers._full_fe_kernels`:
 CSR mat-vec, projection, contact). :func:`convergence` states the run's own convergence
 in penalty (k vs 10 k) and step (Δt vs Δt/2). A tqdm bar (:mod:`ffrmbs_app.progress`)
 shows long runs on a terminal.
@@ -111,11 +110,7 @@ shows long runs on a terminal.
 
 from __future__ import annotations
 
-import hashlib
-import json
 import math
-import os
-import tempfile
 import time
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -128,8 +123,8 @@ import scipy.sparse.linalg as sla
 from ffrmbs.errors import ModelError
 from ffrmbs_app.progress import ProgressCallback
 from ffrmbs_app.scenes import point_mass_beam as pmb
-from ffrmbs_app.scenes.cache import cache_dir
 from validation.peers import _full_fe_kernels as kern
+from validation.peers import result_cache
 
 NAME = "full_fe_contact"
 CACHE_VERSION = 3         # 3: ray along e_y, W the gap's gradient, the conserved energy
@@ -348,35 +343,22 @@ def recipe(setup="A", divisions=ELEMENT_SIZES[0.0125], k=PENALTY_K, t_end=T_END,
 
 def cache_path(key: dict) -> Path:
     """``cache_dir() / full_fe_contact-<first 16 hex of sha256(JSON key)>.npz``."""
-    digest = hashlib.sha256(json.dumps(key, sort_keys=True).encode()).hexdigest()[:16]
-    return cache_dir() / f"{NAME}-{digest}.npz"
+    return result_cache.cache_path(NAME, key)
 
 
 def _store(path: Path, result: FullFEResult) -> None:
-    """Write ``result`` to ``path`` atomically: a temporary file beside it, then a rename."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.stem, suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            np.savez(fh, recipe=np.array(json.dumps(result.recipe, sort_keys=True)),
-                     **{n: getattr(result, n) for n in FullFEResult.ARRAYS},
-                     **{n: np.array(getattr(result, n)) for n in FullFEResult.SCALARS})
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        os.unlink(tmp)
-        raise
+    """Write ``result`` to ``path`` (:func:`validation.peers.result_cache.store`)."""
+    result_cache.store(path, result.recipe, {**{n: getattr(result, n) for n in FullFEResult.ARRAYS},
+                                             **{n: np.array(getattr(result, n)) for n in FullFEResult.SCALARS}})
 
 
 def _load(path: Path, key: dict):
     """The cached result at ``path`` if it exists and holds ``key``, else None."""
-    if not path.exists():
+    z = result_cache.load(path, key)
+    if z is None:
         return None
-    with np.load(path, allow_pickle=False) as z:
-        if json.loads(str(z["recipe"])) != json.loads(json.dumps(key)):
-            return None
-        scalars = {n: z[n].item() for n in FullFEResult.SCALARS}
-        return FullFEResult(**{n: z[n] for n in FullFEResult.ARRAYS}, **scalars, recipe=key, cached=True)
+    scalars = {n: z[n].item() for n in FullFEResult.SCALARS}
+    return FullFEResult(**{n: z[n] for n in FullFEResult.ARRAYS}, **scalars, recipe=key, cached=True)
 
 
 def simulate(setup="A", divisions=ELEMENT_SIZES[0.0125], k=PENALTY_K, t_end=T_END, n_out=N_OUT, dt=None,

@@ -80,8 +80,8 @@ Outputs, convergence, cache
 :func:`simulate` gives v_tip [m] every 0.01 s (cubic Hermite in the step values of v_tip
 and dv_tip/dt, exact at step multiples). :func:`reference` is the run at
 :data:`REFERENCE_SETTINGS` (32 elements, Δt = 2.5 ms), cached as
-``spin_up_beam-<16 hex of sha256 of the JSON recipe>.npz`` in
-:func:`ffrmbs_app.scenes.cache.cache_dir` (temporary file + rename, read without pickle).
+``spin_up_beam-<16 hex of sha256 of the JSON recipe>.npz``
+(:mod:`validation.peers.result_cache`).
 Measured (2 shared cores): the reference runs in 2.8 s (0.002 s from the cache); its
 peak is v_tip = −0.5738 m at t = 6.76 s, after the spin-up |v_tip| ≤ 3.7 mm.
 :func:`convergence_table` against the finest run (64 elements, Δt = 1.25 ms), as
@@ -109,18 +109,15 @@ centrifugal tension (geometric stiffening) gives a peak of −0.5744 m at 6.76 s
 
 from __future__ import annotations
 
-import hashlib
-import json
 import math
-import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
 from numba import njit
 from scipy.interpolate import CubicHermiteSpline
 
-from ffrmbs_app.scenes.cache import cache_dir
+from validation.peers import result_cache
+
 
 NAME = "spin_up_beam"
 CACHE_VERSION = 1
@@ -519,42 +516,17 @@ def recipe(n_elements, dt, curvature="exact", rho_inf=RHO_INF) -> dict:
 
 def cache_path(key: dict) -> Path:
     """``cache_dir() / spin_up_beam-<first 16 hex of sha256(JSON key)>.npz``."""
-    digest = hashlib.sha256(json.dumps(key, sort_keys=True).encode()).hexdigest()[:16]
-    return cache_dir() / f"{NAME}-{digest}.npz"
-
-
-def _store(path: Path, key: dict, t, v) -> None:
-    """Write the run atomically: a temporary file beside ``path``, then a rename."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.stem, suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            np.savez(fh, recipe=np.array(json.dumps(key, sort_keys=True)), t=t, v_tip=v)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        os.unlink(tmp)
-        raise
-
-
-def _load(path: Path, key: dict):
-    """(t, v_tip) cached at ``path`` if it exists and holds ``key``, else None."""
-    if not path.exists():
-        return None
-    with np.load(path, allow_pickle=False) as z:
-        if json.loads(str(z["recipe"])) != json.loads(json.dumps(key)):
-            return None
-        return z["t"], z["v_tip"]
+    return result_cache.cache_path(NAME, key)
 
 
 def cached_run(n_elements, dt, curvature="exact", rho_inf=RHO_INF):
     """:func:`simulate` at the default outputs, from the cache or run and stored."""
     key = recipe(n_elements, dt, curvature, rho_inf)
     path = cache_path(key)
-    if (hit := _load(path, key)) is not None:
-        return hit
+    if (hit := result_cache.load(path, key)) is not None:
+        return hit["t"], hit["v_tip"]
     t, v = simulate(n_elements, dt, curvature=curvature, rho_inf=rho_inf)
-    _store(path, key, t, v)
+    result_cache.store(path, key, {"t": t, "v_tip": v})
     return t, v
 
 
