@@ -117,9 +117,10 @@ class FlexibleBodyFFR(FloatingFrameBody):
         return self.geometric_stiffening and not self.frame_at_rest
 
     def _frame_loads(self, q, u, t):
-        """(ω̄ holder, its offset; read on a free frame only) with the load parameters p of eq. S1 at the body's own
-        (q, u, t) written into ``self._p``: a prescribed frame's ω̄, ω̄̇, Aᵀ R̈; a free
-        frame's ω̄ (u[3:6] of a quaternion frame, T u_r of a Cardan one)."""
+        """Write the load parameters p of eq. S1 at the body's own (q, u, t) into ``self._p``
+        — a prescribed frame's ω̄, ω̄̇, Aᵀ R̈; a free frame's ω̄ (u[3:6] of a quaternion
+        frame, T u_r of a Cardan one) — and return (the array holding ω̄, its offset),
+        which a free frame's tangents read."""
         if self.motion is not None:
             if t != self._p_time:                 # p of a prescribed frame depends on t alone
                 A, w, wd = (np.asarray(x, dtype=float) for x in self.motion.rotation(t))

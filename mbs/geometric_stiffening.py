@@ -19,8 +19,9 @@ same matrices). Per step: 12 n_f² multiply-adds, whatever the node count.
   and are left out. On a free-free body those cases carry no stress anyway (inertia
   relief, :mod:`preprocess.geometric`).
 
-Tangents (for the implicit integrators): −∂h_f/∂q_f = K_geo(p); on a free frame also
-−∂h_f/∂ω̄_k = Σ_c (∂p_c/∂ω̄_k) K_c q_f.
+Tangents (for the implicit integrators): −∂h_f/∂q_f = K_geo(p); on a free quaternion
+frame also −∂h_f/∂ω̄_k = Σ_c (∂p_c/∂ω̄_k) K_c q_f. The recorded potential energy stays
+½ q_fᵀ K_ff q_f: the prestress comes from the frame's motion, it is no potential of the body.
 
 The numba kernels write into arrays the caller owns; the numpy references
 (:func:`load_parameters`, :func:`geometric_force`) are what the tests compare them with.
