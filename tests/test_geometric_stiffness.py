@@ -211,3 +211,15 @@ def test_spin_up_profile_is_smooth_and_reaches_the_spin():
     assert theta == pytest.approx(np.angle(np.exp(1j * 6.0 * (20.0 - 7.5))))
     with pytest.raises(ModelError, match="axis"):
         PrescribedFrameMotion.spin_up(1.0, 1.0, axis=3)
+
+
+def test_scene_file_turns_the_stiffening_on(cantilever, tmp_path):
+    from ffrmbs_app.scene_file import read_scene
+
+    write_body(tmp_path / "beam", cantilever)
+    (tmp_path / "spin.toml").write_text(
+        '[scene]\nt_end = 0.01\ndt = 1e-3\n\n[[body]]\nname = "beam"\nkind = "flexible"\nsource = "beam"\n'
+        'modes = 2\nangular_velocity = [0.0, 0.0, 50.0]\ngeometric_stiffening = true\n')
+    beam = read_scene(tmp_path / "spin.toml").system.bodies[0]
+    assert beam.geometric_stiffening and beam.varying_tangents
+    assert np.array_equal(beam.K_cases, cantilever.geometric_stiffness[:, :2, :2])
