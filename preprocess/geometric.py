@@ -46,6 +46,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from preprocess import fe
+from preprocess.body import mass_times
 from preprocess.mesh import Mesh
 from preprocess.residual import StaticFlexibility
 
@@ -77,18 +78,12 @@ def inertia_load_fields(u0) -> np.ndarray:
     return fields
 
 
-def scalar_mass_matrix(mass) -> sp.csr_matrix:
-    """The scalar mass matrix M_s (N, N) [kg] (M_FE = M_s ⊗ I3) of ``mass``: lumped node
-    masses (N,) (diagonal M_s) or M_s itself."""
-    return sp.diags(np.asarray(mass, dtype=float)).tocsr() if np.ndim(mass) == 1 else sp.csr_matrix(mass)
-
-
 def inertia_loads(u0, mass) -> np.ndarray:
     """Nodal loads F_c (3N, 12) [N per unit p_c] of the twelve load cases: M b_c / ρ with the
-    body's mass ``mass``, lumped node masses (N,) [kg] or the scalar mass matrix (N, N)."""
+    body's mass ``mass``, lumped node masses (N,) [kg] or the scalar mass matrix (N, N)
+    (:func:`preprocess.body.mass_times`)."""
     fields = inertia_load_fields(u0)
-    Ms = scalar_mass_matrix(mass)
-    return np.stack([(Ms @ fields[c]).ravel() for c in range(12)], axis=1)
+    return mass_times(mass, fields.reshape(12, -1).T)
 
 
 def stress_geometric_matrices(mesh: Mesh, young, poisson, displacements) -> list:
