@@ -141,15 +141,20 @@ def cmd_run(args):
     common = dict(resume=args.resume, checkpoint_every=args.checkpoint_every, export=not args.no_export,
                   no_limits=args.no_limits)
     if args.scene is None:
+        if args.set:
+            raise FfrmbsError("--set sets values of a scene file; the default scene takes --setup, --modes, ... "
+                              "(its scene file is examples/scenes/point_mass_beam.toml)")
         settings = JobSettings(**given, check=not args.no_check)
         summary = run_job(settings, args.out, log=_say, **common)
     else:
         if given:
             raise FfrmbsError(f"--{', --'.join(k.replace('_', '-') for k in given)}: options of the default "
-                              f"scene; a scene file sets its own")
+                              f"scene; a scene file sets its own (or --set KEY=VALUE)")
         from ffrmbs_app.scene import load_scene
 
-        summary = run_scene(lambda: load_scene(args.scene), args.out, check=not args.no_check, log=_say, **common)
+        overrides = tuple(args.set or ())
+        summary = run_scene(lambda: load_scene(args.scene, overrides), args.out, check=not args.no_check, log=_say,
+                            **common)
     written = [summary["result_file"]] + [summary[k] for k in ("plot", "paraview") if k in summary]
     print("wrote " + ", ".join(written))
 
@@ -281,6 +286,9 @@ def build_parser():
     run.add_argument("scene", nargs="?", help="scene file (.toml) or model script (.py defining scene()); "
                                               "default: the embedded point-mass-on-beam scene")
     run.add_argument("--out", type=output_dir, default="ffrmbs-run", help="output directory (default: ffrmbs-run)")
+    run.add_argument("--set", action="append", metavar="KEY=VALUE",
+                     help="set a value of the scene file (repeatable): a dotted key such as scene.dt, "
+                          "body.beam.modes or contact.impact.e, a TOML value")
     run.add_argument("--resume", action="store_true",
                      help="continue a killed or interrupted run from its checkpoint (OUT/<scene>.h5.ckpt)")
     run.add_argument("--checkpoint-every", type=float, default=60.0, metavar="SECONDS",

@@ -142,7 +142,8 @@ def _run(make_scene, scene, path, check, resume, checkpoint_every, flush_every, 
     log(f"scene {scene.name}: {scene.description}" if scene.description else f"scene {scene.name}")
     units = scene.output_units()
     recorder = ResultRecorder(path, {"scene": scene.name, "description": scene.description, "inputs": scene.inputs,
-                                     "units": units}, flush_every=flush_every, checkpoint_every=checkpoint_every)
+                                     "overrides": scene.overrides, "units": units},
+                              flush_every=flush_every, checkpoint_every=checkpoint_every)
     warm_s = 0.0
     with CompileClock(log) as clock:
         if scene.warmup is not None:
@@ -157,7 +158,7 @@ def _run(make_scene, scene, path, check, resume, checkpoint_every, flush_every, 
         with _stop_on_signals(log), progress as bar:
             if resume:
                 log(f"resuming {path} from its checkpoint")
-                checkpoint = resume_checkpoint(recorder, inputs=scene.inputs)
+                checkpoint = resume_checkpoint(recorder, inputs=scene.inputs, overrides=scene.overrides)
                 res = _simulate(scene, recorder=recorder, progress=bar.update_to, contacts=True, checkpoint=checkpoint)
             else:
                 res = _simulate(scene, recorder=recorder, progress=bar.update_to, contacts=True)

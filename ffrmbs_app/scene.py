@@ -52,7 +52,9 @@ class Scene:
     {output name: unit} written with the outputs and on plot axes (:meth:`output_units`);
     variants: {label: (what, make)} — scenes that differ in one modelling choice (e.g.
     "modal truncation": (f"{2n} modes", a maker of the scene with twice the modes)),
-    each run once more by the job's accuracy check to estimate that part of the error.
+    each run once more by the job's accuracy check to estimate that part of the error;
+    overrides: the ``KEY=VALUE`` texts set in the scene file (``--set``), recorded in the
+    result file.
     """
 
     system: object
@@ -71,6 +73,7 @@ class Scene:
     warmup: tuple | None = None
     units: dict = field(default_factory=dict)
     variants: dict = field(default_factory=dict)
+    overrides: tuple = ()
 
     def __post_init__(self):
         fault = name_fault(self.name)
@@ -100,18 +103,23 @@ class Scene:
         return np.linspace(0.0, self.t_end, self.n_out)
 
 
-def load_scene(path) -> Scene:
+def load_scene(path, overrides=()) -> Scene:
     """The scene of a TOML scene file (``.toml``) or a Python model script (``.py``
     defining ``scene()``); a path that is missing or not a regular file (a directory, a
-    FIFO, ...) is an InputFileError saying so, and is never opened."""
+    FIFO, ...) is an InputFileError saying so, and is never opened. ``overrides``:
+    ``"KEY=VALUE"`` texts set in a scene file (:mod:`ffrmbs_app.scene_file.overrides`);
+    a model script takes none."""
     from preprocess.inputfiles import regular_file
 
     path = regular_file(path)
     if path.suffix == ".toml":
         from ffrmbs_app.scene_file import read_scene
 
-        return read_scene(path)
+        return read_scene(path, overrides)
     if path.suffix == ".py":
+        if overrides:
+            raise InputFileError(path, None, "--set sets values of a scene file (.toml); a model script "
+                                             "takes its values from its own code")
         return _from_script(path)
     raise InputFileError(path, None, "a scene is a .toml scene file or a .py model script")
 

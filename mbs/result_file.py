@@ -10,6 +10,7 @@ goes)::
                               dt, t_end [s], n_out, plan (the printed scene plan, "" if none),
                               versions (JSON: ffrmbs, python, numpy, scipy, numba, h5py),
                               inputs (JSON: {label: {"path": str, "sha256": hex}}),
+                              overrides (JSON: the scene file's --set KEY=VALUE texts),
                               summary (JSON, written when the run ends), stats (JSON)
     /t                        (n,) [s] sample times
     /bodies/<body>/           attrs: kind (class name), q_start, q_stop, u_start, u_stop
@@ -136,7 +137,8 @@ class ResultRecorder:
     """Streams a run's samples to the HDF5 result file ``path`` (layout above) and takes
     checkpoints.
 
-    meta: {"scene", "description", "inputs": {label: path}, "units": {output name: unit}}
+    meta: {"scene", "description", "inputs": {label: path}, "overrides": [KEY=VALUE],
+    "units": {output name: unit}}
     (attributes; an output without a unit is "SI"); flush_every [s]: wall time between
     appends of the buffered samples; checkpoint_every [s] or None: wall time between
     checkpoints (taken at output samples).
@@ -176,7 +178,8 @@ class ResultRecorder:
                                integrator=integ.name, options=json.dumps(integ.options(), default=str),
                                dt=integ.dt, t_end=float(st.times[-1]), n_out=len(st.times), plan=st.result.plan,
                                versions=json.dumps(versions()),
-                               inputs=json.dumps(input_hashes(self.meta.get("inputs", {}))), units="SI")
+                               inputs=json.dumps(input_hashes(self.meta.get("inputs", {}))),
+                               overrides=json.dumps(list(self.meta.get("overrides", ()))), units="SI")
                 self._layout(f, integ)
                 f.flush()
                 os.replace(part, self.path)
@@ -423,17 +426,22 @@ def modal_units(body) -> tuple[str, str]:
     return "SI", "SI"
 
 
-def resume_checkpoint(recorder, inputs=None):
+def resume_checkpoint(recorder, inputs=None, overrides=()):
     """The checkpoint (:class:`mbs.checkpoint.Checkpoint`) beside ``recorder.path``, to
     continue its run with ``System.simulate(checkpoint=…, recorder=recorder)``.
     ``inputs`` ({label: path}, the scene's): refused if one changed since the run
-    started. InputFileError if there is no checkpoint or it cannot be read."""
+    started; ``overrides`` (the scene's ``--set`` texts): refused if they differ from the
+    run's. InputFileError if there is no checkpoint or it cannot be read."""
     path, ckpt = recorder.path, recorder.checkpoint_path
     if not ckpt.exists():
         raise InputFileError(ckpt, None, "no checkpoint to resume from (the run completed, or never "
                                          "reached its first checkpoint)")
+    _, attrs = load_result(path)
+    then = list(attrs.get("overrides") or [])
+    if then != list(overrides):
+        raise InputFileError(path, None, f"cannot resume: the run started with --set {then or 'nothing'}, "
+                                         f"not {list(overrides) or 'nothing'}")
     if inputs:
-        _, attrs = load_result(path)
         then, now = attrs.get("inputs", {}), input_hashes(inputs)
         changed = [label for label, entry in now.items() if then.get(label, {}).get("sha256") != entry["sha256"]]
         if changed:
@@ -558,7 +566,7 @@ def _raised_by_a_reader(exc) -> bool:
 
 def _read(f, path) -> tuple[Result, dict]:
     """The body of :func:`load_result` on the open file ``f``."""
-    attrs = {k: (json.loads(v) if k in ("options", "versions", "inputs", "summary", "stats") else v)
+    attrs = {k: (json.loads(v) if k in ("options", "versions", "inputs", "overrides", "summary", "stats") else v)
              for k, v in f.attrs.items()}
     n = min((d.shape[0] for name, d in datasets(f) if per_sample(name)), default=0)
     t = f["t"][:n] if "t" in f else np.zeros(0)

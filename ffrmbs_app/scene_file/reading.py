@@ -13,7 +13,7 @@ from __future__ import annotations
 import json
 import re
 import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from ffrmbs.errors import InputFileError, os_reason
@@ -25,10 +25,11 @@ else:   # pragma: no cover - Python 3.10
     import tomli as tomllib
 
 _KEY = r"""(?:[A-Za-z0-9_-]+|"(?:[^"\\]|\\.)*"|'[^']*')"""
-_DOTTED = rf"{_KEY}(?:[ \t]*\.[ \t]*{_KEY})*"
-_ARRAY_HEADER = re.compile(rf"[ \t]*\[\[[ \t]*({_DOTTED})[ \t]*\]\]")
-_TABLE_HEADER = re.compile(rf"[ \t]*\[[ \t]*({_DOTTED})[ \t]*\]")
-_KEY_VALUE = re.compile(rf"[ \t]*({_DOTTED})[ \t]*=[ \t]*(.*)")
+#: a dotted TOML key (bare or quoted parts)
+DOTTED = rf"{_KEY}(?:[ \t]*\.[ \t]*{_KEY})*"
+_ARRAY_HEADER = re.compile(rf"[ \t]*\[\[[ \t]*({DOTTED})[ \t]*\]\]")
+_TABLE_HEADER = re.compile(rf"[ \t]*\[[ \t]*({DOTTED})[ \t]*\]")
+_KEY_VALUE = re.compile(rf"[ \t]*({DOTTED})[ \t]*=[ \t]*(.*)")
 
 
 def key_parts(dotted: str) -> tuple:
@@ -108,14 +109,22 @@ class KeyLines:
 
 @dataclass
 class Document:
-    """A parsed scene file: its path, the TOML data and the lines of its keys."""
+    """A parsed scene file: its path, the TOML data, the lines of its keys and the
+    overridden key paths (key path -> the ``--set`` text that gave the value,
+    :mod:`.overrides`)."""
 
     path: Path
     data: dict
     lines: KeyLines
+    overridden: dict = field(default_factory=dict)
 
     def fail(self, keypath, fault):
-        """Raise InputFileError at the line of ``keypath`` (a tuple of keys)."""
+        """Raise InputFileError at the line of ``keypath`` (a tuple of keys), or naming the
+        ``--set`` that gave the value at ``keypath`` or above it."""
+        keypath = tuple(keypath)
+        for given, text in self.overridden.items():
+            if keypath[:len(given)] == given:
+                raise InputFileError(self.path, None, f"{fault} (the value of --set {text})")
         raise InputFileError(self.path, self.lines.find(keypath), fault)
 
 
