@@ -42,6 +42,8 @@ import time
 from pathlib import Path
 
 from ffrmbs.errors import FfrmbsError, first_line
+from ffrmbs_app.scene_file.overrides import split_override
+from ffrmbs_app.scene_file.reading import key_parts
 
 RESOLUTION_KEYS = ("dt", "modes", "tol", "tolerance")    # last key parts that set a resolution
 SINGLE_THREAD_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
@@ -86,9 +88,11 @@ def parse_set(items) -> dict:
     (:func:`split_values`); a KEY given twice or an item without ``=`` is a FfrmbsError."""
     grid = {}
     for item in items:
-        key, eq, values = item.partition("=")
-        key = key.strip()
-        if not eq or not key:
+        try:
+            key, values = split_override(item)          # at the first "=" outside quotes
+        except ValueError:
+            key = ""
+        if not key:
             raise FfrmbsError(f"--set {item!r}: expected KEY=V1,V2,... (e.g. scene.dt=1e-5,5e-6)")
         if key in grid:
             raise FfrmbsError(f"--set: the key {key} is given twice; list all its values in one --set")
@@ -146,15 +150,19 @@ def override_sets(grid, zip=False) -> list[tuple[str, ...]]:
 def short_labels(keys) -> dict:
     """{KEY: label}: the shortest dotted suffix of each key that no other key shares
     ("body.beam.modes" -> "modes", unless another key ends in "modes" too)."""
+    parts = {key: key_parts(key) for key in keys}
     labels = {}
-    for key in keys:
-        parts = key.split(".")
-        for n in range(1, len(parts) + 1):
-            label = ".".join(parts[-n:])
-            if not any(o != key and (o == label or o.endswith("." + label)) for o in keys):
+    for key, mine in parts.items():
+        for n in range(1, len(mine) + 1):
+            if not any(o != key and theirs[-n:] == mine[-n:] for o, theirs in parts.items()):
                 break
-        labels[key] = label
+        labels[key] = ".".join(mine[-n:])
     return labels
+
+
+def _pairs(overrides) -> list[tuple[str, str]]:
+    """(KEY, VALUE) of each "KEY=VALUE" override (split at the first "=" outside quotes)."""
+    return [split_override(o) for o in overrides]
 
 
 def run_key(overrides) -> str:
@@ -162,9 +170,9 @@ def run_key(overrides) -> str:
     by :func:`short_labels`). Characters outside [A-Za-z0-9._+=,-] become "_", and then,
     or when the name is longer than KEY_MAX, "-" and 8 hex digits of the overrides' SHA-1
     follow, so different runs never share a name."""
-    keys = [o.partition("=")[0] for o in overrides]
-    labels = short_labels(keys)
-    text = ",".join(f"{labels[k]}={o.partition('=')[2]}" for k, o in _zip(keys, overrides))
+    pairs = _pairs(overrides)
+    labels = short_labels([k for k, _ in pairs])
+    text = ",".join(f"{labels[k]}={v}" for k, v in pairs)
     safe = _SAFE.sub("_", text)
     if safe != text or len(safe) > KEY_MAX or safe.startswith("."):
         digest = hashlib.sha1("\n".join(overrides).encode()).hexdigest()[:8]
@@ -367,7 +375,7 @@ def rows(runs, keys, results, out) -> list[dict]:
     for i, (overrides, key) in enumerate(_zip(runs, keys)):
         r = results[i]
         s = r.get("summary") or {}
-        row = {"run": key, **{o.partition("=")[0]: o.partition("=")[2] for o in overrides},
+        row = {"run": key, **dict(_pairs(overrides)),
                "status": r["status"], "error": r.get("error")}
         est = s.get("error_estimate")
         rel = [e["relative_to_range"] for e in (est or {}).values() if e["relative_to_range"] is not None]
@@ -428,7 +436,7 @@ def write_table(table, out, meta) -> list[Path]:
 
 def resolution_keys(keys) -> list[str]:
     """The keys that set a resolution: their last part is one of RESOLUTION_KEYS."""
-    return [k for k in keys if k.rpartition(".")[2] in RESOLUTION_KEYS]
+    return [k for k in keys if key_parts(k)[-1:] and key_parts(k)[-1] in RESOLUTION_KEYS]
 
 
 def plot_work_precision(table, grid, path) -> Path | None:
@@ -458,7 +466,7 @@ def plot_work_precision(table, grid, path) -> Path | None:
         rs = sorted(rs, key=lambda r: r["cpu_s"])
         ax.loglog([r["cpu_s"] for r in rs], [r["error_estimate"] for r in rs], "o-", label=label)
         for r in rs:
-            ax.annotate(",".join(f"{k.rpartition('.')[2]}={r[k]}" for k in varied), (r["cpu_s"], r["error_estimate"]),
+            ax.annotate(",".join(f"{key_parts(k)[-1]}={r[k]}" for k in varied), (r["cpu_s"], r["error_estimate"]),
                         fontsize=7, xytext=(3, 3), textcoords="offset points")
     ax.set_xlabel("CPU time of the run [s]")
     ax.set_ylabel("error estimate, relative to the output's range [-]")
