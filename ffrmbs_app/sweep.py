@@ -117,22 +117,27 @@ def toml_text(value) -> str:
     raise FfrmbsError(f"grid value {value!r}: give TOML text, a number, a bool or a list of them")
 
 
-def override_sets(grid, zip=False) -> list[tuple[str, ...]]:
-    """The runs of ``grid`` ({KEY: [values]}) as tuples of "KEY=VALUE" overrides: the
-    Cartesian product of the value lists, or (``zip``) the lists side by side (of equal
-    lengths). An empty grid or list, unequal lengths with ``zip`` or a run listed twice is
-    a FfrmbsError."""
+def grid_text(grid) -> dict:
+    """{KEY: [value as TOML text, ...]} of ``grid`` ({KEY: a list of values, or one
+    value}); an empty grid or value list is a FfrmbsError."""
     if not isinstance(grid, dict) or not grid:
         raise FfrmbsError("the sweep's grid is empty: give at least one KEY with its values")
-    keys, lists = list(grid), []
-    for key in keys:
-        values = grid[key]
-        if isinstance(values, (str, bytes)) or not hasattr(values, "__iter__"):
+    text = {}
+    for key, values in grid.items():
+        if not isinstance(values, (list, tuple)):
             values = [values]
-        values = [toml_text(v) for v in values]
         if not values:
             raise FfrmbsError(f"the sweep's grid gives no value for {key}")
-        lists.append(values)
+        text[key] = [toml_text(v) for v in values]
+    return text
+
+
+def override_sets(grid, zip=False) -> list[tuple[str, ...]]:
+    """The runs of ``grid`` (:func:`grid_text`) as tuples of "KEY=VALUE" overrides: the
+    Cartesian product of the value lists, or (``zip``) the lists side by side (of equal
+    lengths). Unequal lengths with ``zip`` or a run listed twice is a FfrmbsError."""
+    text = grid_text(grid)
+    keys, lists = list(text), list(text.values())
     if zip:
         lengths = {key: len(v) for key, v in _zip(keys, lists)}
         if len(set(lengths.values())) > 1:
@@ -258,7 +263,7 @@ def sweep(scene, grid, out, client=None, zip=False, workers=None, scheduler=None
         raise FfrmbsError("give a client, or workers or a scheduler for the sweep to connect to, not both")
     if workers is not None and scheduler is not None:
         raise FfrmbsError("--workers makes a local cluster, --scheduler uses a running one: give one of them")
-    if workers is not None and (not isinstance(workers, int) or workers < 1):
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
         raise FfrmbsError(f"workers must be a whole number >= 1, got {workers!r}")
     if as_frame:
         try:
@@ -287,10 +292,8 @@ def sweep(scene, grid, out, client=None, zip=False, workers=None, scheduler=None
         with _client(client, scheduler, workers) as c:
             _gather(c, scene, runs, keys, todo, out, check, results, progress)
     table = rows(runs, keys, results, out)
-    write_table(table, out, {"scene": str(scene), "grid": {k: [toml_text(v) for v in (vs if isinstance(vs, (list, tuple)) else [vs])]
-                                                          for k, vs in grid.items()},
-                             "zip": bool(zip), "check": bool(check), "runs": len(runs), "ran": len(todo),
-                             "wall_s": time.perf_counter() - w0})
+    write_table(table, out, {"scene": str(scene), "grid": grid_text(grid), "zip": bool(zip), "check": bool(check),
+                             "runs": len(runs), "ran": len(todo), "wall_s": time.perf_counter() - w0})
     if as_frame:
         return pandas.DataFrame(table)
     return table

@@ -197,6 +197,13 @@ def test_bad_sweeps_are_refused_before_running(scene, tmp_path):
         ffrmbs.sweep(tmp_path / "missing.toml", GRID, tmp_path)
     with pytest.raises(FfrmbsError, match="not both"):
         ffrmbs.sweep(scene, GRID, tmp_path, client=object(), workers=2)
+    with pytest.raises(FfrmbsError, match="workers"):
+        ffrmbs.sweep(scene, GRID, tmp_path, workers=0)
+    try:
+        import pandas  # noqa: F401
+    except ImportError:
+        with pytest.raises(FfrmbsError, match="pandas"):
+            ffrmbs.sweep(scene, GRID, tmp_path, as_frame=True)
     assert not (tmp_path / "runs").exists()
 
 
