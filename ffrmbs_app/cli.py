@@ -8,6 +8,7 @@ Subcommands
 ``run``         a scene as a job (result file streamed, checkpoints, ``--resume``, plot,
                 ParaView export): the default point mass on the flexible beam (thesis
                 Sec. 5.2), a TOML scene file or a Python model script
+``sweep``       a scene file over a grid of overrides, one run per Dask task: table, work-precision plot
 ``bench``       every benchmark in one process: tables, target verdicts, JSON (validation.bench)
 ``plot``        outputs, energy and contacts of a result file against time, as a PNG (ffrmbs_app.plot)
 ``export``      a result file to ParaView: deformed surfaces over time, .pvd + .vtu (ffrmbs_app.export)
@@ -158,6 +159,20 @@ def cmd_run(args):
     print("wrote " + ", ".join(written))
 
 
+def cmd_sweep(args):
+    """A parameter sweep of a scene file on a Dask cluster (:mod:`ffrmbs_app.sweep`)."""
+    from ffrmbs_app.sweep import parse_set, sweep
+
+    table = sweep(args.scene, parse_set(args.set), args.out, zip=args.zip, workers=args.workers,
+                  scheduler=args.scheduler, check=args.check, progress=_log)
+    failed = [row["run"] for row in table if row["status"] != "complete"]
+    print(f"wrote {args.out}/sweep.csv, sweep.json, sweep.md"
+          + (", sweep.png" if (Path(args.out) / "sweep.png").exists() else "") + f" and {args.out}/runs/")
+    if failed:      # the table is written; the status tells a script that not every run completed
+        raise FfrmbsError(f"{len(failed)} of {len(table)} runs failed: {', '.join(failed)} (their errors are in "
+                          f"{args.out}/sweep.csv; a second sweep into {args.out} runs only those again)")
+
+
 DEFAULT_SCENE_OPTIONS = ("setup", "modes", "law", "e", "contour", "residual_flexibility", "t_end", "dt")
 
 
@@ -296,6 +311,23 @@ def build_parser():
     default.add_argument("--t-end", type=float, help="simulated time [s] (default 0.1)")
     default.add_argument("--dt", type=float, help="time step [s] (default 1e-5)")
     run.set_defaults(func=cmd_run)
+
+    sw = sub.add_parser("sweep", help="run a scene file over a grid of overrides, one run per Dask task "
+                                      "(a local cluster, or a running scheduler): table and work-precision plot")
+    sw.add_argument("scene", help="scene file (.toml)")
+    sw.add_argument("--set", action="append", required=True, metavar="KEY=V1,V2,...",
+                    help="a key of the scene file and its values (TOML; commas inside [] or quotes stay), "
+                         "e.g. scene.dt=1e-5,5e-6 or body.beam.modes=10,20; repeat for more keys")
+    sw.add_argument("--zip", action="store_true",
+                    help="take the value lists side by side (equal lengths) instead of every combination")
+    sw.add_argument("--out", type=output_dir, required=True,
+                    help="output directory: runs/<run>.h5, sweep.csv, sweep.json, sweep.md, sweep.png; "
+                         "complete runs in it are kept on a second sweep")
+    where = sw.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=int, metavar="N", help="worker processes of a local cluster (default 2)")
+    where.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler, e.g. tcp://host:8786")
+    sw.add_argument("--check", action="store_true", help="estimate each run's error with a second run at dt/2")
+    sw.set_defaults(func=cmd_sweep)
 
     bench = sub.add_parser("bench", help="run the benchmarks: tables, target verdicts, JSON")
     bench.add_argument("--out", type=output_dir, default="out/bench", help="output directory (default: out/bench)")

@@ -38,6 +38,7 @@ from __future__ import annotations
 import contextlib
 import math
 import signal
+import threading
 import time
 from pathlib import Path
 
@@ -85,7 +86,17 @@ def _simulate(scene, dt=None, t_end=None, n_out=None, **extra):
 
 @contextlib.contextmanager
 def _stop_on_signals(log):
-    """SIGINT/SIGTERM → :func:`mbs.integrators.driver.request_stop` while the run goes."""
+    """SIGINT/SIGTERM → :func:`mbs.integrators.driver.request_stop` while the run goes
+    (in the main thread only: Python takes signals there; a run in another thread, e.g.
+    a Dask worker's task, leaves the handlers to its host)."""
+    if threading.current_thread() is not threading.main_thread():
+        driver.clear_stop()
+        try:
+            yield
+        finally:
+            driver.clear_stop()
+        return
+
     def handler(signum, frame):
         name = signal.Signals(signum).name
         driver.request_stop(f"{name} received")
@@ -106,7 +117,7 @@ def result_path(scene, out) -> Path:
 
 
 def run_scene(make_scene, out, check=True, resume=False, checkpoint_every=60.0, flush_every=2.0,
-              export=True, plot=True, log=print, no_limits=False) -> dict:
+              export=True, plot=True, log=print, no_limits=False, result=None) -> dict:
     """Run the job (module docstring) on ``make_scene()`` (a fresh Scene per call);
     returns the summary. A diverging run raises SimulationError after closing the file
     with its samples so far (status "failed: …"); an interrupted one RunInterrupted.
@@ -114,14 +125,15 @@ def run_scene(make_scene, out, check=True, resume=False, checkpoint_every=60.0, 
     Refused before anything is written (ModelError): ``checkpoint_every`` [s] not a
     finite number > 0 (None: no checkpoints), or a scene over the step or memory limits
     of :mod:`ffrmbs_app.limits` unless ``no_limits``. One job at a time writes a result file
-    (:mod:`ffrmbs_app.output_lock`); another is refused."""
+    (:mod:`ffrmbs_app.output_lock`); another is refused. ``result``: the result file's
+    path (default :func:`result_path`, ``OUT/<scene>.h5``; a sweep names its runs)."""
     scene = make_scene()                      # a bad scene stops here, before anything is written
     if checkpoint_every is not None and not (isinstance(checkpoint_every, (int, float))
                                              and math.isfinite(checkpoint_every) and checkpoint_every > 0):
         raise ModelError(f"checkpoint_every (--checkpoint-every) must be a finite number of seconds > 0, "
                          f"got {checkpoint_every!r}")
     check_resources(scene, check, no_limits)
-    path = result_path(scene, out)
+    path = result_path(scene, out) if result is None else Path(result)
     with output_lock(path):
         return _run(make_scene, scene, path, check, resume, checkpoint_every, flush_every, export, plot, log)
 

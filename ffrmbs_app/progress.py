@@ -118,6 +118,11 @@ class ProgressBar:
         self._stage_open = True
         self._bar.set_postfix_str(str(label), refresh=True)
 
+    def postfix(self, text):
+        """Show ``text`` after the bar (e.g. counts of running and failed tasks)."""
+        if self._bar is not None:
+            self._bar.set_postfix_str(str(text), refresh=False)
+
     def write(self, msg, file=None):
         """Print ``msg`` on ``file`` (default stderr) without tearing the bar."""
         write(msg, file)

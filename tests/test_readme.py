@@ -32,6 +32,11 @@ NOT_RUN = {
                                                               "first checkpoint; kill -9 and resume are tested in "
                                                               "tests/test_resume.py",
     "ffrmbs validate": "minutes of validation cases, each with its own tests",
+    "python3 -m distributed.cli.dask_scheduler": "a server that runs until stopped; tests/test_sweep.py starts a "
+                                                 "scheduler with workers (LocalCluster)",
+    "python3 -m distributed.cli.dask_worker": "a server that runs until stopped, and needs a scheduler at host",
+    "ffrmbs sweep examples/scenes/point_mass_beam.toml --set body.beam.modes=10,20,40": "needs a scheduler at "
+        "host:8786; --scheduler is tested against a LocalCluster's in tests/test_sweep.py",
 }
 
 
