@@ -118,7 +118,12 @@ def cmd_info(args):
 
 
 def cmd_validate(args):
+    if args.workers is not None and args.workers < 1:
+        raise FfrmbsError(f"--workers must be at least 1, not {args.workers}")
     if args.stability:    # the stability suite (validation.stability); a case that did not pass is an error
+        if args.workers is not None or args.scheduler is not None:
+            raise FfrmbsError("--workers and --scheduler run the validation cases on Dask; the stability suite "
+                              "runs in this process")
         from validation.stability.runner import run_stability
 
         run_stability(args.out, quick=args.quick, only=args.only or None, progress=_log)
@@ -126,7 +131,8 @@ def cmd_validate(args):
         return
     from validation import run_validation
 
-    run_validation(args.out, quick=args.quick, only=args.only or None, progress=_log)
+    run_validation(args.out, quick=args.quick, only=args.only or None, progress=_log, workers=args.workers,
+                   scheduler=args.scheduler)
     print(f"wrote {args.out}/results.json, {args.out}/report.md and one plot per case")
 
 
@@ -277,6 +283,11 @@ def build_parser():
     val.add_argument("--quick", action="store_true", help="coarse sweeps (minutes)")
     val.add_argument("--only", action="append", metavar="NAME", help="run only this case (repeatable)")
     val.add_argument("--out", type=output_dir, required=True, help="output directory")
+    where = val.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=int, metavar="N",
+                       help="run the cases as Dask tasks on a local cluster of N single-threaded worker processes")
+    where.add_argument("--scheduler", metavar="ADDRESS", help="run the cases on a running Dask scheduler "
+                                                               "(e.g. tcp://host:8786)")
     val.add_argument("--stability", action="store_true",
                      help="run the stability suite instead (stiff and extreme cases): stability.json, report.md")
     val.set_defaults(func=cmd_validate)

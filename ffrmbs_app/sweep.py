@@ -289,7 +289,7 @@ def sweep(scene, grid, out, client=None, zip=False, workers=None, scheduler=None
         else:
             results[i] = {"status": "complete", "summary": summary, "reused": True}
     if todo:
-        with _client(client, scheduler, workers) as c:
+        with dask_client(client, scheduler, workers) as c:
             _gather(c, scene, runs, keys, todo, out, check, results, progress)
     table = rows(runs, keys, results, out)
     write_table(table, out, {"scene": str(scene), "grid": grid_text(grid), "zip": bool(zip), "check": bool(check),
@@ -299,7 +299,7 @@ def sweep(scene, grid, out, client=None, zip=False, workers=None, scheduler=None
     return table
 
 
-class _client:
+class dask_client:
     """The client to use: the caller's (left open), one of a running scheduler, or a
     LocalCluster of single-threaded worker processes made and closed here."""
 

@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import math
 import re
+import threading
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -51,12 +52,14 @@ PLANE_RTOL = 1e-9          # a node on a bounding plane: within this x the body'
 
 @contextmanager
 def gmsh_session():
-    """Initialize gmsh quietly for one job and finalize it afterwards."""
+    """Initialize gmsh quietly for one job and finalize it afterwards. Off the main thread
+    (e.g. a Dask worker's task) gmsh is not made interruptible: its Ctrl-C handler can
+    only be installed by the main thread."""
     import gmsh
 
     owner = not gmsh.isInitialized()
     if owner:
-        gmsh.initialize(readConfigFiles=False)
+        gmsh.initialize(readConfigFiles=False, interruptible=threading.current_thread() is threading.main_thread())
     gmsh.option.setNumber("General.Terminal", 0)
     gmsh.clear()
     gmsh.option.setNumber("General.NumThreads", 1)

@@ -44,3 +44,14 @@ def thesis_centre_line(thesis_beam):
     """The beam's centre line as a degree-4 1s neutral contour, reference normal y: a C²
     band and cylinder on it (module docstring of contours.derived)."""
     return Contour1sNeutralFFR.along_line(thesis_beam, (0, 0.025, 0.025), (1, 0, 0), normal=(0, 1, 0), degree=4)
+
+
+@pytest.fixture(scope="session")
+def dask_client():
+    """One Dask LocalCluster for the session's sweep and validate tests: two single-threaded
+    worker processes (as ``ffrmbs sweep --workers 2`` makes), and its client."""
+    from distributed import Client, LocalCluster
+
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
+            Client(cluster) as client:
+        yield client

@@ -56,15 +56,6 @@ GRID = {"scene.dt": ["1e-3", "5e-4"], "contact.floor.e": ["0.5", "2"]}     # e =
 
 
 @pytest.fixture(scope="module")
-def client():
-    from distributed import Client, LocalCluster
-
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
-            Client(cluster) as c:
-        yield c
-
-
-@pytest.fixture(scope="module")
 def scene(tmp_path_factory):
     path = tmp_path_factory.mktemp("scene") / "bounce.toml"
     path.write_text(BOUNCE)
@@ -72,11 +63,11 @@ def scene(tmp_path_factory):
 
 
 @pytest.fixture(scope="module")
-def grid_sweep(client, scene, tmp_path_factory):
+def grid_sweep(dask_client, scene, tmp_path_factory):
     """The 2 x 2 sweep through the package's entry point, with its progress lines."""
     out = tmp_path_factory.mktemp("sweep")
     lines = []
-    table = ffrmbs.sweep(scene, GRID, out, client=client, progress=lines.append)
+    table = ffrmbs.sweep(scene, GRID, out, client=dask_client, progress=lines.append)
     return out, table, lines
 
 
@@ -165,20 +156,20 @@ def test_sweep_run_is_bitwise_the_run_alone(grid_sweep, scene, tmp_path):
         assert swept[name].tobytes() == single[name].tobytes(), name
 
 
-def test_resume_runs_only_what_is_missing(grid_sweep, client, scene):
+def test_resume_runs_only_what_is_missing(grid_sweep, dask_client, scene):
     out, table, _ = grid_sweep
     kept = out / table[0]["result_file"]
     stamp = kept.stat().st_mtime_ns
     (out / table[2]["result_file"]).unlink()
-    again = ffrmbs.sweep(scene, GRID, out, client=client, progress=lambda line: None)
+    again = ffrmbs.sweep(scene, GRID, out, client=dask_client, progress=lambda line: None)
     assert [r["reused"] for r in again] == [True, False, False, False]     # the failed ones run again too
     assert [r["status"] for r in again] == ["complete", "failed", "complete", "failed"]
     assert kept.stat().st_mtime_ns == stamp
     assert again[2]["final:z"] == table[2]["final:z"]
 
 
-def test_zip_sweep_with_check_and_python_values(client, scene, tmp_path):
-    table = ffrmbs.sweep(scene, {"scene.dt": [1e-3, 5e-4], "scene.t_end": [0.2, 0.15]}, tmp_path, client=client,
+def test_zip_sweep_with_check_and_python_values(dask_client, scene, tmp_path):
+    table = ffrmbs.sweep(scene, {"scene.dt": [1e-3, 5e-4], "scene.t_end": [0.2, 0.15]}, tmp_path, client=dask_client,
                          zip=True, check=True, progress=lambda line: None)
     assert [r["run"] for r in table] == ["dt=0.001,t_end=0.2", "dt=0.0005,t_end=0.15"]
     assert [r["steps"] for r in table] == [200, 300]
@@ -207,13 +198,13 @@ def test_bad_sweeps_are_refused_before_running(scene, tmp_path):
     assert not (tmp_path / "runs").exists()
 
 
-def test_cli_end_to_end(client, scene, tmp_path):
+def test_cli_end_to_end(dask_client, scene, tmp_path):
     """``ffrmbs sweep`` on the module's cluster (--scheduler), a list-valued key whose
     values hold commas; a bad --set is one line and status 2."""
     out = tmp_path / "cli"
     cmd = [sys.executable, "-m", "ffrmbs_app.cli", "sweep", str(scene),
            "--set", "body.ball.position=[0.0, 0.0, 0.05],[0.0,0.0,0.02]", "--set", "scene.dt=1e-3",
-           "--out", str(out), "--scheduler", client.scheduler.address]
+           "--out", str(out), "--scheduler", dask_client.scheduler.address]
     done = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, timeout=120)
     assert done.returncode == 0, done.stderr
     rows = json.loads((out / "sweep.json").read_text())["rows"]

@@ -235,7 +235,7 @@ def _check_result(result):
             raise ModelError(f"row {i}: error = {row['error']!r} is neither a number nor None")
 
 
-def _run_case(registry, name, quick):
+def run_case(registry, name, quick):
     """Load and run one case; an exception becomes a failed outcome."""
     outcome = _Outcome(name)
     start = time.process_time()
@@ -250,6 +250,15 @@ def _run_case(registry, name, quick):
         outcome.traceback = traceback.format_exc()
     outcome.cpu_s = time.process_time() - start
     return outcome
+
+
+def outcome_line(outcome) -> str:
+    """One progress line of a case's outcome: its rows and CPU time, skipped or FAILED."""
+    if outcome.failure is not None:
+        return f"{outcome.name}: FAILED: {outcome.failure}"
+    if not outcome.result.rows and outcome.result.skipped:
+        return f"{outcome.name}: {_status(outcome)}"
+    return f"{outcome.name}: {len(outcome.result.rows)} rows, {outcome.cpu_s:.3g} s CPU"
 
 
 def _as_registry(cases):
@@ -473,7 +482,8 @@ def _results_json(outcomes, quick, machine, date):
     return json_safe({"date": date, "quick": quick, "machine": machine, "rows": rows, "cases": cases})
 
 
-def run_validation(out_dir, quick=False, only=None, cases=None, progress=print):
+def run_validation(out_dir, quick=False, only=None, cases=None, progress=print, workers=None, scheduler=None,
+                   client=None):
     """Run validation cases and write ``out_dir/results.json``, ``report.md``, ``<case>.png``.
 
     Parameters
@@ -488,6 +498,12 @@ def run_validation(out_dir, quick=False, only=None, cases=None, progress=print):
         The cases to choose from; None: the registry :data:`CASES`.
     progress : callable or None
         Called with one line of text per step; None for silence.
+    workers, scheduler, client :
+        Run the cases as Dask tasks (:mod:`validation.parallel`): on the given
+        ``client``, on a running scheduler at the address ``scheduler``, or on a
+        LocalCluster of ``workers`` single-threaded processes. All None: one after
+        another in this process. The report and results.json are the same either way;
+        each case's CPU time is measured inside its task.
 
     Returns the rows of all cases. A case that raises is recorded as ``FAILED: <message>``
     and the others still run; after writing the files, FfrmbsError names the failed cases.
@@ -498,18 +514,16 @@ def run_validation(out_dir, quick=False, only=None, cases=None, progress=print):
     names = _select(registry, only)
     out_dir = os.fspath(out_dir)
     os.makedirs(out_dir, exist_ok=True)
-    outcomes = []
-    for i, name in enumerate(names, 1):
-        say(f"[{i}/{len(names)}] {name} ...")
-        outcome = _run_case(registry, name, quick)
-        if outcome.failure is not None:
-            say(f"[{i}/{len(names)}] {name}: FAILED: {outcome.failure}")
-        elif not outcome.result.rows and outcome.result.skipped:
-            say(f"[{i}/{len(names)}] {name}: {_status(outcome)}")
-        else:
-            say(f"[{i}/{len(names)}] {name}: {len(outcome.result.rows)} rows, "
-                f"{outcome.cpu_s:.3g} s CPU")
-        outcomes.append(outcome)
+    if workers is None and scheduler is None and client is None:
+        outcomes = []
+        for i, name in enumerate(names, 1):
+            say(f"[{i}/{len(names)}] {name} ...")
+            outcomes.append(run_case(registry, name, quick))
+            say(f"[{i}/{len(names)}] {outcome_line(outcomes[-1])}")
+    else:
+        from validation.parallel import run_cases
+
+        outcomes = run_cases(registry, names, quick, say, client=client, scheduler=scheduler, workers=workers)
     pngs = {}
     for o in outcomes:
         plotted = [row for row in o.result.rows if _plottable(row)] if o.result else []
