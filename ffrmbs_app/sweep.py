@@ -48,6 +48,9 @@ from ffrmbs_app.scene_file.reading import key_parts
 RESOLUTION_KEYS = ("dt", "modes", "tol", "tolerance")    # last key parts that set a resolution
 SINGLE_THREAD_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
                      "NUMBA_NUM_THREADS": "1"}
+#: Dask settings of the workers a sweep starts: no statistical profiler (a thread that samples
+#: the task's stack every 10 ms and competes with it for the GIL)
+QUIET_WORKER_CONFIG = {"distributed.worker.profile.enabled": False}
 _zip = zip                    # the builtin, for functions whose argument ``zip`` hides it
 _SAFE = re.compile(r"[^A-Za-z0-9._+=,-]")
 KEY_MAX = 80                  # characters of a run's readable name before its hash
@@ -319,8 +322,11 @@ class dask_client:
                 raise FfrmbsError(f"cannot connect to the Dask scheduler {self.scheduler}: {first_line(exc)}") from None
             self.made.append(c)
             return c
-        cluster = LocalCluster(n_workers=self.workers or 2, threads_per_worker=1, processes=True,
-                               dashboard_address=None, env=dict(SINGLE_THREAD_ENV))
+        import dask
+
+        with dask.config.set(QUIET_WORKER_CONFIG):
+            cluster = LocalCluster(n_workers=self.workers or 2, threads_per_worker=1, processes=True,
+                                   dashboard_address=None, env=dict(SINGLE_THREAD_ENV))
         self.made.append(cluster)
         c = Client(cluster)
         self.made.append(c)

@@ -47,3 +47,16 @@ def test_a_failing_case_on_a_worker_is_reported_and_the_others_run(dask_client, 
     doc = json.loads((tmp_path / "results.json").read_text())
     assert doc["cases"]["wobble_shear"]["status"] == "ok" and doc["cases"]["failing_case"]["status"] == "failed"
     assert "deliberate failure" in doc["cases"]["failing_case"]["failure"]
+
+
+def test_case_times_are_kept_per_mode_and_merged(tmp_path, monkeypatch):
+    from validation.parallel import case_times, record_case_times
+
+    monkeypatch.setenv("FFRMBS_CACHE", str(tmp_path))
+    assert case_times(True) == {}
+    record_case_times(True, {"a": 2.0, "b": 1.0})
+    record_case_times(True, {"b": 3.0})
+    record_case_times(False, {"a": 9.0})
+    assert case_times(True) == {"a": 2.0, "b": 3.0} and case_times(False) == {"a": 9.0}
+    (tmp_path / "case-times.json").write_text("not json")
+    assert case_times(True) == {}

@@ -515,11 +515,14 @@ def run_validation(out_dir, quick=False, only=None, cases=None, progress=print, 
     out_dir = os.fspath(out_dir)
     os.makedirs(out_dir, exist_ok=True)
     if workers is None and scheduler is None and client is None:
+        from validation.parallel import record_case_times
+
         outcomes = []
         for i, name in enumerate(names, 1):
             say(f"[{i}/{len(names)}] {name} ...")
             outcomes.append(run_case(registry, name, quick))
             say(f"[{i}/{len(names)}] {outcome_line(outcomes[-1])}")
+        record_case_times(quick, {o.name: o.cpu_s for o in outcomes})
     else:
         from validation.parallel import run_cases
 
