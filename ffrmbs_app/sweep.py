@@ -313,7 +313,11 @@ class dask_client:
     def __enter__(self):
         if self.given is not None:
             return self.given
-        from distributed import Client, LocalCluster
+        try:
+            from distributed import Client, LocalCluster
+        except ImportError:
+            raise FfrmbsError("sweeps and validate --workers run on Dask, which is not installed: "
+                              "pip install '.[sweep]'") from None
 
         if self.scheduler is not None:
             try:

@@ -60,3 +60,11 @@ def test_case_times_are_kept_per_mode_and_merged(tmp_path, monkeypatch):
     assert case_times(True) == {"a": 2.0, "b": 3.0} and case_times(False) == {"a": 9.0}
     (tmp_path / "case-times.json").write_text("not json")
     assert case_times(True) == {}
+
+
+def test_without_dask_workers_are_one_clear_error(monkeypatch, tmp_path):
+    import sys
+
+    monkeypatch.setitem(sys.modules, "distributed", None)          # as if not installed
+    with pytest.raises(FfrmbsError, match=r"Dask, which is not installed: pip install '\.\[sweep\]'"):
+        run_validation(tmp_path, quick=True, cases=CHEAP, progress=None, workers=2)

@@ -26,8 +26,6 @@ TIMES_FILE = "case-times.json"
 def run_cases(registry, names, quick, say, client=None, scheduler=None, workers=None) -> list:
     """The outcomes of the cases ``names`` of ``registry`` (name -> module), in that order,
     each run as one Dask task; ``say`` receives a line as each case finishes."""
-    from distributed import as_completed
-
     from ffrmbs_app.sweep import dask_client
     from validation.harness import outcome_line
 
@@ -35,6 +33,8 @@ def run_cases(registry, names, quick, say, client=None, scheduler=None, workers=
     times = case_times(quick)
     order = sorted(names, key=lambda name: -times.get(name, float("inf")))
     with dask_client(client, scheduler, workers) as dask:
+        from distributed import as_completed
+
         futures = {dask.submit(run_case_task, registry[name].__name__, name, quick, pure=False,
                                priority=len(order) - rank): name
                    for rank, name in enumerate(order)}
