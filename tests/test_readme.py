@@ -148,6 +148,9 @@ def test_readme_python_snippets_compile_and_import():
             continue
         problems += [f"{_where(snippet)}: {p}" for p in
                      filter(None, (rc.import_problem(m, n) for m, n in snippet.imports()))]
+        if snippet.free_names():
+            problems.append(f"{_where(snippet)}: a fragment (uses {', '.join(sorted(snippet.free_names()))} "
+                            "without defining them); every README snippet runs as written")
     if problems:
         pytest.fail("\n".join(problems), pytrace=False)
 
@@ -192,8 +195,6 @@ def test_readme_commands_run_as_written(tmp_path):
     failures, ran = [], 0
     for item in rc.items(_readme()):
         if isinstance(item, rc.Snippet):
-            if item.free_names():
-                continue                          # a fragment: compiled and import-checked above
             argv, extra = [sys.executable, "-c", item.source], {}
         elif item.synopsis or _not_run_reason(item):
             continue
