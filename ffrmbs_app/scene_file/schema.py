@@ -159,6 +159,9 @@ Gravity is ``[scene] gravity``.
 
 ``[[contact]]`` (:class:`contact.Contact`). ``name`` ("contact <i>", unique).
 ``contour1`` *req.*: ``{ kind = "point" | "sphere", <frame>, radius }``.
+Either contour may be on the ground, not both: points on the ground
+(``body = "ground"``) against a surface on a body model a part landing on a rigid
+support, the part's own surface (and its residual flexibility) taking the contact.
 ``contour2`` *req.* is one of:
 
 - ``{ kind = "2s", body, nodes, extra_rows = 0, degree = 3, closed = false,
