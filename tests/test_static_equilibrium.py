@@ -14,9 +14,10 @@ import scipy.sparse.linalg as spla
 
 from contact import LinearRegularizedUnilateralConstraint, connect
 from contours import PlaneContour, PointContour
-from ffrmbs.errors import ModelError
+from ffrmbs.errors import InputFileError, ModelError
+from ffrmbs_app.scene_file import read_scene
 from mbs import FlexibleBodyFFR, Joint, PointMass, PrescribedFrameMotion, RigidBody, SpringDamper, System, ground_frame
-from preprocess import Material, build_body
+from preprocess import Material, build_body, write_body
 from preprocess.geometry import box
 
 G = 9.81                                     # [m/s²]
@@ -142,3 +143,85 @@ def test_unsupported_states_are_named(make, fragment):
     with pytest.raises(ModelError) as info:
         system.static_equilibrium()
     assert fragment in str(info.value)
+
+
+# --- scene files: initial = "static" -------------------------------------------------------------------
+
+SCENE = """\
+[scene]
+t_end = 0.01
+dt = 2e-5
+gravity = [0.0, -9.81, 0.0]
+
+[[body]]
+name = "beam"
+kind = "flexible"
+source = "beam/body.h5"
+frame = "fixed"
+initial = "static"
+
+[[body]]
+name = "bob"
+kind = "point_mass"
+mass = 0.5
+position = [0.0, -0.25, 0.0]
+initial = "static"
+
+[[spring]]
+frame1 = { body = "ground", point = [0.0, 0.0, 0.0] }
+frame2 = { body = "bob" }
+stiffness = 200.0
+free_length = 0.3
+
+[[body]]
+name = "ball"
+kind = "point_mass"
+mass = 0.1
+position = [0.1, 0.05, 0.01]
+velocity = [0.0, -1.0, 0.0]
+"""
+
+
+@pytest.fixture(scope="module")
+def scene_path(beam_data, tmp_path_factory):
+    directory = tmp_path_factory.mktemp("static")
+    write_body(directory / "beam", beam_data)
+    path = directory / "static.toml"
+    path.write_text(SCENE)
+    return path
+
+
+def test_initial_static_in_a_scene_file_is_the_python_static_state(beam_data, scene_path):
+    """The beam and the bob at rest as System.static_equilibrium puts them (the bob at
+    l0 + m g / k below the spring's anchor); the ball keeps its given state."""
+    scene = read_scene(scene_path)
+    system, beam = cantilever(beam_data)
+    bob = system.add(PointMass(0.5, position=(0.0, -0.25, 0.0), name="bob"))
+    system.add(SpringDamper(ground_frame((0.0, 0.0, 0.0)), bob.point, 200.0, 0.0, free_length=0.3))
+    ball = system.add(PointMass(0.1, position=(0.1, 0.05, 0.01), velocity=(0.0, -1.0, 0.0), name="ball"))
+    system.static_equilibrium(bodies=[beam, bob])
+    q, u = scene.system.initial_state()
+    np.testing.assert_array_equal((q, u), system.initial_state())
+    np.testing.assert_allclose(q[bob.q_slice], [0.0, -(0.3 + 0.5 * G / 200.0), 0.0], rtol=0, atol=1e-12)
+    np.testing.assert_array_equal(u[ball.u_slice], [0.0, -1.0, 0.0])
+
+
+@pytest.mark.parametrize("old, new, fragment, line", [
+    ('position = [0.0, -0.25, 0.0]\ninitial = "static"',
+     'position = [0.0, -0.25, 0.0]\ninitial = "static"\nvelocity = [0.0, 0.1, 0.0]',
+     "body 'bob': 'velocity' is computed by initial = \"static\"", "velocity = [0.0, 0.1, 0.0]"),
+    ('velocity = [0.0, -1.0, 0.0]\n', 'initial = "static"\n',
+     "body 'ball': initial = \"static\": static equilibrium: body 'ball' has none: nothing holds it",
+     'initial = "static"'),
+    ('frame = "fixed"\ninitial = "static"', 'frame = "fixed"\ninitial = "rest"',
+     "'initial' must be one of 'given', 'static'", 'initial = "rest"'),
+])
+def test_faults_of_initial_static_name_the_body_and_line(scene_path, old, new, fragment, line):
+    text = SCENE
+    assert text.count(old) == 1
+    path = scene_path.parent / "fault.toml"
+    path.write_text(text.replace(old, new))
+    with pytest.raises(InputFileError) as info:
+        read_scene(path)
+    assert fragment in str(info.value)
+    assert path.read_text().splitlines()[info.value.line - 1] == line
