@@ -12,20 +12,23 @@ g the joints' residuals and the gaps g_N of the resting contacts, W = [C_qᵀ, W
 Newton's method on (S1) with ∂h/∂Δu by forward differences (exact to rounding when h is
 affine in q, as for a body on a fixed frame) and the step of the bordered system
 
-    [∂h/∂Δu  W] [Δu]   [−h − W λ]
-    [Wᵀ      0] [λ⁺] = [−g      ]                                           (S2)
+    [∂h/∂Δu  W] [Δu]   [−h]
+    [Wᵀ      0] [λ⁺] = [−g]                                                 (S2)
 
-solved in the least-squares sense (a statically indeterminate support, e.g. a rigid block
-on four points, takes the multipliers of least norm). For a clamped FFR body (a fixed
+solved by the null-space method in the least-squares sense (:func:`_newton_step`: a
+direction with neither stiffness nor load stays put; a statically indeterminate support,
+e.g. a rigid block on four points, takes the multipliers of least norm). For a clamped FFR body (a fixed
 frame) h = Q_f − K_ff q_f is affine and (S1) is K_ff q_f = Q_f: the modal static
 deflection, exact in the modal basis, in one Newton step (the second confirms it).
 
 Contacts: a unilateral set-valued contact (impact or Coulomb law) closed at the given
 state (its own rule, :meth:`contact.Contact.locate`) is a resting contact: its gap is
-held at zero and its normal force λ_N must come out compressive (>= 0), frictionless.
-A contact open at the given state must stay open at the static one. A closed contact
-with a penalty law, one on a contour with residual flexibility, or a bilateral curve
-constraint is not supported (a ModelError names it).
+held at zero (rows W_N) and its normal force λ_N must come out compressive (>= 0). With
+the impact law it is frictionless; with the Coulomb law it also sticks (rows W_T, the
+contact point does not slide: W_Tᵀ Δu = 0) and its friction force must lie in the cone,
+|λ_T| <= μ λ_N. A contact open at the given state must stay open at the static one. A
+closed contact with a penalty law, one on a contour with residual flexibility, or a
+bilateral curve constraint is not supported (a ModelError names it).
 """
 
 from __future__ import annotations
@@ -36,6 +39,10 @@ from ffrmbs.errors import ModelError
 
 #: forward-difference step of ∂h/∂Δu [the unit of each velocity coordinate]
 FD_STEP = 1e-7
+#: singular values below this fraction of the largest count as zero (least-squares solves)
+RANK_TOL = 1e-12
+#: a generalized force left unbalanced by a Newton step, relative to the largest load at the start
+UNBALANCED_TOL = 1e-6
 
 
 def static_equilibrium(system, t=0.0, bodies=None, tol=1e-10, max_iter=30):
@@ -69,14 +76,14 @@ def static_equilibrium(system, t=0.0, bodies=None, tol=1e-10, max_iter=30):
         r = h + W @ lam
         if np.abs(r).max(initial=0.0) <= tol * scale and np.abs(g).max(initial=0.0) <= tol:
             break
-        du, lam = _newton_step(system, chosen, equations, q, u, t, cols, h, W, r, g, scale, tol)
+        du, lam = _newton_step(system, chosen, equations, q, u, t, cols, h, W, g, scale)
         q = equations.increment(q, du)
         equations.normalize(q)
         h = equations.h(t, q, u)[cols]
     else:
         raise ModelError(f"static equilibrium of {_names(chosen)}: Newton's method did not converge in {max_iter} "
                          f"iterations (residual {np.abs(r).max():.3g} of the loads' {scale:.3g})")
-    _check_contacts(contacts, resting, lam[lam.size - len(resting):], q, u, t)
+    _check_contacts(contacts, resting, lam[lam.size - sum(c.dim for c in resting):], q, u, t)
     for b in chosen:
         b.q_init[:] = q[b.q_slice]
         b.u_init[:] = 0.0
@@ -142,53 +149,72 @@ def _constraints(system, resting, q, u, t, cols):
         keep = np.abs(C).max(axis=1) > 0.0
         columns.append(C[keep].T)
         residuals.append(system.constraint_residual(t, q)[keep])
-    if resting:
-        W_N = np.empty((len(cols), len(resting)))
-        g_N = np.empty(len(resting))
-        for j, c in enumerate(resting):
-            _update_contours(c, q, u, t)
-            if not c.kinematics.update(velocity=False, jacobians=True):
-                raise ModelError(f"static equilibrium: the resting contact {c.name!r} lost its contact point "
-                                 "(it left the contour's domain)")
-            W_N[:, j] = c.kinematics.W_N()[cols]
-            g_N[j] = c.kinematics.g_N
-        columns.append(W_N)
-        residuals.append(g_N)
+    for c in resting:
+        _update_contours(c, q, u, t)
+        k = c.kinematics
+        if not k.update(velocity=False, jacobians=True):
+            raise ModelError(f"static equilibrium: the resting contact {c.name!r} lost its contact point "
+                             "(it left the contour's domain)")
+        columns.append(k.W_N()[cols, None])
+        residuals.append([k.g_N])
+        if c.dim == 3:                          # Coulomb: the point sticks (no position-level slip)
+            columns.append(k.W_T()[cols])
+            residuals.append([0.0, 0.0])
     if not columns:
         return np.zeros((len(cols), 0)), np.zeros(0)
     return np.hstack(columns), np.concatenate(residuals)
 
 
-def _newton_step(system, chosen, equations, q, u, t, cols, h, W, r, g, scale, tol):
-    """(Δu (nu,), λ⁺) of (S2); ModelError naming the bodies whose equations (S2) cannot
-    satisfy (nothing holds them against their loads)."""
-    n, m = len(cols), g.size
+def _newton_step(system, chosen, equations, q, u, t, cols, h, W, g, scale):
+    """(Δu (nu,), λ⁺) of (S2) by the null-space method: Δu = Δu_g + Z z with Wᵀ Δu_g = −g
+    (least norm), Z an orthonormal basis of the null space of Wᵀ, the reduced equations
+    Zᵀ ∂h/∂Δu Z z = −Zᵀ (h + ∂h/∂Δu Δu_g) in the least-squares sense (directions without
+    stiffness and without load stay put), then W λ⁺ = −(h + ∂h/∂Δu Δu) (least norm for a
+    statically indeterminate support). ModelError naming the body whose reduced equations
+    have no solution (a load along a direction nothing holds)."""
+    n = len(cols)
     J = np.empty((n, n))
     du = np.zeros(system.nu)
     for k, col in enumerate(cols):
         du[col] = FD_STEP
         J[:, k] = (equations.h(t, equations.increment(q, du), u)[cols] - h) / FD_STEP
         du[col] = 0.0
-    A = np.zeros((n + m, n + m))
-    A[:n, :n], A[:n, n:], A[n:, :n] = J, W, W.T
-    rhs = np.concatenate([-h, -g])
-    x = np.linalg.lstsq(A, rhs, rcond=1e-12)[0]
-    left = A @ x - rhs
-    if np.abs(left[:n]).max(initial=0.0) > 1e-6 * scale or np.abs(left[n:]).max(initial=0.0) > max(tol, 1e-9):
-        worst = cols[int(np.argmax(np.abs(left[:n])))] if n else 0
+    du_g, Z = np.zeros(n), np.eye(n)
+    if g.size:
+        _, sv, Vt = np.linalg.svd(W.T)
+        rank = int(np.sum(sv > RANK_TOL * sv.max())) if sv.size else 0
+        Z = Vt[rank:].T
+        du_g = np.linalg.lstsq(W.T, -g, rcond=RANK_TOL)[0]
+    b = Z.T @ (h + J @ du_g)
+    J_r = Z.T @ J @ Z
+    z = np.linalg.lstsq(J_r, -b, rcond=RANK_TOL)[0]
+    unbalanced = Z @ (J_r @ z + b)
+    if np.abs(unbalanced).max(initial=0.0) > UNBALANCED_TOL * scale:
+        worst = cols[int(np.argmax(np.abs(unbalanced)))]
         body = next(b for b in chosen if b.u_slice.start <= worst < b.u_slice.stop)
         raise ModelError(f"static equilibrium: body {body.name!r} has none: nothing holds it against its loads "
-                         "(add a joint, a spring or a resting contact, or start it from its given state)")
-    du[cols] = x[:n]
-    return du, x[n:]
+                         "(add a joint, a spring or a resting contact — frictionless with the impact law, sticking "
+                         "with the coulomb law — or start it from its given state)")
+    step = du_g + Z @ z
+    lam = np.linalg.lstsq(W, -(h + J @ step), rcond=RANK_TOL)[0] if g.size else np.zeros(0)
+    du[cols] = step
+    return du, lam
 
 
-def _check_contacts(contacts, resting, lam_N, q, u, t):
-    """Resting contacts press (λ_N >= 0); the others are open at the static state."""
-    for c, lam in zip(resting, lam_N):
-        if lam < 0.0:
-            raise ModelError(f"static equilibrium: contact {c.name!r} would have to pull ({-lam:.3g} N): the body "
-                             "does not rest on it; start it apart from the contact")
+def _check_contacts(contacts, resting, lam, q, u, t):
+    """Resting contacts press (λ_N >= 0) and stick inside their friction cone
+    (|λ_T| <= μ λ_N; ``lam`` their multipliers, [N] or [N, T1, T2] each); the others are
+    open at the static state."""
+    at = 0
+    for c in resting:
+        lam_N, lam_T = lam[at], lam[at + 1:at + c.dim]
+        at += c.dim
+        if lam_N < 0.0:
+            raise ModelError(f"static equilibrium: contact {c.name!r} would have to pull ({-lam_N:.3g} N): the "
+                             "body does not rest on it; start it apart from the contact")
+        if lam_T.size and np.linalg.norm(lam_T) > c.law.mu * lam_N:
+            raise ModelError(f"static equilibrium: contact {c.name!r} would slide: friction {np.linalg.norm(lam_T):.3g} "
+                             f"N needed, mu lambda_N = {c.law.mu * lam_N:.3g} N")
     for c in contacts:
         if not any(c is r for r in resting) and _closed(c, q, u, t):
             raise ModelError(f"static equilibrium: the static deflection closes contact {c.name!r}, open at the "

@@ -10,9 +10,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from contact import connect
+from contact import UnilateralCoulombContact, connect
 from contours import Contour2sNeutralFFR, PlaneContour, PointContour
-from ffrmbs.errors import InputFileError
+from ffrmbs.errors import InputFileError, ModelError
 from ffrmbs_app.scene_file import read_scene
 from ffrmbs_app.scene_file.contacts import axes_with_normal
 from mbs import FlexibleBodyFFR, RigidBody, System, ground_frame
@@ -171,3 +171,18 @@ def test_a_contact_with_both_contours_on_the_ground_is_refused(scene_path):
         read_scene(path)
     assert "contact 'block 0'" in str(info.value)
     assert "both contours are on the ground" in info.value.fault
+
+
+def test_a_plate_cannot_start_sticking_on_points_that_hold_it_by_friction(scene_path):
+    """Static equilibrium (issue 30, item 16) of the plate touching the points with the
+    Coulomb law: sticking points pin its bottom face, and the bending would need
+    horizontal forces far beyond μ λ_N (membrane action): a clear error naming the
+    contact, not a state the run would leave at once."""
+    system = System(gravity=(0.0, 0.0, -G))
+    plate = system.add(FlexibleBodyFFR.from_file(scene_path.parent / "plate" / "body.h5", name="plate"))
+    bottom = Contour2sNeutralFFR(plate, "z0")
+    for i, (x, y) in enumerate(PLATE_POINTS):
+        system.add(connect(PointContour(ground_frame((x, y, 0.0))), bottom,
+                           UnilateralCoulombContact(0.0, 0.5), name=f"p{i}"))
+    with pytest.raises(ModelError, match=r"contact 'p\d' would slide: friction .* N needed, mu lambda_N = .* N"):
+        system.static_equilibrium()

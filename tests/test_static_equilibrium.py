@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 import scipy.sparse.linalg as spla
 
-from contact import LinearRegularizedUnilateralConstraint, connect
+from contact import LinearRegularizedUnilateralConstraint, UnilateralCoulombContact, connect
 from contours import PlaneContour, PointContour
 from ffrmbs.errors import InputFileError, ModelError
 from ffrmbs_app.scene_file import read_scene
@@ -119,18 +119,23 @@ def block_on_points(law="impact", z=0.05):
     return system, block
 
 
-def test_a_block_rests_on_three_points():
+@pytest.mark.parametrize("law", ["impact", UnilateralCoulombContact(0.0, 0.3)])
+def test_a_block_rests_on_three_points(law):
     """Hand calculation (moments about the centre of mass): the front points carry m g / 4
-    each, the back one m g / 2."""
-    system, block = block_on_points()
+    each, the back one m g / 2; frictionless (impact law) or sticking (Coulomb law: no
+    net friction force needed; the run's friction forces between the sticking points
+    are not unique, they cancel)."""
+    system, block = block_on_points(law)
     q, u = system.static_equilibrium()
     np.testing.assert_allclose(q[block.q_slice][:3], [0.0, 0.0, 0.05], rtol=0, atol=1e-15)
     result = system.simulate(0.05, 1e-4, integrator="moreau", t_out=[0.0, 0.05], outputs={}, plan=False,
                              contacts=True)
     np.testing.assert_allclose(result.q[-1], q, rtol=0, atol=1e-12)
-    forces = [result.contacts[f"p{i}"]["force"][-1] for i in range(3)]        # on the ground points
-    np.testing.assert_allclose(forces, [[0.0, 0.0, -2.0 * G * share] for share in (0.25, 0.25, 0.5)],
-                               rtol=0, atol=1e-9)
+    forces = np.array([result.contacts[f"p{i}"]["force"][-1] for i in range(3)])    # on the ground points
+    np.testing.assert_allclose(forces[:, 2], [-2.0 * G * share for share in (0.25, 0.25, 0.5)], rtol=1e-8)
+    np.testing.assert_allclose(forces[:, :2].sum(axis=0), 0.0, rtol=0, atol=1e-8)
+    if law == "impact":
+        np.testing.assert_allclose(forces[:, :2], 0.0, rtol=0, atol=1e-8)
 
 
 @pytest.mark.parametrize("make, fragment", [

@@ -119,7 +119,8 @@ other keys take the default shown.
 Every body takes ``initial`` ("given"): "static" starts the body at rest in static
 equilibrium under gravity and the loads at t = 0 (:meth:`mbs.System.static_equilibrium`),
 held by its fixed frame, joints, springs and the contacts it rests on (closed at the
-given state, impact or Coulomb law, taken frictionless); the bodies with "given" keep
+given state: with the impact law frictionless, with the Coulomb law sticking within its
+friction cone); the bodies with "given" keep
 their state. A clamped flexible body (``frame = "fixed"``) then starts from its static
 deflection K_ff q_f = Q_f (exact in its modes) instead of ringing about it. The given
 ``position`` and ``orientation`` of a free body are the start of the search; such a body
