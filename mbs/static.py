@@ -57,6 +57,8 @@ def static_equilibrium(system, t=0.0, bodies=None, tol=1e-10, max_iter=30):
     docstring)."""
     chosen = _chosen(system, bodies)
     q, u = system.initial_state()
+    if not chosen:
+        return q, u
     cols = np.concatenate([np.arange(b.u_slice.start, b.u_slice.stop) for b in chosen])
     for b in chosen:
         u[b.u_slice] = 0.0
