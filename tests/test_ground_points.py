@@ -186,3 +186,24 @@ def test_a_plate_cannot_start_sticking_on_points_that_hold_it_by_friction(scene_
                            UnilateralCoulombContact(0.0, 0.5), name=f"p{i}"))
     with pytest.raises(ModelError, match=r"contact 'p\d' would slide: friction .* N needed, mu lambda_N = .* N"):
         system.static_equilibrium()
+
+
+@pytest.mark.slow
+def test_the_part_lands_through_its_residual_flexibility(scene_path):
+    """The compliant surface on the part: the plate's bottom face with residual
+    flexibility (free-free, inertia relief) lands on the ground points and rests with the
+    four forces summing to its weight (θ = 1; at θ = ½ the recorded force is θ times the
+    real one, issue 30 item 3)."""
+    system = System(gravity=(0.0, 0.0, -G))
+    plate = system.add(FlexibleBodyFFR.from_file(scene_path.parent / "plate" / "body.h5", modal_damping=0.3,
+                                                 name="plate").set_initial(R=(0.0, 0.0, DROP), v=(0.0, 0.0, V0)))
+    bottom = Contour2sNeutralFFR(plate, "z0", residual_flexibility=True)
+    for i, (x, y) in enumerate(PLATE_POINTS):
+        system.add(connect(PointContour(ground_frame((x, y, 0.0))), bottom, "impact", name=f"p{i}"))
+    result = system.simulate(T_END, DT, integrator="moreau", t_out=np.linspace(0.0, T_END, N_OUT),
+                             outputs={"vz": lambda t, q, u: u[plate.u_slice][2]}, plan=False, contacts=True,
+                             theta=1.0)
+    rest = result.t > 0.8 * T_END
+    assert np.all(np.abs(result["vz"][rest]) < 1e-6)
+    total = sum(result.contacts[f"p{i}"]["force"][rest] for i in range(4))
+    np.testing.assert_allclose(total[:, 2], -plate.mass * G, rtol=1e-6)
