@@ -138,13 +138,15 @@ def _check_resting(contact):
         what = "a closed contact through residual flexibility"
     if what is not None:
         raise ModelError(f"static equilibrium: contact {contact.name!r} is {what}, which the static solve does not "
-                         "support (it supports resting contacts with the impact or Coulomb law, frictionless): "
+                         "support (it supports resting contacts with the impact law, frictionless, or the Coulomb law, "
+                         "sticking): "
                          "start the body apart from it, or without initial = \"static\"")
 
 
 def _constraints(system, resting, q, u, t, cols):
-    """(W (n_cols, m), g (m,)): the joints' C_qᵀ and the resting contacts' W_N restricted
-    to the chosen bodies' columns, and their residuals (joints not touching them left out)."""
+    """(W (n_cols, m), g (m,)): the joints' C_qᵀ and the resting contacts' W_N (and W_T of
+    a Coulomb contact) restricted to the chosen bodies' columns, and their residuals (g_N;
+    zero for W_T: the increments do not slide; joints not touching the bodies left out)."""
     columns, residuals = [], []
     if system.n_c:
         C = system.constraint_jacobian(t, q)[:, cols]
