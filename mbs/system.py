@@ -15,6 +15,9 @@ Example::
     beam = system.add(FlexibleBodyFFR.from_file("beam.h5", modes=10))
     system.add(Joint.revolute(system.ground, beam.origin, axis=(0, 1, 0)))
     result = system.simulate(t_end=1.0, dt=1e-3, outputs={"tip": beam.node(12)})
+
+``static_equilibrium()`` replaces the bodies' initial state by their rest under gravity
+and the loads (:mod:`mbs.static`).
 """
 
 from __future__ import annotations
@@ -88,6 +91,16 @@ class System:
         q = np.concatenate([b.q_init for b in self.bodies])
         u = np.concatenate([b.u_init for b in self.bodies])
         return q, u
+
+    def static_equilibrium(self, t=0.0, bodies=None, tol=1e-10, max_iter=30):
+        """Put ``bodies`` (default: all; bodies or names) at rest in static equilibrium
+        under gravity and the loads at time ``t`` [s], held by joints, springs, fixed
+        frames and resting contacts, as their initial state; returns (q, u). The others
+        keep their given state. :func:`mbs.static.static_equilibrium` (Newton's method on
+        h(q, 0, t) + W λ = 0, g(q) = 0; for a clamped FFR body K_ff q_f = Q_f)."""
+        from .static import static_equilibrium
+
+        return static_equilibrium(self, t, bodies, tol, max_iter)
 
     def equations(self):
         """The :class:`~mbs.equations.Equations` of all bodies and force elements (rebuilt

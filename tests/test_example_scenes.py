@@ -1,7 +1,7 @@
 """The example scenes on gmsh parts (examples/scenes/ball_on_plate.toml,
 ball_in_channel.toml) run as a user runs them — preprocess the part with the CLI, then
 ``ffrmbs run`` — and obey the physics their headers state: free fall onto the plate's
-top face, and a frictionless ball whose centre stays on the cylinder of radius R − r
+top face, the plate at rest in its static deflection until the ball arrives, and a frictionless ball whose centre stays on the cylinder of radius R − r
 inside the channel while it moves along the channel at constant speed."""
 
 import shutil
@@ -52,6 +52,10 @@ def test_ball_dropped_on_the_unstructured_plate_lands_when_free_fall_says(tmp_pa
     assert abs(t[first_bounce][np.argmin(z[first_bounce])] - t_hit) <= t[1] - t[0]
     free = t < t_hit - 1e-3
     assert np.allclose(z[free], top + radius + drop - 0.5 * G * t[free] ** 2, atol=1e-9)
+    # the plate starts in its static deflection (initial = "static"): at rest until the ball arrives
+    sag = result["tip"][0, 2]
+    assert sag < -1e-6
+    assert np.abs(result["tip"][free, 2] - sag).max() < 1e-3 * abs(sag)
     # the ball never sinks into the (deflecting) plate by more than a Moreau step's drift
     assert np.nanmin(result.contacts["drop"]["gap"]) > -2e-6       # (no gap before the first step)
     # it bounced (e = 0.5), at most as high as e² of the drop (the plate keeps some energy)

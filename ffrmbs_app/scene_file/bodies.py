@@ -17,7 +17,7 @@ from mbs.flexible_body import select_modes
 from preprocess import read_body
 from preprocess.bodyfiles import body_files
 
-from .schema import BODY, BODY_HEAD, BUILTIN, FIXED_FRAME_REFUSES, GROUND
+from .schema import BODY, BODY_HEAD, BUILTIN, FIXED_FRAME_REFUSES, GROUND, STATIC_REFUSES
 from .tables import Table, describe, is_int
 
 BUILTIN_BODIES = {"point_mass_beam": point_mass_beam, "point_mass_beam_tet10": point_mass_beam.TET10,
@@ -33,6 +33,7 @@ class BodyEntry:
     keypath: tuple
     make: object
     data: object = None         # BodyData of a flexible body
+    static: bool = False        # initial = "static": started in static equilibrium
 
 
 class BodyReader:
@@ -60,7 +61,20 @@ class BodyReader:
             kind = head.get("kind", spec=BODY_HEAD["kind"])
             t = Table(self.doc, data, keypath, label, BODY[kind])
             bodies[name] = getattr(self, "_" + kind)(t, keypath, name)
+            bodies[name].static = self._static(t)
         return bodies
+
+    @staticmethod
+    def _static(t: Table) -> bool:
+        """Whether the body starts in static equilibrium (``initial = "static"``), which
+        computes its velocities and elastic coordinates: they must not be given."""
+        if t.get("initial") != "static":
+            return False
+        for key in STATIC_REFUSES:
+            if t.has(key):
+                t.fail(key, f"{key!r} is computed by initial = \"static\" (the body starts at rest in static "
+                            "equilibrium): remove it, or set initial = \"given\"")
+        return True
 
     # --- flexible ---------------------------------------------------------------------------
     def _flexible(self, t: Table, keypath, name) -> BodyEntry:

@@ -253,12 +253,26 @@ class SceneBuilder:
                                         lambda body=body: env.system.add(body.make()))
         for keypath, label, build in self.steps:
             run(doc, keypath, label, lambda: build(env))
+        self._static_equilibrium(env)
         outputs = {name: run(doc, keypath, label, lambda make=make: make(env))
                    for name, (keypath, label, make) in self.outputs.items()}
         return run(doc, ("scene",), "[scene]", lambda: Scene(
             env.system, settings["t_end"], settings["dt"], settings["integrator"], settings["options"],
             settings["n_out"], outputs, settings["energies"], settings["plan"], settings["tolerance"],
             settings["name"], dict(self.inputs), settings["description"], units=dict(self.units)))
+
+    def _static_equilibrium(self, env: Env):
+        """The bodies with initial = "static" put at rest in static equilibrium
+        (:meth:`mbs.System.static_equilibrium`); a ModelError is reported at the
+        'initial' key of the body it names (else of the first such body)."""
+        static = [body for body in self.bodies.values() if body.static]
+        if not static:
+            return
+        try:
+            env.system.static_equilibrium(bodies=[body.name for body in static])
+        except ModelError as exc:
+            body = next((b for b in static if f"body {b.name!r}" in str(exc)), static[0])
+            self.doc.fail(body.keypath + ("initial",), f"body {body.name!r}: initial = \"static\": {exc}")
 
 
 def _probe(ref: FrameRef, quantity, component):

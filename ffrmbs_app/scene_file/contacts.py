@@ -45,8 +45,10 @@ class ContactReader:
             common = tuple(k for k in CONTACT if not (bilateral and k == "margin"))
             t.allow(common + tuple(parameters) + tuple(k for k in friction if k not in parameters),
                     f" for law {law!r}")
-            kind1, make1 = self._contour(t, "contour1", CONTOUR1_KINDS)
-            kind2, make2 = self._contour(t, "contour2", CONTOUR2_KINDS)
+            kind1, body1, make1 = self._contour(t, "contour1", CONTOUR1_KINDS)
+            kind2, body2, make2 = self._contour(t, "contour2", CONTOUR2_KINDS)
+            if body1 == GROUND and body2 == GROUND:
+                t.fail("contour2", "both contours are on the ground: the contact would act on nothing")
             pairs = BILATERAL_KINEMATICS if bilateral else PAIR_KINEMATICS
             if (kind1, kind2) not in pairs:
                 known = [f"{a}/{b}" for a, b in pairs if a in CONTOUR1_KINDS and b in CONTOUR2_KINDS]
@@ -100,7 +102,9 @@ class ContactReader:
 
     # --- the contours --------------------------------------------------------------------------------
     def _contour(self, t: Table, key, kinds):
-        """(kind, make(env) -> Contour) of the contour table ``key``."""
+        """(kind, body name or "ground", make(env) -> Contour) of the contour table ``key``.
+        Either side may be on the ground: a point on the ground against a surface on a
+        body is a part landing on a rigid support (the compliant surface on the part)."""
         head = t.table(key, f"{key!r}", None)         # the keys are checked once the kind is known
         kind = head.get("kind", spec=Key("choice", choices=kinds))
         label = f"{key} ({kind})"
@@ -108,15 +112,14 @@ class ContactReader:
         cls = CONTOURS[kind]
         if kind == "point":
             frame = frame_of(self.bodies, c)
-            if frame.body == GROUND:
-                c.fail("body", "a point contour on the ground never moves: put the point on a body "
-                               "and the surface on the ground")
+            owner = frame.body
 
             def make(env):
                 return cls(frame.resolve(env))
 
         elif kind == "sphere":
             frame = frame_of(self.bodies, c)
+            owner = frame.body
             radius = c.get("radius")
 
             def make(env):
@@ -124,6 +127,7 @@ class ContactReader:
 
         elif kind == "plane":
             frame = frame_of(self.bodies, c, GROUND)
+            owner = frame.body
             normal = c.get("normal")
             if not np.linalg.norm(normal) > 0:
                 c.fail("normal", "'normal' must be a nonzero direction")
@@ -134,7 +138,7 @@ class ContactReader:
                 return cls(frame.resolve(env, orientation=axes, name="plane"), size)
 
         elif kind == "2s":
-            name = body_of(self.bodies, c, kinds=("flexible",))
+            name = owner = body_of(self.bodies, c, kinds=("flexible",))
             nodes = self._node_matrix(c, name)
             extra = c.get("extra_rows")
             degree = _pair(c, "degree", int)
@@ -154,8 +158,9 @@ class ContactReader:
 
         else:   # 1s, band, cylinder: on a 1s neutral curve
             make = self._curve(c, kind)
+            owner = c.data["body"]                  # a flexible body, checked by _curve
         keypath, label = t.keypath + (key,), f"{t.label}: {label}"        # a ModelError is reported there
-        return kind, lambda env: run(self.doc, keypath, label, lambda: make(env))
+        return kind, owner, lambda env: run(self.doc, keypath, label, lambda: make(env))
 
     def _curve(self, c: Table, kind):
         """make(env) of a 1s neutral curve, or a band or a cylinder on one."""

@@ -116,6 +116,19 @@ other keys take the default shown.
 - "point_mass": :class:`mbs.PointMass`. ``mass`` *req.* [kg] > 0. ``position`` and
   ``velocity`` (both [0, 0, 0]) [m], [m/s].
 
+Every body takes ``initial`` ("given"): "static" starts the body at rest in static
+equilibrium under gravity and the loads at t = 0 (:meth:`mbs.System.static_equilibrium`),
+held by its fixed frame, joints, springs and the contacts it rests on (closed at the
+given state: with the impact law frictionless, with the Coulomb law sticking within its
+friction cone); the bodies with "given" keep
+their state. A clamped flexible body (``frame = "fixed"``) then starts from its static
+deflection K_ff q_f = Q_f (exact in its modes) instead of ringing about it. The given
+``position`` and ``orientation`` of a free body are the start of the search; such a body
+takes no ``velocity``, ``angular_velocity``, ``q_f`` or ``modal_velocities``. A body
+nothing holds (free fall), a contact that would have to pull, one the deflection would
+close, or a resting contact with a penalty law or residual flexibility are errors naming
+the body or the contact.
+
 Frames. Links, loads, contours and outputs name a point by ``body`` plus at most one of:
 
 - ``node = j``: the 0-based FE node of a flexible body. It follows the deformation.
@@ -159,6 +172,9 @@ Gravity is ``[scene] gravity``.
 
 ``[[contact]]`` (:class:`contact.Contact`). ``name`` ("contact <i>", unique).
 ``contour1`` *req.*: ``{ kind = "point" | "sphere", <frame>, radius }``.
+Either contour may be on the ground, not both: points on the ground
+(``body = "ground"``) against a surface on a body model a part landing on a rigid
+support, the part's own surface (and its residual flexibility) taking the contact.
 ``contour2`` *req.* is one of:
 
 - ``{ kind = "2s", body, nodes, extra_rows = 0, degree = 3, closed = false,
@@ -362,6 +378,8 @@ def option_keys(integrator: str) -> dict:
 # --- [[body]] -----------------------------------------------------------------------------------
 
 BODY_HEAD = {"name": Key("string"), "kind": Key("choice", choices=BODIES)}
+_INITIAL = {"initial": Key("choice", "given", choices=("given", "static"))}
+STATIC_REFUSES = ("velocity", "angular_velocity", "q_f", "modal_velocities")     # what initial = "static" computes
 _FREE_FRAME = {
     "rotation": Key("choice", "quaternion", choices=ROTATIONS),
     "position": _vector(unit="m"),
@@ -383,6 +401,7 @@ BODY = {
         "modal_damping": Key("special", None, doc="ζ >= 0: one value or one per selected mode"),
         "geometric_stiffening": Key("boolean", False, doc="stiffening by the frame's inertia loads "
                                                           "(body file preprocessed with --geometric-stiffness)"),
+        **_INITIAL,
     },
     "rigid": {
         **BODY_HEAD,
@@ -390,12 +409,14 @@ BODY = {
         "inertia": Key("special", unit="kg m²", doc="a 3 x 3 matrix or 3 principal values"),
         "com": _vector((0.0, 0.0, 0.0), "m"),
         **_FREE_FRAME,
+        **_INITIAL,
     },
     "point_mass": {
         **BODY_HEAD,
         "mass": Key("number", unit="kg", low=0.0, strict=True),
         "position": _vector((0.0, 0.0, 0.0), "m"),
         "velocity": _vector((0.0, 0.0, 0.0), "m/s"),
+        **_INITIAL,
     },
 }
 FIXED_FRAME_REFUSES = ("velocity", "angular_velocity", "rotation")     # keys of free frames only
