@@ -42,9 +42,13 @@ CORNER_TURN = np.radians(30.0)
 def parameterize(patch: SurfacePatch):
     """(params (k, 2) in [0, 1]², closed (bool, bool)) of ``patch``'s nodes: η along the
     first, ξ along the second direction; closed = (True, False) for an annulus."""
-    if patch.topology() == "disk":
+    kind = patch.topology()
+    if kind == "disk":
         uv = _square_map(patch.points, patch.linear, patch.loops[0], _corners(patch.points, patch.loops[0]))
         return uv, (False, False)
+    if kind == "holes":
+        raise ModelError(f"{patch.name}: the face has {len(patch.loops) - 1} hole(s): its contour would cover "
+                         f"them; give a face group without holes")
     return _band_map(patch), (True, False)
 
 

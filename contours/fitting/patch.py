@@ -8,10 +8,17 @@ to the patch when all its nodes are in the group. A 6-node triangle is split int
 linear ones (corner, mid, mid and the middle one), so mid-edge nodes are data points and
 vertices of the patch's triangulation like the corners.
 
-The patch must be a connected, manifold surface that is a topological disk (one
-boundary loop; mapped onto the unit square) or an annulus (two loops: a closed band such
-as a cylinder's lateral surface; mapped periodically in one direction), see
-:mod:`.parameterization`.
+The patch must be a connected, manifold surface: a topological disk (one boundary loop;
+mapped onto the unit square), a face with holes (an outer loop and one or more hole
+loops, the patch a graph over its mean plane: every triangle's outward normal has a
+positive component along the area-weighted mean normal m = Σ A_T n_T / |Σ A_T n_T|) or a
+closed band (two loops and not such a graph, e.g. a cylinder's lateral surface, where
+Σ A_T n_T vanishes; mapped periodically in one direction), see :mod:`.parameterization`.
+
+On a face with holes the loops, projected onto the plane normal to m, run
+counter-clockwise seen along −m (the patch on their left) for the outer loop — a
+positive signed area — and clockwise for the holes: the outer loop is the one loop of
+positive signed area.
 """
 
 from __future__ import annotations
@@ -124,17 +131,55 @@ class SurfacePatch:
         return sorted(loops, key=lambda l: int(l.min()))
 
     def topology(self) -> str:
-        """"disk" (one boundary loop) or "annulus" (two), else a ModelError."""
+        """"disk" (one boundary loop), "holes" (a face with holes: an outer loop and
+        len(loops) − 1 hole loops, the patch a graph over its mean plane) or "annulus" (a
+        closed band: two loops, not such a graph), else a ModelError (module docstring)."""
         n = len(self.loops)
         edges = np.unique(np.sort(self.directed_edges(), axis=1), axis=0)
         euler = self.k - len(edges) + len(self.linear)
         if n == 1 and euler == 1:
             return "disk"
+        if n >= 2 and euler == 2 - n and self.mean_normal() is not None:
+            return "holes"
         if n == 2 and euler == 0:
             return "annulus"
         if n == 0:
             raise ModelError(f"{self.name}: the patch is a closed surface (no boundary); a contour needs a "
-                             f"patch with one boundary (a face) or two (a band)")
-        raise ModelError(f"{self.name}: the patch has {n} boundary loops and Euler characteristic {euler}; a "
-                         f"contour needs a face without holes (1 loop) or a closed band (2 loops): split the "
-                         f"group")
+                             f"patch with one boundary (a face), a face with holes or a closed band")
+        raise ModelError(f"{self.name}: the patch has {n} boundary loops and Euler characteristic {euler}, and it "
+                         f"is not a graph over one plane: a contour needs a face (1 loop, or an outer loop and "
+                         f"holes, no triangle facing away from the face's mean normal) or a closed band "
+                         f"(2 loops): split the group")
+
+    def mean_normal(self):
+        """(3,) the unit area-weighted mean outward normal m of the linear triangles when
+        every triangle's normal has a positive component along it (the patch is a graph
+        over the plane normal to m), else None."""
+        x = self.points[self.linear]
+        n = np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0])        # 2 A_T n_T
+        total = n.sum(axis=0)
+        size = np.linalg.norm(total)
+        if size <= 1e-12 * np.linalg.norm(n, axis=1).sum():
+            return None
+        m = total / size
+        return m if (n @ m > 0.0).all() else None
+
+    def outer_and_holes(self) -> tuple:
+        """(outer loop, [hole loops]) of a face with holes (:meth:`topology` "holes"):
+        the outer loop has a positive signed area in the plane normal to the mean normal
+        (module docstring); ModelError if not exactly one has."""
+        m = self.mean_normal()
+        e1 = np.cross(m, [1.0, 0.0, 0.0] if abs(m[0]) < 0.9 else [0.0, 1.0, 0.0])
+        e1 /= np.linalg.norm(e1)
+        e2 = np.cross(m, e1)
+        areas = []
+        for loop in self.loops:
+            x = self.points[loop]
+            a, b = x @ e1, x @ e2
+            areas.append(0.5 * float(np.sum(a * np.roll(b, -1) - np.roll(a, -1) * b)))
+        positive = [i for i, area in enumerate(areas) if area > 0]
+        if len(positive) != 1:
+            raise ModelError(f"{self.name}: cannot tell the outer boundary of the face from its holes "
+                             f"({len(positive)} of its {len(areas)} boundary loops run counter-clockwise)")
+        outer = positive[0]
+        return self.loops[outer], [loop for i, loop in enumerate(self.loops) if i != outer]
