@@ -29,6 +29,8 @@ scale; the root counts only if it is a local minimum of |g| (a maximum or saddle
 — e.g. the far side of a cylinder — is no contact point). Closed directions wrap the
 parameter; on an open direction an iterate is clipped to the domain, and a second clip in
 a row rejects the start (the root lies outside the contour: no contact point there).
+On a trimmed surface (``contour.trim``, a face with holes: :mod:`contours.fitting.trim`)
+a root inside a hole is rejected likewise.
 
 On a compiled neutral contour (:class:`~contours.neutral.factory.NeutralContour`, the
 default) Newton runs as one numba kernel per start (:func:`._detection_kernels.newton_2s`,
@@ -296,10 +298,15 @@ class Contact2sSearch(_Search):
                                                        ax_e.max_step, ax_x.max_step, self._tol2(), self.max_iter,
                                                        *self._work)
         self.newton_iterations += steps
-        if not found:
+        if not found or not self._on_material(eta, xi):
             return None
         self.last_iterations = k
         return eta, xi, gg
+
+    def _on_material(self, eta, xi) -> bool:
+        """False when the contour is trimmed and (η, ξ) lies in one of its holes."""
+        trim = self.contour.trim
+        return trim is None or trim.contains(eta, xi)
 
     def _newton_reference(self, r_point, eta, xi):
         """The Python reference of :meth:`_newton`, over ``contour.evaluate``."""
@@ -318,8 +325,8 @@ class Contact2sSearch(_Search):
             det = h11 * h22 - h12 * h12
             minimum = h11 < 0.0 and det > _SINGULAR * a * c
             if f0 * f0 <= tol2 * a and f1 * f1 <= tol2 * c:
-                if not minimum:
-                    return None  # a maximum or saddle of the distance: not the contact point
+                if not minimum or not self._on_material(eta, xi):
+                    return None  # a maximum or saddle of the distance, or a hole: not the contact point
                 self.last_iterations = k
                 return eta, xi, g @ g
             if k == self.max_iter:

@@ -8,8 +8,13 @@ import numpy as np
 import pytest
 
 import gmsh_parts
-from contours.fitting import SurfacePatch, surface_fit
-from ffrmbs.errors import ModelError
+from contact import connect
+from contours import Contour2sNeutralFFR, SphereContour
+from contours.fitting import SurfacePatch, Trim, fit_report, surface_fit
+from contours.fitting.trim import in_material_reference
+from mbs import FlexibleBodyFFR, PointMass, PrescribedFrameMotion, System
+from preprocess import build_body
+from validation.cases import contact_hole as case
 
 
 @pytest.fixture(scope="module")
@@ -45,8 +50,131 @@ def test_band_stays_a_band():
     assert fit.eta.closed
 
 
-def test_face_with_a_hole_is_not_fitted_as_a_band(plate_hole):
-    """Never silently accepted as a band: refused with a line naming the holes."""
-    mesh = plate_hole
-    with pytest.raises(ModelError, match="1 hole"):
-        surface_fit(mesh.points, mesh.surface_triangles(), mesh.node_groups["top"], name="top")
+def _fit(mesh):
+    fit, patch = surface_fit(mesh.points, mesh.surface_triangles(), mesh.node_groups["top"], name="top")
+    return fit, patch, fit_report(fit, patch, name="top")
+
+
+def _face_distance(fit, patch, report, params):
+    """max |S_z − lz| [m] at the nodes and at ``params``: the face is the plane z = lz."""
+    lz = gmsh_parts.PLATE[2]
+    S = fit.collocation(params) @ report.ctrl
+    return max(np.abs(fit.collocation(fit.params) @ report.ctrl - patch.points)[:, 2].max(), np.abs(S[:, 2] - lz).max())
+
+
+def test_face_with_a_hole_is_fitted_on_its_material(plate_hole):
+    """The flat top face with a hole: fitted over the rectangle's square (not a band), on
+    the plane z = lz to rounding at the nodes, at the triangles' mid-points and anywhere
+    on the trimmed domain — as the same face without the hole; the parameters are an
+    affine image of (x, y) (mean-value weights reproduce linear functions), so the hole's
+    polygon in parameter space is the rim's image."""
+    fit, patch, report = _fit(plate_hole)
+    assert not fit.eta.closed and not fit.xi.closed
+    trim = Trim.of_fit(fit, patch)
+    assert trim is not None and len(trim.polygons) == 1
+    grid = np.stack(np.meshgrid(np.linspace(0, 1, 81), np.linspace(0, 1, 81), indexing="ij"), -1).reshape(-1, 2)
+    material = grid[trim.contains_many(grid)]
+    assert 0 < len(material) < len(grid)
+    assert _face_distance(fit, patch, report, material) < 1e-12
+    affine = np.column_stack([patch.points[:, :2], np.ones(patch.k)])
+    coef, *_ = np.linalg.lstsq(affine, fit.params, rcond=None)
+    assert np.abs(affine @ coef - fit.params).max() < 1e-12
+    # without the hole: the same (rounding) distance
+    plain = gmsh_parts.plate_hole_mesh(0.005, order=2, hole=False)
+    fit0, patch0, report0 = _fit(plain)
+    assert Trim.of_fit(fit0, patch0) is None
+    assert _face_distance(fit0, patch0, report0, grid) < 1e-12
+    assert report.rows[0]["node_max"] < 1e-12 and report0.rows[0]["node_max"] < 1e-12
+
+
+def test_trim_kernel_against_reference_and_circle():
+    """The numba crossing-number test = its numpy reference = the exact disc test, for a
+    polygon of 64 corners on a circle and a non-convex (L-shaped) hole."""
+    rng = np.random.default_rng(3)
+    angle = np.linspace(0.0, 2 * np.pi, 64, endpoint=False)
+    centre, radius = np.array([0.3, 0.6]), 0.2
+    circle = centre + radius * np.column_stack([np.cos(angle), np.sin(angle)])
+    ell = np.array([[0.6, 0.1], [0.9, 0.1], [0.9, 0.2], [0.7, 0.2], [0.7, 0.4], [0.6, 0.4]])
+    trim = Trim([circle[::-1], ell])                       # a hole loop runs clockwise
+    points = rng.random((4000, 2))
+    inside_circle = np.linalg.norm(points - centre, axis=1) < radius * np.cos(np.pi / 64)   # inscribed
+    outside_circle = np.linalg.norm(points - centre, axis=1) > radius
+    inside_ell = (((points[:, 0] > 0.6) & (points[:, 0] < 0.9) & (points[:, 1] > 0.1) & (points[:, 1] < 0.2))
+                  | ((points[:, 0] > 0.6) & (points[:, 0] < 0.7) & (points[:, 1] > 0.1) & (points[:, 1] < 0.4)))
+    got = trim.contains_many(points)
+    assert (got == in_material_reference(points, trim.polygons)).all()
+    assert not got[inside_circle | inside_ell].any()
+    assert got[outside_circle & ~inside_ell].all()
+
+
+# --- contact on the trimmed face and its rim -----------------------------------------------------
+
+@pytest.fixture(scope="module")
+def plate_data():
+    """The validation case's plate with the hole, tet4 at 6 mm, bottom clamped, 2 modes."""
+    return build_body(case.plate_hole_mesh(0.006, order=1), case.STEEL, n_modes=2, clamp="bottom")
+
+
+def _ball(data, position, rims=True):
+    system = System(gravity=(0.0, 0.0, -case.G))
+    plate = system.add(FlexibleBodyFFR(data, modes=2, frame=PrescribedFrameMotion.fixed(), name="plate"))
+    top = Contour2sNeutralFFR(plate, "top")
+    ball = system.add(PointMass(case.BALL_MASS, position=position, name="ball"))
+    sphere = SphereContour(ball.point, case.BALL_RADIUS)
+    face = system.add(connect(sphere, top, "impact", name="face"))
+    edges = top.rims()
+    rim = system.add(connect(sphere, edges[1], "impact", name="rim")) if rims else None
+    return system, face, rim, edges
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_no_contact_point_in_the_hole(plate_data, compiled):
+    """A ball whose centre is over the hole has no contact point on the face (compiled
+    Newton and the Python reference alike); beside the hole its gap is the analytic
+    height above z = lz less the radius."""
+    lx, ly, lz = case.PLATE
+    r = case.BALL_RADIUS
+    for xy, found in ((case.HOLE[:2], False), ((case.HOLE[0] + 0.7 * case.HOLE[2], case.HOLE[1]), False),
+                      ((case.HOLE[0] + 1.3 * case.HOLE[2], case.HOLE[1]), True), (case.BESIDE, True)):
+        system, face, _, _ = _ball(plate_data, (*xy, lz + r + 1e-3), rims=False)
+        face.kinematics.search.compiled = compiled
+        assert face.kinematics.update() is found, xy
+        if found:
+            assert face.kinematics.g_N == pytest.approx(1e-3, abs=1e-12)
+
+
+def test_rims_of_the_face(plate_data):
+    """The face's rims: the outer edge (the rectangle, length 2 (lx + ly)) and the hole's
+    circle (radius 6 mm at z = lz), as closed edge contours."""
+    _, _, _, edges = _ball(plate_data, (*case.BESIDE, 0.1), rims=False)
+    outer, hole = edges
+    lx, ly, lz = case.PLATE
+    eta = np.linspace(0.0, 1.0, 200, endpoint=False)
+    x = np.array([hole.position(e) for e in eta])
+    assert np.abs(np.linalg.norm(x[:, :2] - case.HOLE[:2], axis=1) - case.HOLE[2]).max() < 2e-5   # chord sag
+    assert np.abs(x[:, 2] - lz).max() < 1e-12
+    y = np.array([outer.position(e) for e in eta])
+    assert np.abs(y[:, 2] - lz).max() < 1e-12 and hole.closed[0] and outer.closed[0]
+
+
+def test_rim_contact_normal_points_from_the_edge_to_the_centre(plate_data):
+    """A ball over the hole's rim, its centre inside the circle: the rim contact's normal
+    is (c − r*)/|c − r*| with r* the exact circle's closest point, g_N = |c − r*| − ρ, up
+    to the rim curve's distance e from the circle (an interpolant through the tet4 rim's
+    nodes): angle error <= 2 e / |c − r*|."""
+    lx, ly, lz = case.PLATE
+    hx, hy, R = case.HOLE
+    r = case.BALL_RADIUS
+    for angle, inset, height in ((0.0, 0.5e-3, 3e-3), (2.0, 1e-3, 1e-3), (4.0, 2e-3, 0.5e-3)):
+        u = np.array([np.cos(angle), np.sin(angle)])
+        c = np.array([*(np.array([hx, hy]) + (R - inset) * u), lz + height])
+        _, face, rim, edges = _ball(plate_data, c)
+        curve = np.array([edges[1].position(e) for e in np.linspace(0.0, 1.0, 2000, endpoint=False)])
+        e = np.abs(np.linalg.norm(curve - (hx, hy, lz), axis=1) - R).max()
+        assert rim.kinematics.update()
+        star = np.array([*(np.array([hx, hy]) + R * u), lz])
+        n = (c - star) / np.linalg.norm(c - star)
+        assert np.arccos(min(1.0, rim.kinematics.n @ n)) < 2 * e / np.linalg.norm(c - star)
+        assert rim.kinematics.g_N == pytest.approx(np.linalg.norm(c - star) - r, abs=e)
+        assert rim.kinematics.n[:2] @ u < 0                 # towards the hole's centre
+        assert not face.kinematics.update()                 # the centre is over the hole
