@@ -244,7 +244,8 @@ class _CentreContact(ContactKinematics):
 class _SearchContact(_CentreContact):
     """Contour 2 located by ``search_class`` (or a given search on it), warm-started at
     the last contact point: ``start`` ((η, ξ) on a 2s contour, (η,) on a 1s one; NaN
-    when there is none, before the first search or after a search found nothing)."""
+    when there is none, before the first search or after a search found nothing; the
+    search's ``hole`` when the nearest point lay in a trimmed contour's hole)."""
 
     search_class: type
     run_state = _CentreContact.run_state + ("search", "start")     # the search and its warm start
@@ -264,7 +265,7 @@ class _SearchContact(_CentreContact):
             start = start[0]
         found = self.search.solve(c, start)
         if found is None:
-            self.start[:] = np.nan
+            self.start[:] = self.search.hole             # NaN, or a point in a trimmed contour's hole
             return False
         self.start[:] = found
         coords = found if self.search.dim == 2 else (found,)

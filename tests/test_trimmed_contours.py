@@ -178,3 +178,43 @@ def test_rim_contact_normal_points_from_the_edge_to_the_centre(plate_data):
         assert rim.kinematics.g_N == pytest.approx(np.linalg.norm(c - star) - r, abs=e)
         assert rim.kinematics.n[:2] @ u < 0                 # towards the hole's centre
         assert not face.kinematics.update()                 # the centre is over the hole
+
+
+def test_ball_falls_through_the_hole_and_rests_beside_it(plate_data):
+    """Dropped over the hole's centre the ball falls freely through the plate (exact free
+    fall, no contact closes); dropped beside it, it rests at lz + r to within the Moreau
+    closing step's offset (contact_unstructured.closing_offset, exact free fall)."""
+    from validation.cases.contact_unstructured import closing_offset
+
+    lz, r, drop, dt = case.PLATE[2], case.BALL_RADIUS, case.DROP, 1e-4
+    for xy, t_end in ((case.HOLE[:2], 0.04), (case.BESIDE, 0.025)):
+        system, face, rim, _ = _ball(plate_data, (*xy, lz + r + drop))
+        ball = face.kinematics.contour1.body
+        res = system.simulate(t_end, dt, integrator="moreau", theta=0.5, trace=True,
+                              outputs={"z": lambda t, q, u: q[ball.q_slice][2]})
+        if xy == case.BESIDE:
+            assert res["z"][-1] - (lz + r) == pytest.approx(closing_offset(dt), abs=1e-9)
+        else:
+            assert not np.any(res.trace["closed"])
+            assert res["z"][-1] == pytest.approx(lz + r + drop - 0.5 * case.G * res.t[-1] ** 2, abs=1e-12)
+            assert res["z"][-1] < lz                       # below the top: through the hole
+
+
+@pytest.mark.slow
+def test_hole_case_rows(tmp_path):
+    """The validation case contact_hole, quick mode: the fit on the material as without the
+    hole (rounding), the rest height within its bound, the free fall through the hole, the
+    rim's normal from the edge to the centre as the exact circle's and the ball in the hole."""
+    from case_rows import quick_rows_by_case, select
+
+    rows = quick_rows_by_case(tmp_path, [case])[case.NAME]
+    for row in select(rows, check="fit"):
+        assert row["error"] < 1e-12 and row["node_max_m"] < 1e-12
+    (rest,) = select(rows, check="rest beside the hole")
+    assert rest["error"] <= rest["bound_rel"]
+    (through,) = select(rows, check="fall through the hole")
+    assert through["contacts_closed"] == 0 and through["error"] < 1e-9
+    (rolled,) = select(rows, check="roll into the hole")
+    assert rolled["rim_closed_steps"] > 0 and rolled["error"] < 1e-3
+    assert rolled["z_end_below_top_m"] > 0                 # its centre below the top: in the hole
+    assert rolled["first_rim_normal"][2] > 0.99 and rolled["last_rim_normal"][0] > 0.5   # up, then to the centre
