@@ -16,6 +16,9 @@ from mbs import FlexibleBodyFFR, PointMass, PrescribedFrameMotion, System
 from preprocess import build_body
 from validation.cases import contact_hole as case
 
+# the 2-mode tet4 plate's mode shapes fit to ~6 % (a coarse mesh); these tests check geometry
+pytestmark = pytest.mark.filterwarnings("ignore:.*is fitted to within:UserWarning")
+
 
 @pytest.fixture(scope="module")
 def plate_hole():
