@@ -320,16 +320,25 @@ class ContactKinematicsSphereContour1s(_SearchContact):
         super().__init__(sphere, curve, search, nu_total)
 
 
-class ContactKinematicsSphereEdge(ContactKinematicsSphereContour1s):
-    """A sphere against an edge (:class:`contours.Contour1sEdgeFFR`, a face's rim): its
-    centre c is searched as a point on the curve (closest point r_C2), the normal points
-    from the edge to the centre, n = (c − r_C2)/|c − r_C2|, t1 the curve's tangent, t2 =
-    n × t1 (:func:`._detection_kernels.edge_frame`); g_N = |c − r_C2| − ρ (eq. 3.4 with
-    that n), C1 = c − ρ n, ġ by eq. 3.8 — exact: at the closest point c − r_C2 ⟂ t1.
-    Inactive when c lies on the curve."""
+class _EdgeFrame:
+    """The frame of a contact on an edge (:class:`contours.Contour1sEdgeFFR`, a face's
+    rim): the centre c (a point, or a sphere's centre) is searched as a point on the curve
+    (closest point r_C2), the normal points from the edge to the centre, n = (c − r_C2)/|c
+    − r_C2|, t1 the curve's tangent, t2 = n × t1 (:func:`._detection_kernels.edge_frame`);
+    g_N = |c − r_C2| − ρ (eq. 3.4 with that n), C1 = c − ρ n, ġ by eq. 3.8 — exact: at the
+    closest point c − r_C2 ⟂ t1. Inactive when c lies on the curve."""
 
     def _project(self, c, velocity, jacobians):
         return super()._project(c, velocity, jacobians) and K.edge_frame(self.point2.frame, c, self.point2.derivs)
+
+
+class ContactKinematicsSphereEdge(_EdgeFrame, ContactKinematicsSphereContour1s):
+    """A sphere against an edge (see :class:`_EdgeFrame`): a ball on a hole's rim."""
+
+
+class ContactKinematicsPointEdge(_EdgeFrame, ContactKinematicsPointContour1s):
+    """A point against an edge (see :class:`_EdgeFrame`, ρ = 0): g_N >= 0, the point
+    touches the edge only where it meets the curve (a ball needs a sphere)."""
 
 
 class _PlaneProjection(_CentreContact):

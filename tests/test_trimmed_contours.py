@@ -221,3 +221,22 @@ def test_hole_case_rows(tmp_path):
     assert rolled["rim_closed_steps"] > 0 and rolled["error"] < 1e-3
     assert rolled["z_end_below_top_m"] > 0                 # its centre below the top: in the hole
     assert rolled["first_rim_normal"][2] > 0.99 and rolled["last_rim_normal"][0] > 0.5   # up, then to the centre
+
+
+def test_edge_frame_kernel_against_numpy():
+    """edge_frame: n = (c − r)/|c − r|, t1 the tangent without its n part, t2 = n × t1 (a
+    right-handed orthonormal frame), as computed with numpy; False on the curve."""
+    from contact._detection_kernels import edge_frame
+
+    rng = np.random.default_rng(7)
+    for _ in range(20):
+        D = np.zeros((6, 3))
+        D[0], tangent, c = rng.normal(size=3), rng.normal(size=3), rng.normal(size=3)
+        F = np.zeros((3, 3))
+        F[:, 0] = tangent / np.linalg.norm(tangent)
+        assert edge_frame(F, c, D)
+        n = (c - D[0]) / np.linalg.norm(c - D[0])
+        t1 = tangent - (tangent @ n) * n
+        t1 /= np.linalg.norm(t1)
+        assert np.allclose(F, np.column_stack([t1, np.cross(n, t1), n]), atol=1e-14)
+    assert not edge_frame(F, D[0].copy(), D)
