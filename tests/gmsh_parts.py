@@ -1,8 +1,7 @@
 """Unstructured gmsh meshes with feature-edge groups, built directly with gmsh for the
 node-path tests (test_node_path.py, test_scene_reader.py): a cylinder with its two
 circular rims and a box with edges, each a gmsh physical curve, so the groups are the
-nodes gmsh puts on those curves (no grid, no order); a plate with a through hole (a face
-with a hole, test_trimmed_contours.py)."""
+nodes gmsh puts on those curves (no grid, no order)."""
 
 from __future__ import annotations
 
@@ -10,8 +9,6 @@ from preprocess.geometry import gmsh_session, mesh_from_gmsh_model
 
 RADIUS, LENGTH = 0.05, 0.1          # cylinder [m]: axis z, base circle at z = 0
 BOX = (0.2, 0.1, 0.05)              # box [m]: [0, lx] x [0, ly] x [0, lz]
-PLATE = (0.2, 0.04, 0.01)           # plate with a hole [m]: [0, lx] x [0, ly] x [0, lz]
-HOLE = (0.1, 0.02, 0.006)           # its through hole along z: centre x, y and radius [m]
 
 
 def _entities_in(gmsh, dim, lo, hi, eps=1e-6):
@@ -66,23 +63,3 @@ def box_mesh(size, order=1):
         gmsh.model.addPhysicalGroup(2, _entities_in(gmsh, 2, (0.0, 0.0, 0.0), (lx, ly, 0.0)), name="z0")
         gmsh.model.addPhysicalGroup(3, [volume], name="body")
         return _mesh(gmsh, size, order, False, "box")
-
-
-def plate_hole_mesh(size, order=1, hole=True):
-    """The plate [0, lx] x [0, ly] x [0, lz] (PLATE) with a through hole along z (HOLE;
-    ``hole=False``: without), meshed with tetrahedra of ``order`` at element size
-    ``size`` [m], mid-edge nodes on the hole. Node groups: ``top`` (the face z = lz, with
-    the hole's rim), ``clamp`` (the face x = 0), ``body``."""
-    lx, ly, lz = PLATE
-    with gmsh_session() as gmsh:
-        occ = gmsh.model.occ
-        volume = occ.addBox(0.0, 0.0, 0.0, lx, ly, lz)
-        if hole:
-            cut = occ.addCylinder(HOLE[0], HOLE[1], -lz, 0.0, 0.0, 3 * lz, HOLE[2])
-            (volume,), _ = occ.cut([(3, volume)], [(3, cut)])
-            volume = volume[1]
-        occ.synchronize()
-        gmsh.model.addPhysicalGroup(2, _entities_in(gmsh, 2, (0.0, 0.0, lz), (lx, ly, lz)), name="top")
-        gmsh.model.addPhysicalGroup(2, _entities_in(gmsh, 2, (0.0, 0.0, 0.0), (0.0, ly, lz)), name="clamp")
-        gmsh.model.addPhysicalGroup(3, [volume], name="body")
-        return _mesh(gmsh, size, order, True, "plate with a hole")

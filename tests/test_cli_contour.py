@@ -167,13 +167,15 @@ def test_face_with_a_hole_is_trimmed_with_its_rims(tmp_path, capsys):
     grid with its centre in the hole."""
     import meshio
 
-    mesh = gmsh_parts.plate_hole_mesh(0.008, order=1)
+    from validation.cases import contact_hole as case
+
+    mesh = case.plate_hole_mesh(0.008, order=1)
     _write(mesh, tmp_path / "plate")
     code, text, err = run(capsys, "contour", tmp_path / "plate", "top", "--out", tmp_path / "o")
     assert code == 0, err
     assert "a face with 1 hole" in text and "band" not in text and "trimmed" in text
-    lx, ly, lz = gmsh_parts.PLATE
-    hx, hy, radius = gmsh_parts.HOLE
+    lx, ly, lz = case.PLATE
+    hx, hy, radius = case.HOLE
     assert re.search(rf"outer edge: \d+ nodes, length {2 * (lx + ly):.4g} m", text)
     assert f"rim 1: " in text and f"centre ({hx:.4g}, {hy:.4g}, {lz:.4g}) m, mean radius {radius:.4g} m" in text
     assert max(report_row(text, "geometry")) < 1e-12

@@ -22,8 +22,8 @@ pytestmark = pytest.mark.filterwarnings("ignore:.*is fitted to within:UserWarnin
 
 @pytest.fixture(scope="module")
 def plate_hole():
-    """The gmsh plate with a 12 mm through hole, tet10 at 5 mm."""
-    return gmsh_parts.plate_hole_mesh(0.005, order=2)
+    """The validation case's plate with a 12 mm through hole, tet10 at 5 mm."""
+    return case.plate_hole_mesh(0.005, order=2)
 
 
 def test_face_with_a_hole_is_no_band(plate_hole):
@@ -34,12 +34,12 @@ def test_face_with_a_hole_is_no_band(plate_hole):
     patch = SurfacePatch(mesh.points, mesh.surface_triangles(), mesh.node_groups["top"], "top")
     assert patch.topology() == "holes"
     outer, holes = patch.outer_and_holes()
-    lx, ly, _ = gmsh_parts.PLATE
+    lx, ly, _ = case.PLATE
     perimeter = np.linalg.norm(np.diff(patch.points[np.append(outer, outer[0])], axis=0), axis=1).sum()
     assert perimeter == pytest.approx(2 * (lx + ly), rel=1e-9)
     (hole,) = holes
-    r = np.linalg.norm(patch.points[hole, :2] - gmsh_parts.HOLE[:2], axis=1)
-    assert np.allclose(r, gmsh_parts.HOLE[2], rtol=1e-6)
+    r = np.linalg.norm(patch.points[hole, :2] - case.HOLE[:2], axis=1)
+    assert np.allclose(r, case.HOLE[2], rtol=1e-6)
 
 
 def test_band_stays_a_band():
@@ -60,7 +60,7 @@ def _fit(mesh):
 
 def _face_distance(fit, patch, report, params):
     """max |S_z − lz| [m] at the nodes and at ``params``: the face is the plane z = lz."""
-    lz = gmsh_parts.PLATE[2]
+    lz = case.PLATE[2]
     S = fit.collocation(params) @ report.ctrl
     return max(np.abs(fit.collocation(fit.params) @ report.ctrl - patch.points)[:, 2].max(), np.abs(S[:, 2] - lz).max())
 
@@ -83,7 +83,7 @@ def test_face_with_a_hole_is_fitted_on_its_material(plate_hole):
     coef, *_ = np.linalg.lstsq(affine, fit.params, rcond=None)
     assert np.abs(affine @ coef - fit.params).max() < 1e-12
     # without the hole: the same (rounding) distance
-    plain = gmsh_parts.plate_hole_mesh(0.005, order=2, hole=False)
+    plain = case.plate_hole_mesh(0.005, order=2, hole=False)
     fit0, patch0, report0 = _fit(plain)
     assert Trim.of_fit(fit0, patch0) is None
     assert _face_distance(fit0, patch0, report0, grid) < 1e-12
