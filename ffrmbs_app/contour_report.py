@@ -26,8 +26,8 @@ files stay inside the directory):
   with holes those whose centre lies in a hole left out: the trim), with point data
   ``eta`` and ``xi``.
 
-A face with holes (several boundary loops, a graph over its mean plane) is fitted over its
-outer loop's square and trimmed to its material (:mod:`contours.fitting.trim`);
+A face with holes (several boundary loops, not a band closing around an axis) is fitted
+over its outer loop's square and trimmed to its material (:mod:`contours.fitting.trim`);
 :meth:`GroupFit.describe` names the trim and the face's rims — its outer edge and each
 hole's rim, the edge contours of :meth:`contours.Contour2sNeutralFFR.rims` — with their
 node counts, lengths and (holes) centres and mean radii.

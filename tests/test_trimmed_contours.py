@@ -53,6 +53,37 @@ def test_band_stays_a_band():
     assert fit.eta.closed
 
 
+def half_cylinder_with_a_hole(radius=0.05, length=0.2, n_theta=25, n_z=41):
+    """(points, triangles, outward) of a half cylinder x² + y² = R², y >= 0, 0 <= z <= L,
+    triangulated on a (θ, z) grid, outward normal (x, y, 0)/R, with the grid nodes within
+    0.15 L of (θ, z) = (π/2, L/2) left out: a curved face with one hole."""
+    theta, z = np.linspace(0.0, np.pi, n_theta), np.linspace(0.0, length, n_z)
+    T, Z = np.meshgrid(theta, z, indexing="ij")
+    points = np.column_stack([radius * np.cos(T.ravel()), radius * np.sin(T.ravel()), Z.ravel()])
+    idx = np.arange(T.size).reshape(T.shape)
+    a, b, c, d = idx[:-1, :-1], idx[1:, :-1], idx[1:, 1:], idx[:-1, 1:]
+    # (θ, z) counter-clockwise seen from outside: t_θ × t_z points outward
+    tri = np.concatenate([np.stack([a, b, c], -1).reshape(-1, 3), np.stack([a, c, d], -1).reshape(-1, 3)])
+    gone = np.hypot(radius * (T.ravel() - np.pi / 2), Z.ravel() - length / 2) < 0.15 * length
+    return points, tri[~gone[tri].any(axis=1)], np.flatnonzero(~gone)
+
+
+def test_curved_face_with_a_hole_is_no_band():
+    """A half cylinder with a hole (flatness below 2/π, the triangles at its two straight
+    edges facing across its mean normal): a face with one hole, fitted over its outer loop's square to the cylinder
+    (within the chords' sag), trimmed; not a band."""
+    points, tri, nodes = half_cylinder_with_a_hole()
+    patch = SurfacePatch(points, tri, nodes, "half cylinder")
+    assert 0.25 < patch.flatness() < 2 / np.pi          # the hole takes some of the top's share
+    assert patch.topology() == "holes"
+    fit, patch = surface_fit(points, tri, nodes, name="half cylinder")
+    report = fit_report(fit, patch)
+    assert not fit.eta.closed and Trim.of_fit(fit, patch) is not None
+    S = fit.collocation(fit.params) @ report.ctrl
+    sag = 0.05 * (1 - np.cos(np.pi / 24 / 2))           # a chord's sag between grid nodes
+    assert np.abs(np.hypot(S[:, 0], S[:, 1]) - 0.05).max() < sag
+
+
 def _fit(mesh):
     fit, patch = surface_fit(mesh.points, mesh.surface_triangles(), mesh.node_groups["top"], name="top")
     return fit, patch, fit_report(fit, patch, name="top")
