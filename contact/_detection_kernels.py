@@ -187,6 +187,30 @@ def newton_1s(r_point, eta, knots, ints, floats, ctrl0, phi, state, span, max_st
 
 
 @njit(cache=True)
+def edge_frame(F, centre, D):
+    """The frame of a sphere's centre c against an edge (a curve) at its closest point
+    r_C2 = D[0]: n = (c − r_C2)/|c − r_C2| (from the edge to the centre), t1 the curve's
+    unit tangent F[:, 0] made perpendicular to n, t2 = n × t1, into the columns of F
+    (3, 3). False (F unchanged) when c lies on the curve or n is along the tangent."""
+    d0, d1, d2 = centre[0] - D[0, 0], centre[1] - D[0, 1], centre[2] - D[0, 2]
+    dist = (d0 * d0 + d1 * d1 + d2 * d2) ** 0.5
+    if dist == 0.0:
+        return False
+    n0, n1, n2 = d0 / dist, d1 / dist, d2 / dist
+    s = F[0, 0] * n0 + F[1, 0] * n1 + F[2, 0] * n2
+    t0, t1, t2 = F[0, 0] - s * n0, F[1, 0] - s * n1, F[2, 0] - s * n2
+    size = (t0 * t0 + t1 * t1 + t2 * t2) ** 0.5
+    if size <= 1e-12:
+        return False
+    F[0, 0], F[1, 0], F[2, 0] = t0 / size, t1 / size, t2 / size
+    F[0, 2], F[1, 2], F[2, 2] = n0, n1, n2
+    F[0, 1] = n1 * F[2, 0] - n2 * F[1, 0]
+    F[1, 1] = n2 * F[0, 0] - n0 * F[2, 0]
+    F[2, 1] = n0 * F[1, 0] - n1 * F[0, 0]
+    return True
+
+
+@njit(cache=True)
 def normal_gap(F, centre, D, radius):
     """g_N = nᵀ (c − r_C2) − ρ [m] (thesis eq. 3.4) with n = F[:, 2] and r_C2 = D[0]."""
     s = 0.0

@@ -244,7 +244,8 @@ class _CentreContact(ContactKinematics):
 class _SearchContact(_CentreContact):
     """Contour 2 located by ``search_class`` (or a given search on it), warm-started at
     the last contact point: ``start`` ((η, ξ) on a 2s contour, (η,) on a 1s one; NaN
-    when there is none, before the first search or after a search found nothing)."""
+    when there is none, before the first search or after a search found nothing; the
+    search's ``hole`` when the nearest point lay in a trimmed contour's hole)."""
 
     search_class: type
     run_state = _CentreContact.run_state + ("search", "start")     # the search and its warm start
@@ -264,7 +265,7 @@ class _SearchContact(_CentreContact):
             start = start[0]
         found = self.search.solve(c, start)
         if found is None:
-            self.start[:] = np.nan
+            self.start[:] = self.search.hole             # NaN, or a point in a trimmed contour's hole
             return False
         self.start[:] = found
         coords = found if self.search.dim == 2 else (found,)
@@ -317,6 +318,27 @@ class ContactKinematicsSphereContour1s(_SearchContact):
 
     def __init__(self, sphere, curve, search=None, nu_total=None):
         super().__init__(sphere, curve, search, nu_total)
+
+
+class _EdgeFrame:
+    """The frame of a contact on an edge (:class:`contours.Contour1sEdgeFFR`, a face's
+    rim): the centre c (a point, or a sphere's centre) is searched as a point on the curve
+    (closest point r_C2), the normal points from the edge to the centre, n = (c − r_C2)/|c
+    − r_C2|, t1 the curve's tangent, t2 = n × t1 (:func:`._detection_kernels.edge_frame`);
+    g_N = |c − r_C2| − ρ (eq. 3.4 with that n), C1 = c − ρ n, ġ by eq. 3.8 — exact: at the
+    closest point c − r_C2 ⟂ t1. Inactive when c lies on the curve."""
+
+    def _project(self, c, velocity, jacobians):
+        return super()._project(c, velocity, jacobians) and K.edge_frame(self.point2.frame, c, self.point2.derivs)
+
+
+class ContactKinematicsSphereEdge(_EdgeFrame, ContactKinematicsSphereContour1s):
+    """A sphere against an edge (see :class:`_EdgeFrame`): a ball on a hole's rim."""
+
+
+class ContactKinematicsPointEdge(_EdgeFrame, ContactKinematicsPointContour1s):
+    """A point against an edge (see :class:`_EdgeFrame`, ρ = 0): g_N >= 0, the point
+    touches the edge only where it meets the curve (a ball needs a sphere)."""
 
 
 class _PlaneProjection(_CentreContact):

@@ -29,6 +29,10 @@ scale; the root counts only if it is a local minimum of |g| (a maximum or saddle
 — e.g. the far side of a cylinder — is no contact point). Closed directions wrap the
 parameter; on an open direction an iterate is clipped to the domain, and a second clip in
 a row rejects the start (the root lies outside the contour: no contact point there).
+On a trimmed surface (``contour.trim``, a face with holes: :mod:`contours.fitting.trim`)
+a root inside a hole is rejected likewise; it is kept (``hole``) as the next warm start,
+and a warm start that converges into a hole again ends the solve without the coarse level
+(the nearest point of the surface is in a hole: no contact point).
 
 On a compiled neutral contour (:class:`~contours.neutral.factory.NeutralContour`, the
 default) Newton runs as one numba kernel per start (:func:`._detection_kernels.newton_2s`,
@@ -142,11 +146,15 @@ class _Search:
     compiled : bool
         Newton runs in the numba kernel: asked for (``compiled=True``) and the contour is
         a compiled neutral contour or a compiled band or cylinder (decided at construction).
+    hole : (dim,)
+        After a solve that found no contact point: the surface coordinates of a distance
+        minimum that lay in a hole of a trimmed contour, else NaN (a warm start for the
+        next solve, which then skips the coarse level while the point stays over the hole).
     """
 
     dim: int
     #: what a solve changes (:mod:`mbs.state_arrays`); ``_G``: the coarse grid's workspace
-    run_state = ("_length_scale", "counts", "_point", "_g", "_G")
+    run_state = ("_length_scale", "counts", "_point", "_g", "_G", "hole")
 
     def __init__(self, contour, tol, max_iter, length_scale, compiled):
         if contour.dim != self.dim:
@@ -161,6 +169,7 @@ class _Search:
                          and contour.compiled)
         self._work = contour.kernel_workspace() + (self._g,) if self.compiled else None
         self.counts = np.zeros(4, dtype=np.int64)
+        self.hole = np.full(self.dim, np.nan)
 
     def reset_counters(self):
         self.counts[:] = 0
@@ -247,11 +256,16 @@ class Contact2sSearch(_Search):
         (3,) [m], or None when there is none inside the domain. ``start``: the last
         successful (η, ξ) (warm start)."""
         r_point = np.asarray(r_point, dtype=float)
+        self.hole[:] = np.nan
         if start is not None:
             root = self._newton(r_point, start[0], start[1])
             if root is not None:
                 return root[:2]
+            if not np.isnan(self.hole[0]):
+                return None                      # the nearest point lies in a hole: no contact point
         root = self._coarse(r_point)
+        if root is not None:
+            self.hole[:] = np.nan
         return None if root is None else root[:2]
 
     def _coarse(self, r_point):
@@ -296,10 +310,19 @@ class Contact2sSearch(_Search):
                                                        ax_e.max_step, ax_x.max_step, self._tol2(), self.max_iter,
                                                        *self._work)
         self.newton_iterations += steps
-        if not found:
+        if not found or not self._on_material(eta, xi):
             return None
         self.last_iterations = k
         return eta, xi, gg
+
+    def _on_material(self, eta, xi) -> bool:
+        """False when the contour is trimmed and (η, ξ) lies in one of its holes (then
+        kept in :attr:`hole`)."""
+        trim = self.contour.trim
+        if trim is None or trim.contains(eta, xi):
+            return True
+        self.hole[:] = eta, xi
+        return False
 
     def _newton_reference(self, r_point, eta, xi):
         """The Python reference of :meth:`_newton`, over ``contour.evaluate``."""
@@ -318,8 +341,8 @@ class Contact2sSearch(_Search):
             det = h11 * h22 - h12 * h12
             minimum = h11 < 0.0 and det > _SINGULAR * a * c
             if f0 * f0 <= tol2 * a and f1 * f1 <= tol2 * c:
-                if not minimum:
-                    return None  # a maximum or saddle of the distance: not the contact point
+                if not minimum or not self._on_material(eta, xi):
+                    return None  # a maximum or saddle of the distance, or a hole: not the contact point
                 self.last_iterations = k
                 return eta, xi, g @ g
             if k == self.max_iter:

@@ -2,7 +2,7 @@
 
 Public API::
 
-    from contours import (Contour2sNeutralFFR, Contour1sNeutralFFR, FlexibleBand,
+    from contours import (Contour2sNeutralFFR, Contour1sNeutralFFR, Contour1sEdgeFFR, FlexibleBand,
                           FlexibleCylinder, PointContour, SphereContour, PlaneContour)
 
 * :mod:`contours.nurbs` — knot vectors, basis functions, interpolation factored once.
@@ -20,13 +20,13 @@ a :class:`ContourPoint` (position, tangents, frame, velocity, J_T, J_R),
 
 from .base import Contour, ContourPoint
 from .derived import FlexibleBand, FlexibleCylinder
-from .neutral import (Contour1sNeutralFFR, Contour1sNeutralFactory, Contour1sNeutralRigid, Contour2sNeutralFFR,
+from .neutral import (Contour1sEdgeFFR, Contour1sNeutralFFR, Contour1sNeutralFactory, Contour1sNeutralRigid, Contour2sNeutralFFR,
                       Contour2sNeutralFactory, Contour2sNeutralRigid)
 from .node_grid import node_line, node_matrix
 from .registry import CONTOURS
 from .rigid import PlaneContour, PointContour, SphereContour
 
-__all__ = ["CONTOURS", "Contour", "Contour1sNeutralFFR", "Contour1sNeutralFactory", "Contour1sNeutralRigid",
+__all__ = ["CONTOURS", "Contour", "Contour1sEdgeFFR", "Contour1sNeutralFFR", "Contour1sNeutralFactory", "Contour1sNeutralRigid",
            "Contour2sNeutralFFR", "Contour2sNeutralFactory", "Contour2sNeutralRigid", "ContourPoint",
            "FlexibleBand", "FlexibleCylinder", "PlaneContour", "PointContour", "SphereContour", "node_line",
            "node_matrix"]

@@ -107,6 +107,9 @@ class Contour(ABC):
     #: the contacts on this contour see the static compliance of the modes its body leaves
     #: out (:mod:`contours.residual`); set on neutral contours and those derived from them
     residual_flexibility = False
+    #: a surface trimmed to its material (:class:`contours.fitting.Trim`, a face with
+    #: holes): a point whose (η, ξ) lies in a hole is no point of the contour; else None
+    trim = None
 
     def __init__(self, body, name):
         self.body = body

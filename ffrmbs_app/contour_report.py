@@ -22,8 +22,15 @@ files stay inside the directory):
   ``eta``, ``xi`` (the node's parameters) and ``node`` (FE node number), and cell data
   ``mid_deviation`` [m] (at the triangle's mid-point);
 * ``G-contour.vtu`` — the contour itself: S sampled on a grid of
-  :data:`SAMPLES_PER_SPAN` points per knot span in each direction, as quads, with point
-  data ``eta`` and ``xi``.
+  :data:`SAMPLES_PER_SPAN` points per knot span in each direction, as quads (on a face
+  with holes those whose centre lies in a hole left out: the trim), with point data
+  ``eta`` and ``xi``.
+
+A face with holes (several boundary loops, not a band closing around an axis) is fitted
+over its outer loop's square and trimmed to its material (:mod:`contours.fitting.trim`);
+:meth:`GroupFit.describe` names the trim and the face's rims — its outer edge and each
+hole's rim, the edge contours of :meth:`contours.Contour2sNeutralFFR.rims` — with their
+node counts, lengths and (holes) centres and mean radii.
 
 Open both ``.vtu`` files in ParaView to see the contour over the FE surface. Lengths are
 in m (the body's undeformed body-frame positions ū0). Each file is written to a temporary
@@ -42,7 +49,7 @@ from pathlib import Path
 import numpy as np
 
 from contours import node_matrix
-from contours.fitting import SMOOTHING, fit_report, surface_fit
+from contours.fitting import SMOOTHING, Trim, fit_report, surface_fit
 from ffrmbs.errors import FfrmbsError, ModelError, OutputFileError, os_reason
 from ffrmbs_app.output_dirs import new_directories
 
@@ -96,6 +103,7 @@ class GroupFit:
     report : the :class:`~contours.fitting.FitReport` (geometry and every mode; its
         ``ctrl``, ``node_deviation`` and ``mid_deviation`` are drawn and written).
     grid : (n_η, n_ξ) of the node matrix O when the group is a planar structured grid, else None.
+    trim : the :class:`~contours.fitting.Trim` of a face with holes, else None.
     """
 
     group: str
@@ -103,6 +111,7 @@ class GroupFit:
     patch: object
     report: object
     grid: tuple | None
+    trim: object = None
 
     def surface(self, params) -> np.ndarray:
         """(m, 3) S(η, ξ) at the parameters ``params`` (m, 2) [m]."""
@@ -112,8 +121,18 @@ class GroupFit:
         """Lines naming the patch and the route a 2s contour on the group takes."""
         p = self.patch
         kind = "6-node (tet10)" if p.order == 2 else "3-node (tet4)"
-        shape = "a closed band, periodic in eta" if self.fit.eta.closed else "a face"
+        if self.fit.eta.closed:
+            shape = "a closed band, periodic in eta"
+        elif self.trim is not None:
+            holes = len(self.trim.polygons)
+            shape = f"a face with {holes} hole{'s' if holes > 1 else ''}"
+        else:
+            shape = "a face"
         lines = [f"node group {self.group!r}: {p.k} nodes on {len(p.triangles)} {kind} surface triangles, {shape}"]
+        if self.trim is not None:
+            lines.append("trimmed: the surface is fitted over the outer edge's square on the material's nodes (the "
+                         "holes filled smoothly) and trimmed to the material: a contact point in a hole is no contact")
+            lines += self._rims()
         if self.grid is not None:
             lines.append(f"a structured grid of {self.grid[0]} x {self.grid[1]} nodes: a 2s contour on it "
                          f"interpolates the nodes exactly (node matrix O, thesis eq. 3.24); given control points "
@@ -121,6 +140,24 @@ class GroupFit:
         else:
             lines.append("not a structured grid: a 2s contour on it is fitted by least squares as reported below")
         return "\n".join(lines)
+
+
+    def _rims(self) -> list:
+        """One line per rim of a face with holes: the outer edge, then each hole."""
+        outer, holes = self.patch.outer_and_holes()
+        lines = ["rims (edge contours: Contour2sNeutralFFR.rims(), a sphere meets them as edges):"]
+        for i, loop in enumerate([outer] + holes):
+            x = self.patch.points[loop]
+            length = float(np.linalg.norm(x - np.roll(x, 1, axis=0), axis=1).sum())
+            what = "outer edge" if i == 0 else f"rim {i}"
+            line = f"  {what}: {len(loop)} nodes, length {length:.4g} m"
+            if i:
+                centre = x.mean(axis=0)
+                radius = np.linalg.norm(x - centre, axis=1).mean()
+                line += (f", centre ({centre[0]:.4g}, {centre[1]:.4g}, {centre[2]:.4g}) m, mean radius "
+                         f"{radius:.4g} m")
+            lines.append(line)
+        return lines
 
 
 def fit_group(body, group, control_points=None, smoothing=SMOOTHING, source="the body") -> GroupFit:
@@ -148,7 +185,7 @@ def fit_group(body, group, control_points=None, smoothing=SMOOTHING, source="the
         grid = node_matrix(body.u0, nodes).shape
     except ModelError:
         grid = None
-    return GroupFit(group, fit, patch, report, grid)
+    return GroupFit(group, fit, patch, report, grid, Trim.of_fit(fit, patch))
 
 
 # --------------------------------------------------------------------------- sampling
@@ -171,7 +208,8 @@ def samples(direction) -> np.ndarray:
 
 def contour_grid(gf: GroupFit):
     """(points (n_η n_ξ, 3) [m], quads (Q, 4), params (n_η n_ξ, 2)): S sampled on
-    :func:`samples` of each direction, η-major, quads wrapping across a closed seam."""
+    :func:`samples` of each direction, η-major, quads wrapping across a closed seam; on a
+    face with holes the quads whose centre lies in a hole left out."""
     eta, xi = samples(gf.fit.eta), samples(gf.fit.xi)
     params = np.stack(np.meshgrid(eta, xi, indexing="ij"), axis=-1).reshape(-1, 2)
     ne, nx = eta.size, xi.size
@@ -181,6 +219,8 @@ def contour_grid(gf: GroupFit):
     if gf.fit.xi.closed:
         idx = np.hstack([idx, idx[:, :1]])
     quads = np.stack([idx[:-1, :-1], idx[1:, :-1], idx[1:, 1:], idx[:-1, 1:]], axis=-1).reshape(-1, 4)
+    if gf.trim is not None:
+        quads = quads[gf.trim.contains_many(params[quads].mean(axis=1))]
     return gf.surface(params), quads, params
 
 

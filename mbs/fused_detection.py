@@ -58,7 +58,8 @@ class PointOnNeutral2s:
     @staticmethod
     def applies(contact) -> bool:
         """True for a :class:`~contact.Contact` of a point on a point mass against a compiled
-        neutral 2s contour on a body whose frame is fixed in space, searched by a compiled
+        neutral 2s contour on a body whose frame is fixed in space, not trimmed (a face with
+        holes takes the Python path, whose search tests the trim), searched by a compiled
         ``Contact2sSearch``, both bodies in a System."""
         if type(contact) is not Contact:
             return False
@@ -68,7 +69,7 @@ class PointOnNeutral2s:
         point, surface = k.contour1, k.contour2
         body1, body2 = point.body, surface.body
         return (type(point) is PointContour and body1 is not None and body1.translation_only
-                and isinstance(surface, Contour2sNeutralFactory) and surface.compiled
+                and isinstance(surface, Contour2sNeutralFactory) and surface.compiled and surface.trim is None
                 and max(surface.space.eta.p, surface.space.xi.p) <= K.MAX_DEGREE
                 and body2 is not None and getattr(body2, "frame_at_rest", False)
                 and type(k.search) is Contact2sSearch and k.search.compiled

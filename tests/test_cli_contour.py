@@ -160,6 +160,32 @@ def test_closed_band_on_a_cylinder(tmp_path, capsys):
     assert np.abs(radius - gmsh_parts.RADIUS).max() < h ** 2 / (8 * gmsh_parts.RADIUS) * 2
 
 
+def test_face_with_a_hole_is_trimmed_with_its_rims(tmp_path, capsys):
+    """``ffrmbs contour`` on a plate's top face with a 12 mm hole (tet4): a face with one
+    hole, not a band; trimmed; the rims reported (the outer edge's length 2 (lx + ly), the
+    hole's centre and radius); the fit on the plane to rounding; no quad of the contour's
+    grid with its centre in the hole."""
+    import meshio
+
+    from validation.cases import contact_hole as case
+
+    mesh = case.plate_hole_mesh(0.008, order=1)
+    _write(mesh, tmp_path / "plate")
+    code, text, err = run(capsys, "contour", tmp_path / "plate", "top", "--out", tmp_path / "o")
+    assert code == 0, err
+    assert "a face with 1 hole" in text and "band" not in text and "trimmed" in text
+    lx, ly, lz = case.PLATE
+    hx, hy, radius = case.HOLE
+    assert re.search(rf"outer edge: \d+ nodes, length {2 * (lx + ly):.4g} m", text)
+    assert f"rim 1: " in text and f"centre ({hx:.4g}, {hy:.4g}, {lz:.4g}) m, mean radius {radius:.4g} m" in text
+    assert max(report_row(text, "geometry")) < 1e-12
+    contour = meshio.read(tmp_path / "o" / "top-contour.vtu")
+    centres = contour.points[contour.cells[0].data].mean(axis=1)
+    cell = np.sqrt(np.ptp(contour.points[:, 0]) * np.ptp(contour.points[:, 1]) / len(centres))
+    assert np.linalg.norm(centres[:, :2] - (hx, hy), axis=1).min() > radius - cell
+    assert np.abs(contour.points[:, 2] - lz).max() < 1e-12
+
+
 @pytest.mark.parametrize("args, fault", [
     (("nope",), "no node group 'nope'"),
     (("x0+x1",), "separate pieces"),

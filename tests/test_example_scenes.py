@@ -1,8 +1,10 @@
 """The example scenes on gmsh parts (examples/scenes/ball_on_plate.toml,
-ball_in_channel.toml) run as a user runs them — preprocess the part with the CLI, then
-``ffrmbs run`` — and obey the physics their headers state: free fall onto the plate's
-top face, the plate at rest in its static deflection until the ball arrives, and a frictionless ball whose centre stays on the cylinder of radius R − r
-inside the channel while it moves along the channel at constant speed."""
+ball_in_channel.toml, ball_into_hole.toml) run as a user runs them — preprocess the part
+with the CLI, then ``ffrmbs run`` — and obey the physics their headers state: free fall
+onto the plate's top face, the plate at rest in its static deflection until the ball
+arrives, a frictionless ball whose centre stays on the cylinder of radius R − r inside the
+channel while it moves along the channel at constant speed, and a ball sliding on a
+trimmed face into its hole over the rim."""
 
 import shutil
 from pathlib import Path
@@ -81,3 +83,26 @@ def test_ball_in_the_unstructured_channel_stays_on_its_cylinder(tmp_path, capsys
     angle = np.degrees(np.arctan2(y - axis_y, axis_z - z))
     assert angle.max() == pytest.approx(40.0, abs=0.5)
     assert angle.min() == pytest.approx(-40.0, abs=0.5)
+
+
+@pytest.mark.slow
+def test_ball_slides_into_the_hole_over_its_rim(tmp_path, capsys):
+    """examples/scenes/ball_into_hole.toml: a trimmed 2s face (the plate's top with a hole)
+    and the hole's rim as an edge. The frictionless ball slides at constant speed on the
+    face (z = lz + r) until its centre reaches the rim at x = 94 mm, then tips over the
+    edge into the hole (its centre below the top); no energy is made."""
+    args = header_command("ball_into_hole.toml", "preprocess").split()
+    assert args[1] == "examples/parts/plate_hole.geo"
+    preprocess = " ".join(a for a in args[2:] if a not in ("--out", "examples/scenes/plate_hole"))
+    result, _ = run_example(tmp_path, "plate_hole.geo", preprocess, "ball_into_hole.toml", "plate_hole", capsys)
+    x, z, t = result["x"], result["z"], result.t
+    top, radius, rim_x, v = 0.01, 0.004, 0.094, 0.1       # [m], [m/s] from the scene's header
+    on_face = x < rim_x - 1e-4
+    assert np.allclose(z[on_face], top + radius, atol=1e-9)
+    assert np.allclose(x[on_face], 0.08 + v * t[on_face], atol=1e-9)
+    assert z[-1] < top                                     # in the hole
+    assert x[-1] < 0.106 - radius + 1e-3                   # tipped over, not across the hole
+    E = sum(result.energy[k] for k in ("kinetic", "potential"))
+    # the plate starts undeformed and rings under the ball's weight; the e = 0 impulses on
+    # the ringing plate move E by ~2e-9 of it (measured; issue 30 item 8 is about such gains)
+    assert E.max() <= E[0] * (1 + 1e-8)

@@ -6,6 +6,7 @@
 * :mod:`.bspline_fit` — least-squares B-spline surfaces and curves, factored once: the
   fitting matrix F with control points = F · nodal values.
 * :mod:`.report` — the fit's distance, normal and mode-shape errors against the FE surface.
+* :mod:`.trim` — a face with holes: the holes' polygons in parameter space, the material test.
 
 :func:`surface_fit` chains the first three for a body's node group; the 2s FFR contour
 uses it when the group is not a structured grid (:class:`contours.Contour2sNeutralFFR`).
@@ -16,6 +17,7 @@ from .parameterization import parameterize
 from .patch import SurfacePatch
 from .report import BOUNDS, FitReport, fit_report
 from .surface import default_control_points, surface_fit
+from .trim import Trim
 
-__all__ = ["BOUNDS", "FitReport", "fit_report", "SMOOTHING", "CurveFit", "FitDirection", "SurfacePatch", "SurfaceFit", "default_control_points",
+__all__ = ["BOUNDS", "FitReport", "fit_report", "SMOOTHING", "CurveFit", "FitDirection", "SurfacePatch", "SurfaceFit", "Trim", "default_control_points",
            "parameterize", "surface_fit"]

@@ -1,6 +1,14 @@
 """Parameters (η, ξ) of a surface patch's nodes on the unit square: a mean-value map
 with a square boundary (Floater 2003), periodic in η for a closed band.
 
+A face with holes (:meth:`.patch.SurfacePatch.topology` "holes") is mapped as the disk
+it becomes when each hole is filled by a fan of triangles from one added node at the
+mean of the hole loop's nodes: its outer loop goes onto the square's boundary, the hole
+loops inside; the added nodes are no data (:mod:`.trim`: the fit is trimmed to the
+material). Mean-value weights reproduce linear functions on a planar star, so on a flat
+face whose outer loop is a rectangle (corners at its corners) and whose holes are star-
+shaped about their nodes' mean, the map is affine, as without holes.
+
 A disk patch (:class:`.patch.SurfacePatch` with one boundary loop) has its boundary
 mapped onto the square's edges by arc length, between four corner nodes: the four
 boundary nodes where the boundary turns most, when they turn by at least
@@ -42,9 +50,12 @@ CORNER_TURN = np.radians(30.0)
 def parameterize(patch: SurfacePatch):
     """(params (k, 2) in [0, 1]², closed (bool, bool)) of ``patch``'s nodes: η along the
     first, ξ along the second direction; closed = (True, False) for an annulus."""
-    if patch.topology() == "disk":
+    kind = patch.topology()
+    if kind == "disk":
         uv = _square_map(patch.points, patch.linear, patch.loops[0], _corners(patch.points, patch.loops[0]))
         return uv, (False, False)
+    if kind == "holes":
+        return _holed_map(patch), (False, False)
     return _band_map(patch), (True, False)
 
 
@@ -135,6 +146,20 @@ def _square_map(points, triangles, loop, corners) -> np.ndarray:
         rhs = -(L[inner][:, loop] @ uv[loop])
         uv[inner] = splu(A).solve(np.ascontiguousarray(rhs))
     return np.clip(uv, 0.0, 1.0)
+
+
+def _holed_map(patch: SurfacePatch) -> np.ndarray:
+    """(k, 2) parameters of a face with holes: each hole filled by a fan of triangles to
+    a node at its nodes' mean, then the square map of the filled disk (module docstring)."""
+    outer, holes = patch.outer_and_holes()
+    k = patch.k
+    points, triangles = [patch.points], [patch.linear]
+    for i, loop in enumerate(holes):
+        points.append(patch.points[loop].mean(axis=0)[None, :])
+        # the hole lies right of its loop: the fan's edges run against it (same orientation)
+        triangles.append(np.column_stack([np.roll(loop, -1), loop, np.full(len(loop), k + i)]))
+    uv = _square_map(np.concatenate(points), np.concatenate(triangles), outer, _corners(patch.points, outer))
+    return uv[:k]
 
 
 def _band_map(patch: SurfacePatch) -> np.ndarray:

@@ -8,10 +8,20 @@ to the patch when all its nodes are in the group. A 6-node triangle is split int
 linear ones (corner, mid, mid and the middle one), so mid-edge nodes are data points and
 vertices of the patch's triangulation like the corners.
 
-The patch must be a connected, manifold surface that is a topological disk (one
-boundary loop; mapped onto the unit square) or an annulus (two loops: a closed band such
-as a cylinder's lateral surface; mapped periodically in one direction), see
-:mod:`.parameterization`.
+The patch must be a connected, manifold surface: a topological disk (one boundary loop;
+mapped onto the unit square), a face with holes (an outer loop and one or more hole
+loops) or a closed band (two loops, e.g. a cylinder's lateral surface; mapped
+periodically in one direction), see :mod:`.parameterization`. A face with holes and a
+band differ in their normals: the flatness |Σ A_T n_T| / Σ A_T of a band that closes
+around an axis is small (0 for a cylinder, sin α for a cone of half-angle α), that of a
+face is not (1 for a flat one, 2/π for a half cylinder, 1/2 for a hemisphere); a patch
+with several loops whose flatness is at least :data:`FACE_FLATNESS` is a face with holes.
+
+On a face with holes the loops, projected onto the plane normal to the area-weighted mean
+normal m = Σ A_T n_T / |Σ A_T n_T|, run
+counter-clockwise seen along −m (the patch on their left) for the outer loop — a
+positive signed area — and clockwise for the holes: the outer loop is the one loop of
+positive signed area.
 """
 
 from __future__ import annotations
@@ -21,6 +31,9 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from ffrmbs.errors import ModelError
+
+#: a patch with several boundary loops is a face with holes from this flatness on (module docstring)
+FACE_FLATNESS = 0.25
 
 #: the four linear triangles of a 6-node triangle (local node numbers 0..5)
 SUBTRIANGLES = np.array([[0, 3, 5], [3, 1, 4], [5, 4, 2], [3, 4, 5]])
@@ -124,17 +137,62 @@ class SurfacePatch:
         return sorted(loops, key=lambda l: int(l.min()))
 
     def topology(self) -> str:
-        """"disk" (one boundary loop) or "annulus" (two), else a ModelError."""
+        """"disk" (one boundary loop), "holes" (a face with holes: an outer loop and
+        len(loops) − 1 hole loops, flatness >= FACE_FLATNESS) or "annulus" (a closed band:
+        two loops, a smaller flatness), else a ModelError (module docstring)."""
         n = len(self.loops)
         edges = np.unique(np.sort(self.directed_edges(), axis=1), axis=0)
         euler = self.k - len(edges) + len(self.linear)
         if n == 1 and euler == 1:
             return "disk"
+        flat = self.flatness() >= FACE_FLATNESS
+        if n >= 2 and euler == 2 - n and flat:
+            return "holes"
         if n == 2 and euler == 0:
             return "annulus"
         if n == 0:
             raise ModelError(f"{self.name}: the patch is a closed surface (no boundary); a contour needs a "
-                             f"patch with one boundary (a face) or two (a band)")
-        raise ModelError(f"{self.name}: the patch has {n} boundary loops and Euler characteristic {euler}; a "
-                         f"contour needs a face without holes (1 loop) or a closed band (2 loops): split the "
-                         f"group")
+                             f"patch with one boundary (a face), a face with holes or a closed band")
+        raise ModelError(f"{self.name}: the patch has {n} boundary loops and Euler characteristic {euler}"
+                         f"{'' if flat else ' and closes around an axis'}: a contour needs a face (1 loop, or an "
+                         f"outer loop and holes) or a closed band (2 loops): split the group")
+
+    def _area_normals(self) -> np.ndarray:
+        """(T_l, 3) 2 A_T n_T of the linear triangles (outward, from their orientation)."""
+        x = self.points[self.linear]
+        return np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0])
+
+    def flatness(self) -> float:
+        """|Σ A_T n_T| / Σ A_T in [0, 1] (module docstring)."""
+        n = self._area_normals()
+        return float(np.linalg.norm(n.sum(axis=0)) / np.linalg.norm(n, axis=1).sum())
+
+    def mean_normal(self):
+        """(3,) the unit area-weighted mean outward normal m = Σ A_T n_T / |Σ A_T n_T|, or
+        None when the sum vanishes (a closed band around an axis)."""
+        n = self._area_normals()
+        total = n.sum(axis=0)
+        size = np.linalg.norm(total)
+        if size <= 1e-12 * np.linalg.norm(n, axis=1).sum():
+            return None
+        return total / size
+
+    def outer_and_holes(self) -> tuple:
+        """(outer loop, [hole loops]) of a face with holes (:meth:`topology` "holes"):
+        the outer loop has a positive signed area in the plane normal to the mean normal
+        (module docstring); ModelError if not exactly one has."""
+        m = self.mean_normal()
+        e1 = np.cross(m, [1.0, 0.0, 0.0] if abs(m[0]) < 0.9 else [0.0, 1.0, 0.0])
+        e1 /= np.linalg.norm(e1)
+        e2 = np.cross(m, e1)
+        areas = []
+        for loop in self.loops:
+            x = self.points[loop]
+            a, b = x @ e1, x @ e2
+            areas.append(0.5 * float(np.sum(a * np.roll(b, -1) - np.roll(a, -1) * b)))
+        positive = [i for i, area in enumerate(areas) if area > 0]
+        if len(positive) != 1:
+            raise ModelError(f"{self.name}: cannot tell the outer boundary of the face from its holes "
+                             f"({len(positive)} of its {len(areas)} boundary loops run counter-clockwise)")
+        outer = positive[0]
+        return self.loops[outer], [loop for i, loop in enumerate(self.loops) if i != outer]

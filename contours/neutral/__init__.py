@@ -3,11 +3,11 @@
 :mod:`.products`, the FFR family in :mod:`.ffr`, the rigid family in :mod:`.rigid`."""
 
 from .factory import Contour1sNeutralFactory, Contour2sNeutralFactory, NeutralContour
-from .ffr import Contour1sNeutralFFR, Contour2sNeutralFFR
+from .ffr import Contour1sEdgeFFR, Contour1sNeutralFFR, Contour2sNeutralFFR
 from .products import (NeutralNurbs, NeutralNurbsLocalPosition, NeutralNurbsModeShapes, NeutralNurbsPosition,
                        NeutralNurbsVelocity)
 from .rigid import Contour1sNeutralRigid, Contour2sNeutralRigid
 
-__all__ = ["Contour1sNeutralFFR", "Contour1sNeutralFactory", "Contour1sNeutralRigid", "Contour2sNeutralFFR",
+__all__ = ["Contour1sEdgeFFR", "Contour1sNeutralFFR", "Contour1sNeutralFactory", "Contour1sNeutralRigid", "Contour2sNeutralFFR",
            "Contour2sNeutralFactory", "Contour2sNeutralRigid", "NeutralContour", "NeutralNurbs",
            "NeutralNurbsLocalPosition", "NeutralNurbsModeShapes", "NeutralNurbsPosition", "NeutralNurbsVelocity"]

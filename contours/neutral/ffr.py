@@ -21,7 +21,7 @@ from ffrmbs.errors import ModelError
 from contours.nurbs import Interpolation1D, SurfaceInterpolation
 from contours.nurbs.knots import parameters
 
-from ..fitting import SMOOTHING, CurveFit, fit_report, surface_fit
+from ..fitting import SMOOTHING, CurveFit, Trim, fit_report, surface_fit
 from ..node_grid import check_node_matrix, node_line, node_matrix, node_path
 from .factory import Contour1sNeutralFactory, Contour2sNeutralFactory
 from .products import NeutralNurbsLocalPosition, NeutralNurbsModeShapes, NeutralNurbsPosition, NeutralNurbsVelocity
@@ -125,6 +125,15 @@ class Contour1sNeutralFFR(_FFRProducts, Contour1sNeutralFactory):
         return cls(body, node_line(body.data.u0, start, direction, nodes), normal, **kw)
 
 
+class Contour1sEdgeFFR(Contour1sNeutralFFR):
+    """An edge of an FFR body: a curve through a line of surface nodes (parameters as
+    :class:`Contour1sNeutralFFR`) that a sphere touches as a sharp edge — its contact
+    measures the distance from the curve, the normal pointing from the curve to the
+    sphere's centre (:class:`contact.kinematics.ContactKinematicsSphereEdge`), whatever
+    the reference ``normal`` (which only completes the curve's own frame). The rims of a
+    face (its outer edge, each hole's rim) are such edges: :meth:`Contour2sNeutralFFR.rims`."""
+
+
 class Contour2sNeutralFFR(_FFRProducts, Contour2sNeutralFactory):
     """A surface on a patch of nodes of an FFR body (thesis Fig. 3.4).
 
@@ -133,6 +142,8 @@ class Contour2sNeutralFFR(_FFRProducts, Contour2sNeutralFactory):
     least squares (:mod:`contours.fitting`): its nodes are mapped onto the unit square
     (periodic in η for a closed band), and the control points of ū0 and of every mode
     shape are F ū0 and F Φ with one fitting matrix F, so the per-step update is the same.
+    A face with holes is fitted over its outer loop's square and trimmed to its material
+    (:attr:`trim`, :mod:`contours.fitting.trim`): no contact point lies in a hole.
 
     Parameters
     ----------
@@ -173,6 +184,7 @@ class Contour2sNeutralFFR(_FFRProducts, Contour2sNeutralFactory):
     fit, patch, fit_report : the :class:`~contours.fitting.SurfaceFit`,
         :class:`~contours.fitting.SurfacePatch` and :class:`~contours.fitting.FitReport`
         of a fitted patch (a warning for each bound of the report it exceeds), else None.
+    trim : the :class:`~contours.fitting.Trim` of a face with holes, else None.
     """
 
     def __init__(self, body, nodes, extra_rows=0, degree=3, closed=False, method="chord",
@@ -191,6 +203,7 @@ class Contour2sNeutralFFR(_FFRProducts, Contour2sNeutralFactory):
             O = check_node_matrix(nodes, data.n_nodes)
         if O is None:
             self.nodes = self.patch.nodes
+            self.trim = Trim.of_fit(self.fit, self.patch)
             space = SurfaceSpace(self.fit)
             self.fit_report = fit_report(self.fit, self.patch, body.phi_nodes[self.nodes],
                                          f"{name}: node group {nodes!r} of body {body.name!r}")
@@ -204,6 +217,26 @@ class Contour2sNeutralFFR(_FFRProducts, Contour2sNeutralFactory):
                          1 if outward is None else outward, name, compiled)
         if outward is None:
             self.sign = self._outward_sign()
+
+    def rims(self, **options) -> list:
+        """The edges of a fitted face, each a closed :class:`Contour1sEdgeFFR` through its
+        boundary loop's nodes: the outer edge first, then each hole's rim (a face with
+        holes), or the one boundary of a face; a band's two rims. ``options``: those of
+        :class:`Contour1sEdgeFFR` (degree, method, control_points, smoothing, ...); the
+        reference normal is the face's mean outward normal (a band, whose normals cancel: z). ModelError on a structured grid (give the edge's node group)."""
+        if self.patch is None:
+            raise ModelError(f"{self.name}: the rims of a node-grid contour are not known; give each edge as a "
+                             f"node group of a 1s edge contour")
+        patch = self.patch
+        loops = patch.loops
+        if patch.topology() == "holes":
+            outer, holes = patch.outer_and_holes()
+            loops = [outer] + holes
+        m = patch.mean_normal()
+        normal = m if m is not None else np.array([0.0, 0.0, 1.0])
+        return [Contour1sEdgeFFR(self.body, patch.nodes[loop], normal, closed=True,
+                                 name=f"{self.name} {'outer edge' if i == 0 else f'rim {i}'}", **options)
+                for i, loop in enumerate(loops)]
 
     def _outward_sign(self) -> float:
         """+1 if t_η × t_ξ at the patch centre points away from the nearest nodes not on

@@ -156,14 +156,14 @@ class ContactReader:
             def make(env):
                 return cls(env.bodies[name], nodes, extra, degree, closed, method, outward, **fitting)
 
-        else:   # 1s, band, cylinder: on a 1s neutral curve
+        else:   # 1s, edge, band, cylinder: on a 1s neutral curve
             make = self._curve(c, kind)
             owner = c.data["body"]                  # a flexible body, checked by _curve
         keypath, label = t.keypath + (key,), f"{t.label}: {label}"        # a ModelError is reported there
         return kind, owner, lambda env: run(self.doc, keypath, label, lambda: make(env))
 
     def _curve(self, c: Table, kind):
-        """make(env) of a 1s neutral curve, or a band or a cylinder on one."""
+        """make(env) of a 1s neutral curve or edge, or a band or a cylinder on a curve."""
         name = body_of(self.bodies, c, kinds=("flexible",))
         line = c.has("start") or c.has("direction")
         start = c.get("start") if line else None
@@ -180,15 +180,16 @@ class ContactReader:
         options = dict(degree=c.get("degree"), closed=closed, method=c.get("method"),
                        control_points=c.get("control_points"), smoothing=c.get("smoothing"))
         extra = tuple(c.get(key) for key in CONTOUR[kind] if key not in CONTOUR["1s"])    # width, offset / radius
-        curve_class, cls = CONTOURS["1s"], CONTOURS[kind]
+        plain = kind in ("1s", "edge")                  # the curve itself, else a band or cylinder on it
+        curve_class, cls = CONTOURS[kind if plain else "1s"], CONTOURS[kind]
         residual = dict(residual_flexibility=c.get("residual_flexibility"))
 
         def make(env):
             body = env.bodies[name]
-            own = residual if kind == "1s" else {}
+            own = residual if plain else {}
             curve = (curve_class.along_line(body, start, direction, normal, nodes=nodes, **options, **own) if line
                      else curve_class(body, nodes, normal, **options, **own))
-            return curve if kind == "1s" else cls(curve, *extra, **residual)
+            return curve if plain else cls(curve, *extra, **residual)
 
         return make
 

@@ -205,6 +205,10 @@ support, the part's own surface (and its residual flexibility) taking the contac
   reference normal in the body frame. "band" (a
   :class:`contours.FlexibleBand`) takes ``width`` *req.* [m] and ``offset`` [m].
   "cylinder" (a :class:`contours.FlexibleCylinder`) takes ``radius`` *req.* [m].
+  "edge" (a :class:`contours.Contour1sEdgeFFR`, same keys as "1s") is a sharp edge
+  that a sphere touches (the normal from the edge to the ball's centre), e.g. a hole's
+  rim given as a gmsh physical curve; a 2s face with holes is trimmed to its material,
+  so a ball over a hole falls through and meets the rim's edge.
 - Each of these flexible contours takes ``residual_flexibility`` (false): true makes
   its contacts act through the static compliance of the modes the body leaves out
   (:mod:`contours.residual`; a set-valued law is needed), accurate impacts with few
@@ -502,9 +506,10 @@ CONTOUR = {
     "1s": _CURVE,
     "band": {**_CURVE, "width": _length(low=0.0, strict=True), "offset": _length(0.0, low=None)},
     "cylinder": {**_CURVE, "radius": _length(low=0.0, strict=True)},
+    "edge": _CURVE,
 }
 CONTOUR1_KINDS = ("point", "sphere")
-CONTOUR2_KINDS = ("2s", "1s", "band", "cylinder", "plane", "sphere")
+CONTOUR2_KINDS = ("2s", "1s", "band", "cylinder", "edge", "plane", "sphere")
 LAW_DEFAULTS = {"coulomb": {"e": 0.0}}                   # scene defaults where the law class has none
 
 
