@@ -142,7 +142,8 @@ def _run(make_scene, scene, path, check, resume, checkpoint_every, flush_every, 
     log(f"scene {scene.name}: {scene.description}" if scene.description else f"scene {scene.name}")
     units = scene.output_units()
     recorder = ResultRecorder(path, {"scene": scene.name, "description": scene.description, "inputs": scene.inputs,
-                                     "overrides": scene.overrides, "units": units},
+                                     "overrides": scene.overrides, "units": units,
+                                     "labels": scene.labels},
                               flush_every=flush_every, checkpoint_every=checkpoint_every)
     warm_s = 0.0
     with CompileClock(log) as clock:

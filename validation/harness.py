@@ -38,9 +38,9 @@ from typing import NamedTuple
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
-from matplotlib.ticker import NullFormatter
 
 from ffrmbs_app.compile_clock import CompileClock
+from ffrmbs_app.ticks import label_log_axis
 from ffrmbs.errors import FfrmbsError, ModelError
 
 ROW_KEYS = ("case", "code", "config", "cpu_s", "error", "error_kind", "reference")
@@ -333,31 +333,84 @@ def _lookup(row, key):
     return row[key] if key in row else row["config"].get(key)
 
 
-def _plot(path, name, rows, group_keys):
-    """Log-log work-precision plot (x: CPU time, y: error) of the plottable rows to ``path``."""
+def _unit(error_kind) -> str:
+    """The unit of an error kind: the "[...]" it ends with ("impact time [s]" -> "s"), else
+    "-" (a relative or dimensionless error)."""
+    match = re.search(r"\[([^\[\]]+)\]\s*$", error_kind)
+    return match[1] if match else "-"
+
+
+def value_text(value) -> str:
+    """A swept value as a legend shows it: "on"/"off" for bools, "20×2×1" for a mesh
+    ("20x2x1" or a list), numbers in %g."""
+    if isinstance(value, bool):
+        return "on" if value else "off"
+    if isinstance(value, (list, tuple)):
+        return "×".join(value_text(v) for v in value)
+    if isinstance(value, float):
+        return f"{value:g}"
+    return re.sub(r"(?<=\d)x(?=\d)", "×", str(value))
+
+
+def series_label(keys, values) -> str:
+    """"modes = 20, mesh = 20×2×1": each key (underscores as spaces) with its value."""
+    return ", ".join(f"{key.replace('_', ' ')} = {value_text(v)}" for key, v in zip(keys, values))
+
+
+def _series(rows, group_keys):
+    """{values of the series keys: rows} of one panel and the series keys that vary among
+    its rows (the legend's); a key with one value is a constant of the panel."""
+    keys = [key for key in group_keys if key != "error_kind"]
+    varying = [key for key in keys if len({repr(_lookup(row, key)) for row in rows}) > 1]
+    constant = [key for key in keys if key not in varying and _lookup(rows[0], key) is not None]
     groups = {}
     for row in rows:
-        groups.setdefault(tuple(_lookup(row, key) for key in group_keys), []).append(row)
-    fig = Figure(figsize=(6.4, 4.8))
-    FigureCanvasAgg(fig)
-    ax = fig.add_subplot()
-    for i, (key, members) in enumerate(groups.items()):
-        members = [r for r in members if _plottable(r)]
-        if not members:
-            continue
+        groups.setdefault(tuple(_lookup(row, key) for key in varying), []).append(row)
+    return groups, varying, constant
+
+
+def _panel(ax, kind, rows, group_keys):
+    """One error kind's work-precision panel: a marker series per value of the varying
+    group keys, legend right of the axes, the constant keys in the panel title."""
+    groups, varying, constant = _series(rows, group_keys)
+    for i, (values, members) in enumerate(groups.items()):
         ax.loglog([r["cpu_s"] for r in members], [abs(r["error"]) for r in members],
                   linestyle="-", linewidth=0.8, marker=_MARKERS[i % len(_MARKERS)],
-                  label=", ".join(str(k) for k in key))
-    kinds = {row["error_kind"] for row in rows}
-    ax.xaxis.set_minor_formatter(NullFormatter())
-    ax.yaxis.set_minor_formatter(NullFormatter())
+                  label=series_label(varying, values) if varying else None)
+    label_log_axis(ax, "x")
+    label_log_axis(ax, "y")
     ax.set_xlabel("CPU time [s]")
-    ax.set_ylabel(f"|error| ({kinds.pop()})" if len(kinds) == 1 else "|error|")
-    ax.set_title(f"{name}: work-precision")
+    ax.set_ylabel(f"|error| [{_unit(kind)}]")
+    title = kind if not constant else f"{kind}\n{series_label(constant, [_lookup(rows[0], k) for k in constant])}"
+    ax.set_title(title, fontsize="medium")
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize="small")
-    fig.tight_layout()
-    write_atomic(path, lambda f: fig.savefig(f, format="png", dpi=120))
+    if varying:
+        ax.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
+    return len(groups)
+
+
+def work_precision_figure(name, rows, group_keys):
+    """The Figure (Agg canvas attached) of a case's work-precision plot: one log-log panel
+    (|error| against CPU time) per error kind, so errors in s, m and relative ones never
+    share an axis (:func:`_panel`)."""
+    panels = {}
+    for row in rows:
+        panels.setdefault(row["error_kind"], []).append(row)
+    series = [len(_series(members, group_keys)[0]) for members in panels.values()]
+    heights = [max(3.0, 0.9 + 0.22 * n) for n in series]
+    fig = Figure(figsize=(9.5, 0.5 + sum(heights)), layout="constrained")
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(len(panels), 1, squeeze=False, gridspec_kw={"height_ratios": heights})[:, 0]
+    for ax, (kind, members) in zip(axes, panels.items()):
+        _panel(ax, kind, members, group_keys)
+    fig.suptitle(f"{name}: work-precision")
+    return fig
+
+
+def _plot(path, name, rows, group_keys):
+    """Write the work-precision plot (:func:`work_precision_figure`) of the plottable rows to ``path``."""
+    fig = work_precision_figure(name, rows, group_keys)
+    write_atomic(path, lambda f: fig.savefig(f, format="png", dpi=110))
 
 
 def cell(value):

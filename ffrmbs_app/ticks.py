@@ -1,0 +1,84 @@
+"""Tick labels that always read as numbers (matplotlib): the run plots, the sweep plot and the
+validation report's work-precision plots.
+
+* :class:`PlainFormatter` labels each tick with as few significant digits as tell the
+  ticks apart (``0.10001``, ``0.10002``), in positional notation from 1e-4 to 1e6 and in
+  e-notation outside; it never draws an offset or a multiplier above the axis (matplotlib's
+  default draws ``1e−5+1e−1`` there when the values differ little from a large one).
+* :func:`label_log_axis` keeps a log axis labelled when it spans less than a decade: its
+  decade ticks then miss the view, so the axis gets a few rounded ticks inside it, in plain
+  numbers.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from matplotlib.ticker import FixedLocator, Formatter, NullFormatter
+
+MAX_DIGITS = 15
+PLAIN_RANGE = (1e-4, 1e6)       # |value| written positionally in this range, else in e-notation
+LOG_TICKS = 4                   # ticks of a log axis that spans less than a decade
+
+
+def number_text(value, digits) -> str:
+    """``value`` to ``digits`` significant digits: positional in PLAIN_RANGE or at 0
+    ("0.00012", "250"), else e-notation without padding ("1.5e-7", "3e8")."""
+    if value == 0 or not math.isfinite(value):
+        return "0" if value == 0 else str(value)
+    if PLAIN_RANGE[0] <= abs(value) < PLAIN_RANGE[1]:
+        return np.format_float_positional(value, precision=digits, unique=False, fractional=False, trim="-")
+    mantissa, exponent = f"{value:.{digits - 1}e}".split("e")
+    if "." in mantissa:
+        mantissa = mantissa.rstrip("0").rstrip(".")
+    return f"{mantissa}e{int(exponent)}"
+
+
+class PlainFormatter(Formatter):
+    """Tick labels in plain numbers, the fewest significant digits that tell the ticks
+    apart; no offset or multiplier text (module docstring)."""
+
+    def __call__(self, x, pos=None):
+        return number_text(x, 6)
+
+    def format_ticks(self, values):
+        values = [float(v) for v in values]
+        scale = max((abs(v) for v in values), default=0.0)
+        values = [0.0 if abs(v) <= 1e-12 * scale else v for v in values]     # 1.4e-17 of a linspace is 0
+        for digits in range(1, MAX_DIGITS + 1):
+            labels = [number_text(v, digits) for v in values]
+            if len(set(labels)) == len(labels):
+                return labels
+        return labels
+
+    def get_offset(self):
+        return ""
+
+
+def plain_axis(axis):
+    """Label a linear ``axis`` (ax.xaxis, ax.yaxis) with :class:`PlainFormatter`."""
+    axis.set_major_formatter(PlainFormatter())
+
+
+def _decades_in(lo, hi) -> int:
+    """The number of powers of ten in [lo, hi] (0 < lo <= hi)."""
+    return math.floor(math.log10(hi) * (1 + 1e-12)) - math.ceil(math.log10(lo) * (1 - 1e-12)) + 1
+
+
+def label_log_axis(ax, which):
+    """Keep the log axis ``which`` ("x" or "y") of ``ax`` labelled: with two or more powers
+    of ten in its view the decades carry the labels (minor ticks unlabelled); with fewer,
+    LOG_TICKS ticks spread geometrically over the view, rounded to two significant digits,
+    labelled by :class:`PlainFormatter`. Call after the data are drawn."""
+    ax.autoscale_view()
+    axis = ax.xaxis if which == "x" else ax.yaxis
+    lo, hi = sorted(ax.get_xlim() if which == "x" else ax.get_ylim())
+    if lo <= 0 or _decades_in(lo, hi) >= 2:
+        axis.set_minor_formatter(NullFormatter())
+        return
+    inner = np.geomspace(lo, hi, LOG_TICKS + 2)[1:-1]
+    ticks = sorted({float(f"{v:.2g}") for v in inner})
+    axis.set_major_locator(FixedLocator(ticks))
+    axis.set_major_formatter(PlainFormatter())
+    axis.set_minor_formatter(NullFormatter())
