@@ -1,5 +1,5 @@
-"""Tick labels that always read as numbers (matplotlib): the run plots, the sweep plot and the
-validation report's work-precision plots.
+"""Tick labels that always read as numbers and legend texts that say what varies (matplotlib):
+the run plots, the sweep plots and the validation report's work-precision plots.
 
 * :class:`PlainFormatter` labels each tick with as few significant digits as tell the
   ticks apart (``0.10001``, ``0.10002``), in positional notation from 1e-4 to 1e6 and in
@@ -13,6 +13,7 @@ validation report's work-precision plots.
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 from matplotlib.ticker import FixedLocator, Formatter, NullFormatter
@@ -82,3 +83,20 @@ def label_log_axis(ax, which):
     axis.set_major_locator(FixedLocator(ticks))
     axis.set_major_formatter(PlainFormatter())
     axis.set_minor_formatter(NullFormatter())
+
+
+def value_text(value) -> str:
+    """A swept value as a legend shows it: "on"/"off" for bools, "20×2×1" for a mesh
+    ("20x2x1" or a list), numbers in %g."""
+    if isinstance(value, bool):
+        return "on" if value else "off"
+    if isinstance(value, (list, tuple)):
+        return "×".join(value_text(v) for v in value)
+    if isinstance(value, float):
+        return f"{value:g}"
+    return re.sub(r"(?<=\d)x(?=\d)", "×", str(value))
+
+
+def series_label(keys, values) -> str:
+    """"modes = 20, mesh = 20×2×1": each key (underscores as spaces) with its value."""
+    return ", ".join(f"{key.replace('_', ' ')} = {value_text(v)}" for key, v in zip(keys, values))

@@ -40,7 +40,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from ffrmbs_app.compile_clock import CompileClock
-from ffrmbs_app.ticks import label_log_axis
+from ffrmbs_app.ticks import label_log_axis, series_label
 from ffrmbs.errors import FfrmbsError, ModelError
 
 ROW_KEYS = ("case", "code", "config", "cpu_s", "error", "error_kind", "reference")
@@ -338,23 +338,6 @@ def _unit(error_kind) -> str:
     "-" (a relative or dimensionless error)."""
     match = re.search(r"\[([^\[\]]+)\]\s*$", error_kind)
     return match[1] if match else "-"
-
-
-def value_text(value) -> str:
-    """A swept value as a legend shows it: "on"/"off" for bools, "20×2×1" for a mesh
-    ("20x2x1" or a list), numbers in %g."""
-    if isinstance(value, bool):
-        return "on" if value else "off"
-    if isinstance(value, (list, tuple)):
-        return "×".join(value_text(v) for v in value)
-    if isinstance(value, float):
-        return f"{value:g}"
-    return re.sub(r"(?<=\d)x(?=\d)", "×", str(value))
-
-
-def series_label(keys, values) -> str:
-    """"modes = 20, mesh = 20×2×1": each key (underscores as spaces) with its value."""
-    return ", ".join(f"{key.replace('_', ' ')} = {value_text(v)}" for key, v in zip(keys, values))
 
 
 def _series(rows, group_keys):
