@@ -23,6 +23,7 @@ from __future__ import annotations
 import datetime
 import importlib
 import json
+import logging
 import math
 import numbers
 import os
@@ -31,6 +32,7 @@ import re
 import tempfile
 import time
 import traceback
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import NamedTuple
@@ -212,6 +214,7 @@ class _Outcome:
     failure: str | None = None
     traceback: str | None = None
     cpu_s: float = math.nan
+    warnings: list = field(default_factory=list)
 
 
 def _check_result(result):
@@ -235,20 +238,67 @@ def _check_result(result):
             raise ModelError(f"row {i}: error = {row['error']!r} is neither a number nor None")
 
 
+QUIET_CATEGORIES = (DeprecationWarning, PendingDeprecationWarning, ImportWarning, ResourceWarning)
+
+
+class _Collector(logging.Handler):
+    """A logging handler keeping the messages of WARNING and above."""
+
+    def __init__(self):
+        super().__init__(logging.WARNING)
+        self.messages = []
+
+    def emit(self, record):
+        self.messages.append(record.getMessage())
+
+
+class CaseWarnings:
+    """The warnings a case raises while it runs (``warnings.warn``, and the "ffrmbs"
+    loggers' warnings, which repeat them), kept for its report instead of printed: they
+    are about our own validation scenes, which the user cannot change. :attr:`lines`:
+    each distinct message once, with its count ("… (3 times)"); deprecation, import and
+    resource warnings are left to Python's filters."""
+
+    def __enter__(self):
+        self._catch = warnings.catch_warnings(record=True)
+        self._seen = self._catch.__enter__()
+        warnings.simplefilter("always")
+        for category in QUIET_CATEGORIES:
+            warnings.simplefilter("ignore", category)
+        self._handler = _Collector()
+        self._logger = logging.getLogger("ffrmbs")
+        self._logger.addHandler(self._handler)
+        return self
+
+    def __exit__(self, *exc):
+        self._logger.removeHandler(self._handler)
+        self._catch.__exit__(*exc)
+        counts = {}
+        for message in [str(w.message) for w in self._seen]:
+            counts[message] = counts.get(message, 0) + 1
+        for message in self._handler.messages:              # logged only, not also warned
+            counts.setdefault(message, 1)
+        self.lines = [m if n == 1 else f"{m} ({n} times)" for m, n in counts.items()]
+        return False
+
+
 def run_case(registry, name, quick):
-    """Load and run one case; an exception becomes a failed outcome."""
+    """Load and run one case; an exception becomes a failed outcome, the warnings it
+    raises go to the outcome (:class:`CaseWarnings`)."""
     outcome = _Outcome(name)
     start = time.process_time()
-    try:
-        module = registry[name]
-        outcome.description = str(module.DESCRIPTION)
-        result = module.run(quick)
-        _check_result(result)
-        outcome.result = result
-    except Exception as exc:  # noqa: BLE001 -- a failing case must not stop the others
-        outcome.failure = f"{type(exc).__name__}: {exc}"
-        outcome.traceback = traceback.format_exc()
+    with CaseWarnings() as caught:
+        try:
+            module = registry[name]
+            outcome.description = str(module.DESCRIPTION)
+            result = module.run(quick)
+            _check_result(result)
+            outcome.result = result
+        except Exception as exc:  # noqa: BLE001 -- a failing case must not stop the others
+            outcome.failure = f"{type(exc).__name__}: {exc}"
+            outcome.traceback = traceback.format_exc()
     outcome.cpu_s = time.process_time() - start
+    outcome.warnings = caught.lines
     return outcome
 
 
@@ -258,7 +308,8 @@ def outcome_line(outcome) -> str:
         return f"{outcome.name}: FAILED: {outcome.failure}"
     if not outcome.result.rows and outcome.result.skipped:
         return f"{outcome.name}: {_status(outcome)}"
-    return f"{outcome.name}: {len(outcome.result.rows)} rows, {outcome.cpu_s:.3g} s CPU"
+    warned = f", {len(outcome.warnings)} warning(s) in the report" if outcome.warnings else ""
+    return f"{outcome.name}: {len(outcome.result.rows)} rows, {outcome.cpu_s:.3g} s CPU{warned}"
 
 
 def _as_registry(cases):
@@ -467,6 +518,9 @@ def _case_report(outcome, png_name, figures=()):
         lines += [note, ""]
     if result.skipped:
         lines += ["Skipped:", ""] + [f"- {s}" for s in result.skipped] + [""]
+    if outcome.warnings:
+        lines += ["Warnings raised while the case ran (about its own scenes):", ""] + \
+                 [f"- {cell(w)}" for w in outcome.warnings] + [""]
     return lines
 
 
@@ -513,6 +567,7 @@ def _results_json(outcomes, quick, machine, date):
         cases[o.name] = {"description": o.description,
                          "status": _status(o),
                          "failure": o.failure, "traceback": o.traceback, "cpu_s": o.cpu_s,
+                         "warnings": list(o.warnings),
                          "skipped": list(r.skipped) if r else [], "notes": list(r.notes) if r else []}
     rows = [row for o in outcomes if o.result for row in o.result.rows]
     return json_safe({"date": date, "quick": quick, "machine": machine, "rows": rows, "cases": cases})
