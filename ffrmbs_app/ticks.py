@@ -1,8 +1,8 @@
 """Tick labels that always read as numbers and legend texts that say what varies (matplotlib):
 the run plots, the sweep plots and the validation report's work-precision plots.
 
-* :class:`PlainFormatter` labels each tick with as few significant digits as tell the
-  ticks apart (``0.10001``, ``0.10002``), in positional notation from 1e-4 to 1e6 and in
+* :class:`PlainFormatter` labels each tick with as few significant digits as give its
+  value to a millionth of the tick spacing (``0.10001``, ``0.10002``; ``0.125``), in positional notation from 1e-4 to 1e6 and in
   e-notation outside; it never draws an offset or a multiplier above the axis (matplotlib's
   default draws ``1e−5+1e−1`` there when the values differ little from a large one).
 * :func:`label_log_axis` keeps a log axis labelled when it spans less than a decade: its
@@ -37,8 +37,8 @@ def number_text(value, digits) -> str:
 
 
 class PlainFormatter(Formatter):
-    """Tick labels in plain numbers, the fewest significant digits that tell the ticks
-    apart; no offset or multiplier text (module docstring)."""
+    """Tick labels in plain numbers, the fewest significant digits that give each tick's
+    value (to 1e-6 of the spacing); no offset or multiplier text (module docstring)."""
 
     def __call__(self, x, pos=None):
         return number_text(x, 6)
@@ -47,9 +47,11 @@ class PlainFormatter(Formatter):
         values = [float(v) for v in values]
         scale = max((abs(v) for v in values), default=0.0)
         values = [0.0 if abs(v) <= 1e-12 * scale else v for v in values]     # 1.4e-17 of a linspace is 0
+        steps = [abs(b - a) for a, b in zip(values, values[1:]) if b != a]
+        tolerance = 1e-6 * (min(steps) if steps else scale)
         for digits in range(1, MAX_DIGITS + 1):
             labels = [number_text(v, digits) for v in values]
-            if len(set(labels)) == len(labels):
+            if all(abs(float(t) - v) <= tolerance for t, v in zip(labels, values)):
                 return labels
         return labels
 

@@ -94,3 +94,4 @@ def test_number_text():
     assert number_text(1.5e-7, 2) == "1.5e-7"
     assert number_text(3e8, 3) == "3e8"
     assert PlainFormatter().format_ticks([0.0 + 1.4e-17, 0.5, 1.0]) == ["0", "0.5", "1"]
+    assert PlainFormatter().format_ticks([0.1, 0.125, 0.15, 0.175]) == ["0.1", "0.125", "0.15", "0.175"]
