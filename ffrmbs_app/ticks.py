@@ -6,8 +6,8 @@ the run plots, the sweep plots and the validation report's work-precision plots.
   e-notation outside; it never draws an offset or a multiplier above the axis (matplotlib's
   default draws ``1e−5+1e−1`` there when the values differ little from a large one).
 * :func:`label_log_axis` keeps a log axis labelled when it spans less than a decade: its
-  decade ticks then miss the view, so the axis gets a few rounded ticks inside it, in plain
-  numbers.
+  decade ticks then miss the view, so the axis gets a few round ticks inside it (1, 2, 5
+  times a power of ten when they fit), in plain numbers.
 """
 
 from __future__ import annotations
@@ -69,20 +69,36 @@ def _decades_in(lo, hi) -> int:
     return math.floor(math.log10(hi) * (1 + 1e-12)) - math.ceil(math.log10(lo) * (1 - 1e-12)) + 1
 
 
+def log_ticks(lo, hi) -> list[float]:
+    """Ticks for a log axis over [lo, hi] that holds fewer than two powers of ten: the
+    first of {1, 2, 5}·10^k, {1, ..., 9}·10^k that puts two to eight ticks in it, else
+    LOG_TICKS values spread geometrically, rounded to the fewest significant digits (two
+    or more) that keep them apart."""
+    decades = range(math.floor(math.log10(lo)), math.ceil(math.log10(hi)) + 1)
+    for mantissas in ((1, 2, 5), range(1, 10)):
+        ticks = [m * 10.0 ** k for k in decades for m in mantissas if lo <= m * 10.0 ** k <= hi]
+        if 2 <= len(ticks) <= 8:
+            return ticks
+    inner = np.geomspace(lo, hi, LOG_TICKS + 2)[1:-1]
+    for digits in range(2, MAX_DIGITS + 1):
+        ticks = sorted({float(f"{v:.{digits}g}") for v in inner})
+        if len(ticks) == len(inner):
+            return ticks
+    return list(inner)
+
+
 def label_log_axis(ax, which):
     """Keep the log axis ``which`` ("x" or "y") of ``ax`` labelled: with two or more powers
     of ten in its view the decades carry the labels (minor ticks unlabelled); with fewer,
-    LOG_TICKS ticks spread geometrically over the view, rounded to two significant digits,
-    labelled by :class:`PlainFormatter`. Call after the data are drawn."""
+    the ticks of :func:`log_ticks`, labelled by :class:`PlainFormatter`. Call after the
+    data are drawn."""
     ax.autoscale_view()
     axis = ax.xaxis if which == "x" else ax.yaxis
     lo, hi = sorted(ax.get_xlim() if which == "x" else ax.get_ylim())
     if lo <= 0 or _decades_in(lo, hi) >= 2:
         axis.set_minor_formatter(NullFormatter())
         return
-    inner = np.geomspace(lo, hi, LOG_TICKS + 2)[1:-1]
-    ticks = sorted({float(f"{v:.2g}") for v in inner})
-    axis.set_major_locator(FixedLocator(ticks))
+    axis.set_major_locator(FixedLocator(log_ticks(lo, hi)))
     axis.set_major_formatter(PlainFormatter())
     axis.set_minor_formatter(NullFormatter())
 
