@@ -46,7 +46,6 @@ from pathlib import Path
 from ffrmbs.errors import FfrmbsError, first_line
 from ffrmbs_app.scene_file.overrides import split_override
 from ffrmbs_app.scene_file.reading import key_parts
-from ffrmbs_app.ticks import label_log_axis, plain_axis, series_label
 
 RESOLUTION_KEYS = ("dt", "modes", "tol", "tolerance")    # last key parts that set a resolution
 SINGLE_THREAD_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
@@ -487,6 +486,8 @@ def line_key(grid) -> str | None:
 def _series(rows, keys, labels):
     """{legend text: rows} with one entry per value combination of ``keys`` ("modes = 20,
     e = 0.5" by their short ``labels``; "" without keys), in grid order."""
+    from ffrmbs_app.ticks import series_label
+
     series = {}
     for r in rows:
         series.setdefault(series_label([labels[k] for k in keys], [r[k] for k in keys]), []).append(r)
@@ -524,6 +525,8 @@ def work_precision_figure(table, grid):
     points = [r for r in table if r["status"] == "complete" and r["error_estimate"] and r["cpu_s"]]
     if len(points) < 2:
         return None
+    from ffrmbs_app.ticks import label_log_axis
+
     labels = short_labels(list(grid))
     along = line_key(grid)
     others = [k for k in varied_keys(grid) if k != along]
@@ -576,6 +579,8 @@ def outputs_figure(table, grid):
 
 def _output_panel(ax, done, name, key, others, labels, grid):
     """One output against one key (:func:`outputs_figure`)."""
+    from ffrmbs_app.ticks import label_log_axis, plain_axis
+
     order = grid[key]
     numeric = _numbers(order)
     for i, (label, rs) in enumerate(_series(done, others, labels).items()):

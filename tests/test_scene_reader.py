@@ -689,6 +689,6 @@ def test_outputs_say_what_they_are(body_dir, sink_path):
     scene = read_scene(sink_path)
     u0 = read_body(body_dir / "body.h5").u0
     nearest = int(np.argmin(np.linalg.norm(u0 - [0.25, 0.05, 0.05], axis=1)))
-    assert scene.labels == {"tip": f"beam node {nearest} position", "tip_v": "beam node 7 velocity",
+    assert scene.labels == {"tip": f"beam node {nearest} (nearest to (0.25, 0.05, 0.05) m) position", "tip_v": "beam node 7 velocity",
                             "tip_u": "clamped node 7 displacement y", "spin": "block angular velocity",
                             "modal": "beam modal coordinates q_f", "bob": "bob point (0, 0, 0.1) m position"}
