@@ -392,14 +392,16 @@ def _unit(error_kind) -> str:
 
 
 def _series(rows, group_keys):
-    """{values of the series keys: rows} of one panel and the series keys that vary among
-    its rows (the legend's); a key with one value is a constant of the panel."""
+    """{repr of the values: (values of the varying keys, rows)} of one panel, the group keys
+    that vary among its rows (the legend's) and those that do not (the panel's constants).
+    Values are told apart by their repr (a mesh may be a list)."""
     keys = [key for key in group_keys if key != "error_kind"]
     varying = [key for key in keys if len({repr(_lookup(row, key)) for row in rows}) > 1]
     constant = [key for key in keys if key not in varying and _lookup(rows[0], key) is not None]
     groups = {}
     for row in rows:
-        groups.setdefault(tuple(_lookup(row, key) for key in varying), []).append(row)
+        values = tuple(_lookup(row, key) for key in varying)
+        groups.setdefault(repr(values), (values, []))[1].append(row)
     return groups, varying, constant
 
 
@@ -407,7 +409,7 @@ def _panel(ax, kind, rows, group_keys):
     """One error kind's work-precision panel: a marker series per value of the varying
     group keys, legend right of the axes, the constant keys in the panel title."""
     groups, varying, constant = _series(rows, group_keys)
-    for i, (values, members) in enumerate(groups.items()):
+    for i, (values, members) in enumerate(groups.values()):
         ax.loglog([r["cpu_s"] for r in members], [abs(r["error"]) for r in members],
                   linestyle="-", linewidth=0.8, marker=_MARKERS[i % len(_MARKERS)],
                   label=series_label(varying, values) if varying else None)
@@ -420,7 +422,6 @@ def _panel(ax, kind, rows, group_keys):
     ax.grid(True, which="both", alpha=0.3)
     if varying:
         ax.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
-    return len(groups)
 
 
 def work_precision_figure(name, rows, group_keys):
