@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import re
 import sys
 import time
 import warnings
@@ -33,6 +34,7 @@ from pathlib import Path
 
 from ffrmbs import __version__
 from ffrmbs.errors import FfrmbsError, RunInterrupted
+from ffrmbs_app.output_dirs import shown
 
 DEFAULT_MODES = 10  # modes printed by the main job
 
@@ -127,13 +129,15 @@ def cmd_validate(args):
         from validation.stability.runner import run_stability
 
         run_stability(args.out, quick=args.quick, only=args.only or None, progress=_log)
-        print(f"wrote {args.out}/stability.json and {args.out}/report.md")
+        out = Path(args.out)
+        print(f"wrote {shown(out / 'stability.json')} and {shown(out / 'report.md')}")
         return
     from validation import run_validation
 
     run_validation(args.out, quick=args.quick, only=args.only or None, progress=_log, workers=args.workers,
                    scheduler=args.scheduler)
-    print(f"wrote {args.out}/results.json, {args.out}/report.md and one plot per case")
+    out = Path(args.out)
+    print(f"wrote {shown(out / 'results.json')}, {shown(out / 'report.md')} and one plot per case")
 
 
 def cmd_run(args):
@@ -162,7 +166,7 @@ def cmd_run(args):
         summary = run_scene(lambda: load_scene(args.scene, overrides), args.out, check=not args.no_check, log=_say,
                             **common)
     written = [summary["result_file"]] + [summary[k] for k in ("plot", "paraview") if k in summary]
-    print("wrote " + ", ".join(written))
+    print("wrote " + ", ".join(shown(p) for p in written))
 
 
 def cmd_sweep(args):
@@ -172,11 +176,13 @@ def cmd_sweep(args):
     table = sweep(args.scene, parse_set(args.set), args.out, zip=args.zip, workers=args.workers,
                   scheduler=args.scheduler, check=args.check, progress=_log)
     failed = [row["run"] for row in table if row["status"] != "complete"]
-    print(f"wrote {args.out}/sweep.csv, sweep.json, sweep.md"
-          + (", sweep.png" if (Path(args.out) / "sweep.png").exists() else "") + f" and {args.out}/runs/")
+    out = Path(args.out)
+    plots = [name for name in ("sweep.png", "sweep-outputs.png") if (out / name).exists()]
+    print(f"wrote {shown(out / 'sweep.csv')}, " + ", ".join(["sweep.json", "sweep.md"] + plots)
+          + f" and {shown(out / 'runs')}/")
     if failed:      # the table is written; the status tells a script that not every run completed
         raise FfrmbsError(f"{len(failed)} of {len(table)} runs failed: {', '.join(failed)} (their errors are in "
-                          f"{args.out}/sweep.csv; a second sweep into {args.out} runs only those again)")
+                          f"{shown(out / 'sweep.csv')}; a second sweep into {shown(out)} runs only those again)")
 
 
 DEFAULT_SCENE_OPTIONS = ("setup", "modes", "law", "e", "contour", "residual_flexibility", "t_end", "dt")
@@ -199,7 +205,7 @@ def cmd_plot(args):
     """Plot a result file's outputs, energy and contacts against time (:mod:`ffrmbs_app.plot`)."""
     from ffrmbs_app.plot import plot_result
 
-    print(f"wrote {plot_result(args.result, args.names or None, args.out, overwrite=args.overwrite)}")
+    print(f"wrote {shown(plot_result(args.result, args.names or None, args.out, overwrite=args.overwrite))}")
 
 
 def cmd_export(args):
@@ -207,7 +213,7 @@ def cmd_export(args):
     from ffrmbs_app.export import export_paraview
 
     pvd = export_paraview(args.result, args.out, every=args.every, bodies=args.body, compress=args.compress)
-    print(f"wrote {pvd} (open it in ParaView: File > Open, Apply, then play)")
+    print(f"wrote {shown(pvd)} (open it in ParaView: File > Open, Apply, then play)")
 
 
 def cmd_contour(args):
@@ -222,7 +228,13 @@ def cmd_contour(args):
     gf = fit_group(read_body(args.body), args.group, control_points, smoothing, source=args.body)
     print(gf.describe())
     print(gf.report.text())
-    print("wrote " + ", ".join(str(p) for p in write_contour_files(gf, args.out)))
+    print("wrote " + ", ".join(shown(p) for p in write_contour_files(gf, args.out)))
+
+
+def plain_text(text) -> str:
+    """``text`` without reST markup, as a terminal shows it: ``ffrmbs`` and :func:`x`
+    become ffrmbs and x."""
+    return re.sub(r"(?::[a-z]+:)?`{1,2}([^`]+)`{1,2}", r"\1", text)
 
 
 def _percent(share) -> str:
@@ -236,7 +248,7 @@ def build_parser():
 
     from ffrmbs_app import limits as run_limits
 
-    p = argparse.ArgumentParser(prog="ffrmbs", description=__doc__.split("\n")[0])
+    p = argparse.ArgumentParser(prog="ffrmbs", description=plain_text(__doc__.split("\n")[0]))
     p.add_argument("--version", action="version", version=f"ffrmbs {__version__}")
     sub = p.add_subparsers(dest="command", required=True)
 
@@ -275,7 +287,7 @@ def build_parser():
     pre.set_defaults(func=cmd_preprocess)
 
     info = sub.add_parser("info", help="summary of a body file or directory")
-    info.add_argument("path")
+    info.add_argument("path", help="a body: its directory of text files (thesis Sec. 4.2.1) or its body.h5")
     info.add_argument("--units", choices=("si", "si-mm"), default="si", help="units of text files")
     info.set_defaults(func=cmd_info)
 
@@ -304,7 +316,9 @@ def build_parser():
                      help="continue a killed or interrupted run from its checkpoint (OUT/<scene>.h5.ckpt)")
     run.add_argument("--checkpoint-every", type=float, default=60.0, metavar="SECONDS",
                      help="wall seconds between checkpoints (default 60)")
-    run.add_argument("--no-check", action="store_true", help="skip the second run at dt/2 (error estimate)")
+    run.add_argument("--no-check", action="store_true",
+                     help="skip the accuracy check: the second run at dt/2 and, for the default scene, the runs "
+                          "with twice the modes and with the coarser mesh (the error estimates)")
     run.add_argument("--no-export", action="store_true", help="skip the ParaView export")
     run.add_argument("--no-limits", action="store_true",
                      help=f"run even beyond {run_limits.MAX_STEPS:.0e} time steps or "

@@ -47,6 +47,7 @@ import numpy as np
 from ffrmbs_app.compile_clock import CompileClock
 from ffrmbs.errors import ModelError
 from ffrmbs_app.limits import check_resources
+from ffrmbs_app.output_dirs import shown
 from ffrmbs_app.output_lock import output_lock
 from ffrmbs_app.scene import MOREAU
 from mbs.integrators import driver
@@ -139,10 +140,11 @@ def run_scene(make_scene, out, check=True, resume=False, checkpoint_every=60.0, 
 
 
 def _run(make_scene, scene, path, check, resume, checkpoint_every, flush_every, export, plot, log) -> dict:
-    log(f"scene {scene.name}: {scene.description}" if scene.description else f"scene {scene.name}")
+    log(header(scene))
     units = scene.output_units()
     recorder = ResultRecorder(path, {"scene": scene.name, "description": scene.description, "inputs": scene.inputs,
-                                     "overrides": scene.overrides, "units": units},
+                                     "overrides": scene.overrides, "units": units,
+                                     "labels": scene.labels},
                               flush_every=flush_every, checkpoint_every=checkpoint_every)
     warm_s = 0.0
     with CompileClock(log) as clock:
@@ -151,13 +153,14 @@ def _run(make_scene, scene, path, check, resume, checkpoint_every, flush_every, 
             t_w, dt_w = scene.warmup
             _simulate(make_scene(), dt=dt_w, t_end=t_w, n_out=2)
             warm_s = time.perf_counter() - w0
-            log(f"warm-up run: {warm_s:.2f} s")
+            log(f"warm-up run (compiles the kernels or loads them from numba's cache, then runs {t_w:g} s of "
+                f"simulated time at dt = {dt_w:g} s; not counted in the cost): {warm_s:.2f} s")
         compiling_before = clock.seconds
         progress = _progress(scene.t_end)
         c0, w0 = time.process_time(), time.perf_counter()
         with _stop_on_signals(log), progress as bar:
             if resume:
-                log(f"resuming {path} from its checkpoint")
+                log(f"resuming {shown(path)} from its checkpoint")
                 checkpoint = resume_checkpoint(recorder, inputs=scene.inputs, overrides=scene.overrides)
                 res = _simulate(scene, recorder=recorder, progress=bar.update_to, contacts=True, checkpoint=checkpoint)
             else:
@@ -188,6 +191,17 @@ def _run(make_scene, scene, path, check, resume, checkpoint_every, flush_every, 
         summary["paraview"] = str(export_paraview(path))
     summary["result_file"] = str(path)
     return summary
+
+
+def header(scene) -> str:
+    """The job's first line: the scene's name and description; with ``--set`` overrides
+    it says the description is the file's and lists the values set instead."""
+    line = f"scene {scene.name}" + (f": {scene.description}" if scene.description else "")
+    if scene.overrides and scene.description:
+        return f"{line}\n  (the file's description; overridden by --set {', '.join(scene.overrides)})"
+    if scene.overrides:
+        return f"{line}, overridden by --set {', '.join(scene.overrides)}"
+    return line
 
 
 def error_estimate(run, half, unit) -> dict:

@@ -105,7 +105,8 @@ def default_scene(settings: JobSettings, data=None, beam=None):
                             lambda: default_scene(settings, coarse.default_beam_data(), coarse))
     return Scene(built.system, settings.t_end, settings.dt, "moreau", {"theta": settings.theta},
                  n_out=settings.n_out, outputs=built.outputs(), energies=True, name="point_mass_beam",
-                 description=description, warmup=(0.0125, 1e-4), units=dict(pmb.OUTPUT_UNITS), variants=variants)
+                 description=description, warmup=(0.0125, 1e-4), units=dict(pmb.OUTPUT_UNITS),
+                 labels=dict(pmb.OUTPUT_LABELS), variants=variants)
 
 
 def run_job(settings: JobSettings, out, log=print, resume=False, checkpoint_every=60.0, export=True,

@@ -31,3 +31,14 @@ def new_directories(path):
             except OSError:
                 pass
         raise
+
+
+def shown(path) -> str:
+    """``path`` as a command prints it: relative to the current directory when it lies
+    under it ("out/bounce.h5"), else absolute ("/data/runs/bounce.h5"), so every path a
+    command prints reads one way, whichever way it was made."""
+    p = Path(path).absolute()
+    try:
+        return str(p.relative_to(Path.cwd()))
+    except ValueError:
+        return str(p)

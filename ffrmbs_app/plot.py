@@ -5,13 +5,15 @@
 * an output name (``/outputs/<name>``): a scalar output is one line; a vector output
   (n, 3) one line per component, labelled x, y, z; other shapes one line per component,
   labelled by index. The y label carries the dataset's ``units`` attribute when it has
-  one (:mod:`mbs.result_file` writes one on every dataset);
+  one (:mod:`mbs.result_file` writes one on every dataset); the panel's title says what
+  the output is (its ``label`` attribute: "node19: beam node 19 displacement [m]");
 * ``energy``: kinetic, potential and their sum, total [J] (``/energy``);
 * ``contact:<name>``: the normal gap g_N [m] on the left axis and the normal force
   magnitude |f · n| [N] on a twin right axis (``/contacts/<name>``); the gap is NaN, so
   not drawn, while no contact point is located.
 
-The title names the scene, the integrator and Δt, and the file's status when the run is
+Tick labels are plain numbers without an offset or multiplier above the axis
+(:class:`ffrmbs_app.ticks.PlainFormatter`). The title names the scene, the integrator and Δt, and the file's status when the run is
 not complete ("interrupted at t = … s", "running at t = … s", "failed: …").
 """
 
@@ -24,6 +26,7 @@ import numpy as np
 
 from ffrmbs.errors import FfrmbsError, InputFileError, OutputFileError, os_reason
 from ffrmbs_app.export import _check_shape, _dataset, _group, open_result
+from ffrmbs_app.ticks import plain_axis
 from mbs.result_file import attribute
 
 COMPONENTS = ("x", "y", "z")
@@ -96,6 +99,8 @@ def _plot_output(ax, f, name, t, n):
         for label, col in zip(_components(name, y.shape[1:]), y.reshape(n, -1).T):
             ax.plot(t, col, label=label)
     ax.set_ylabel(f"{name}{_unit(ds)}")
+    label = attribute(ds, "label")
+    ax.set_title(f"{name}: {label}{_unit(ds)}" if label else f"{name}{_unit(ds)}", fontsize="medium", loc="left")
     if y.ndim > 1 and y[0].size <= 12:
         ax.legend(loc="best", fontsize="small")
 
@@ -112,6 +117,7 @@ def _plot_energy(ax, f, t, n):
             total, unit = total + y, _unit(ds, "J")
     ax.plot(t, total, "k--", label="total")
     ax.set_ylabel(f"energy{unit}")
+    ax.set_title(f"energy{unit}: kinetic, potential and their sum", fontsize="medium", loc="left")
     ax.legend(loc="best", fontsize="small")
 
 
@@ -137,6 +143,8 @@ def _plot_contact(ax, f, name, t, n):
     twin = ax.twinx()
     twin.plot(t, fn, color="C3", label="normal force")
     twin.set_ylabel(force_label, color="C3")
+    plain_axis(twin.yaxis)
+    ax.set_title(f"contact {name}: normal gap and normal force", fontsize="medium", loc="left")
 
 
 def result_figure(result_path, names=None):
@@ -173,6 +181,8 @@ def result_figure(result_path, names=None):
             else:
                 _plot_output(ax, f, name, t, n)
             ax.grid(True, alpha=0.3)
+            plain_axis(ax.yaxis)
+            plain_axis(ax.xaxis)
         axes[-1].set_xlabel(f"t{_unit(f['t'], 's')}")
         fig.suptitle(_title(f, path, n))
     fig.tight_layout()

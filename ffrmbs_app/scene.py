@@ -50,6 +50,8 @@ class Scene:
     for logs; warmup: (t_end, dt) [s] of a short run made first so that the numba kernels
     are compiled (or loaded from numba's cache) outside the timed run, or None; units:
     {output name: unit} written with the outputs and on plot axes (:meth:`output_units`);
+    labels: {output name: what it is, e.g. "beam node 19 displacement"}, written with the
+    outputs and titling their plot panels;
     variants: {label: (what, make)} — scenes that differ in one modelling choice (e.g.
     "modal truncation": (f"{2n} modes", a maker of the scene with twice the modes)),
     each run once more by the job's accuracy check to estimate that part of the error;
@@ -72,6 +74,7 @@ class Scene:
     description: str = ""
     warmup: tuple | None = None
     units: dict = field(default_factory=dict)
+    labels: dict = field(default_factory=dict)
     variants: dict = field(default_factory=dict)
     overrides: tuple = ()
 

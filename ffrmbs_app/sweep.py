@@ -17,10 +17,11 @@ summary written): only the missing, failed or interrupted runs run again.
 
 The table (one row per run: the overrides, status, error, the accuracy estimate of the
 job's Δt/2 check if asked for, the last sample of each output, the run's cost) is returned
-and written as ``DIR/sweep.csv``, ``DIR/sweep.json`` and ``DIR/sweep.md``; when the grid
-varies a resolution parameter (a key ending in dt, modes, tol or tolerance) and the runs
+and written as ``DIR/sweep.csv``, ``DIR/sweep.json`` and ``DIR/sweep.md``; when the runs
 carry error estimates, ``DIR/sweep.png`` plots the work-precision diagram (estimated
-error against CPU seconds).
+error against CPU seconds, a line along the step size per value of the other varied keys);
+``DIR/sweep-outputs.png`` plots each output's last sample against each varied key, one
+line per value of the other varied keys (:func:`plot_sweep`).
 
 Without a client the sweep starts a LocalCluster of ``workers`` (default 2) single-threaded
 worker processes and closes it at the end; ``scheduler`` connects to a running scheduler
@@ -39,6 +40,7 @@ import math
 import os
 import re
 import time
+import tomllib
 from pathlib import Path
 
 from ffrmbs.errors import FfrmbsError, first_line
@@ -150,7 +152,7 @@ def override_sets(grid, zip=False) -> list[tuple[str, ...]]:
     else:
         combos = list(itertools.product(*lists))
     runs = [tuple(f"{k}={v}" for k, v in _zip(keys, combo)) for combo in combos]
-    if len(set(runs)) != len(runs):
+    if len({run_key(r) for r in runs}) != len(runs):
         raise FfrmbsError("the sweep lists a run twice (a value repeated in the grid)")
     return runs
 
@@ -173,14 +175,31 @@ def _pairs(overrides) -> list[tuple[str, str]]:
     return [split_override(o) for o in overrides]
 
 
+def value_name(text) -> str:
+    """A value's TOML text as a run's name shows it: a quoted string without its quotes
+    ("penalty"), a list as its items joined by "_" ("[0.05, 0.02]" -> "0.05_0.02"), any
+    other value as written ("1e-5")."""
+    try:
+        value = tomllib.loads(f"v = {text}")["v"]
+    except tomllib.TOMLDecodeError:
+        return text.strip()
+    if isinstance(value, str):
+        return value
+    if isinstance(value, list):
+        inner = text.strip()[1:-1].strip()
+        return "_".join(value_name(item) for item in split_values(inner)) if inner else "empty"
+    return text.strip()
+
+
 def run_key(overrides) -> str:
-    """A run's name in DIR/runs: "dt=5e-06,modes=50" from its overrides (keys shortened
-    by :func:`short_labels`). Characters outside [A-Za-z0-9._+=,-] become "_", and then,
-    or when the name is longer than KEY_MAX, "-" and 8 hex digits of the overrides' SHA-1
+    """A run's name in DIR/runs: "dt=5e-06,modes=50", "e=0.2,position=0.05_0.02_0.025"
+    from its overrides (keys shortened by :func:`short_labels`, values by
+    :func:`value_name`). Characters outside [A-Za-z0-9._+=,-] become "_", and then, or
+    when the name is longer than KEY_MAX, "-" and 8 hex digits of the overrides' SHA-1
     follow, so different runs never share a name."""
     pairs = _pairs(overrides)
     labels = short_labels([k for k, _ in pairs])
-    text = ",".join(f"{labels[k]}={v}" for k, v in pairs)
+    text = ",".join(f"{labels[k]}={value_name(v)}" for k, v in pairs)
     safe = _SAFE.sub("_", text)
     if safe != text or len(safe) > KEY_MAX or safe.startswith("."):
         digest = hashlib.sha1("\n".join(overrides).encode()).hexdigest()[:8]
@@ -425,8 +444,8 @@ def _cell(value) -> str:
 
 
 def write_table(table, out, meta) -> list[Path]:
-    """Write ``out``/sweep.csv, sweep.json ({meta, "rows"}) and sweep.md, and sweep.png
-    when :func:`plot_work_precision` draws one; returns the paths written."""
+    """Write ``out``/sweep.csv, sweep.json ({meta, "rows"}) and sweep.md, and the plots
+    of :func:`plot_sweep`; returns the paths written."""
     out = Path(out)
     cols = _columns(table)
     with open(out / "sweep.csv", "w", newline="") as f:
@@ -443,8 +462,7 @@ def write_table(table, out, meta) -> list[Path]:
     lines += ["| " + " | ".join(_cell(row.get(c)).replace("|", "\\|") for c in cols) + " |" for row in table]
     (out / "sweep.md").write_text("\n".join(lines) + "\n")
     written = [out / "sweep.csv", out / "sweep.json", out / "sweep.md"]
-    png = plot_work_precision(table, meta["grid"], out / "sweep.png")
-    return written + ([png] if png else [])
+    return written + plot_sweep(table, meta["grid"], out)
 
 
 def resolution_keys(keys) -> list[str]:
@@ -452,41 +470,149 @@ def resolution_keys(keys) -> list[str]:
     return [k for k in keys if key_parts(k)[-1:] and key_parts(k)[-1] in RESOLUTION_KEYS]
 
 
-def plot_work_precision(table, grid, path) -> Path | None:
-    """The work-precision diagram: each complete run's error estimate (relative to the
-    output's range) against its CPU seconds, log-log, one series per value of the keys
-    that are not resolutions; written to ``path`` when the grid varies a resolution key
-    with more than one value and at least two runs carry an estimate, else None (and a
-    stale ``path`` is removed)."""
-    varied = [k for k in resolution_keys(grid) if len(grid[k]) > 1]
-    points = [r for r in table if r["status"] == "complete" and r["error_estimate"] and r["cpu_s"]]
-    path = Path(path)
-    if not varied or len(points) < 2:
-        path.unlink(missing_ok=True)
-        return None
-    import matplotlib
+def varied_keys(grid) -> list[str]:
+    """The keys of ``grid`` given more than one value."""
+    return [k for k, values in grid.items() if len(values) > 1]
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
-    others = [k for k in grid if k not in varied]
+def line_key(grid) -> str | None:
+    """The varied resolution key a work-precision line follows: the step size when it
+    varies, else the first varied resolution key; None when no resolution key varies."""
+    keys = resolution_keys(varied_keys(grid))
+    steps = [k for k in keys if key_parts(k)[-1] == "dt"]
+    return (steps or keys or [None])[0]
+
+
+def _series(rows, keys, labels):
+    """{legend text: rows} with one entry per value combination of ``keys`` ("modes = 20,
+    e = 0.5" by their short ``labels``; "" without keys), in grid order."""
+    from ffrmbs_app.ticks import series_label
+
     series = {}
-    for r in points:
-        label = ", ".join(f"{k}={r[k]}" for k in others) or "runs"
-        series.setdefault(label, []).append(r)
-    fig, ax = plt.subplots(figsize=(6.4, 4.8))
-    for label, rs in series.items():
-        rs = sorted(rs, key=lambda r: r["cpu_s"])
-        ax.loglog([r["cpu_s"] for r in rs], [r["error_estimate"] for r in rs], "o-", label=label)
-        for r in rs:
-            ax.annotate(",".join(f"{key_parts(k)[-1]}={r[k]}" for k in varied), (r["cpu_s"], r["error_estimate"]),
-                        fontsize=7, xytext=(3, 3), textcoords="offset points")
+    for r in rows:
+        series.setdefault(series_label([labels[k] for k in keys], [r[k] for k in keys]), []).append(r)
+    return series
+
+
+def _numbers(texts):
+    """The values as floats, or None when one is not a number."""
+    try:
+        return [float(t) for t in texts]
+    except (TypeError, ValueError):
+        return None
+
+
+def _figure(width, height):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(width, height), layout="constrained")
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def _legend(ax):
+    if any(line.get_label() and not line.get_label().startswith("_") for line in ax.get_lines()):
+        ax.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
+
+
+def work_precision_figure(table, grid):
+    """The work-precision Figure: each complete run's error estimate (relative to the
+    output's range) against its CPU seconds, log-log; a line along the step size (or the
+    varied resolution key, :func:`line_key`) per value of the other varied keys, the
+    legend naming them; markers only when no resolution key varies. None when fewer than
+    two runs carry an estimate."""
+    points = [r for r in table if r["status"] == "complete" and r["error_estimate"] and r["cpu_s"]]
+    if len(points) < 2:
+        return None
+    from ffrmbs_app.ticks import label_log_axis
+
+    labels = short_labels(list(grid))
+    along = line_key(grid)
+    others = [k for k in varied_keys(grid) if k != along]
+    fig = _figure(8.5, 4.8)
+    ax = fig.add_subplot()
+    for i, (label, rs) in enumerate(_series(points, others, labels).items()):
+        if along is not None:
+            rs = sorted(rs, key=lambda r: grid[along].index(r[along]))
+        ax.loglog([r["cpu_s"] for r in rs], [r["error_estimate"] for r in rs], "o-" if along else "o",
+                  label=label or None, color=f"C{i % 10}")
+        if along is not None:
+            for r in rs:
+                ax.annotate(f"{labels[along]} = {r[along]}", (r["cpu_s"], r["error_estimate"]), fontsize=7,
+                            xytext=(3, 3), textcoords="offset points")
+    label_log_axis(ax, "x")
+    label_log_axis(ax, "y")
     ax.set_xlabel("CPU time of the run [s]")
     ax.set_ylabel("error estimate, relative to the output's range [-]")
-    ax.set_title("work precision: " + ", ".join(varied))
+    ax.set_title("work precision" + (f" along {labels[along]}" if along else ""))
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
-    return path
+    _legend(ax)
+    return fig
+
+
+def output_names(table) -> list[str]:
+    """The "final:<output>" columns of the complete runs that hold numbers (scalar
+    outputs), in table order."""
+    done = [r for r in table if r["status"] == "complete"]
+    return [c for c in _columns(done) if c.startswith("final:") and _numbers([r.get(c) for r in done])]
+
+
+def outputs_figure(table, grid):
+    """The outputs Figure: a panel per output (its last sample, a row of panels) and per
+    varied key (a column): the output against the key's values, one line per value of
+    the other varied keys, the legend naming them. None when no key varies or no run
+    completed."""
+    done = [r for r in table if r["status"] == "complete"]
+    names, keys = output_names(table), varied_keys(grid)
+    if not done or not names or not keys:
+        return None
+    labels = short_labels(list(grid))
+    fig = _figure(4.2 * len(keys) + 2.8, 0.6 + 2.8 * len(names))
+    axes = fig.subplots(len(names), len(keys), squeeze=False)
+    for row, name in enumerate(names):
+        for col, key in enumerate(keys):
+            _output_panel(axes[row, col], done, name, key, [k for k in keys if k != key], labels, grid)
+    fig.suptitle("last sample of each output against each varied key")
+    return fig
+
+
+def _output_panel(ax, done, name, key, others, labels, grid):
+    """One output against one key (:func:`outputs_figure`)."""
+    from ffrmbs_app.ticks import label_log_axis, plain_axis
+
+    order = grid[key]
+    numeric = _numbers(order)
+    for i, (label, rs) in enumerate(_series(done, others, labels).items()):
+        rs = [r for r in rs if _numbers([r.get(name)]) is not None]
+        rs.sort(key=lambda r: order.index(r[key]))
+        x = [float(r[key]) for r in rs] if numeric else [order.index(r[key]) for r in rs]
+        ax.plot(x, [float(r[name]) for r in rs], "o-", label=label or None, color=f"C{i % 10}")
+    if numeric and min(numeric) > 0 and max(numeric) / min(numeric) > 20:
+        ax.set_xscale("log")
+        label_log_axis(ax, "x")
+    elif numeric:
+        plain_axis(ax.xaxis)
+    else:
+        ax.set_xticks(range(len(order)), order)
+    plain_axis(ax.yaxis)
+    ax.set_xlabel(labels[key])
+    ax.set_ylabel(name[len("final:"):])
+    ax.grid(True, alpha=0.3)
+    _legend(ax)
+
+
+def plot_sweep(table, grid, out) -> list[Path]:
+    """Write ``out``/sweep.png (:func:`work_precision_figure`) and sweep-outputs.png
+    (:func:`outputs_figure`) when they have something to show; a stale one is removed.
+    Returns the paths written."""
+    written = []
+    for name, make in (("sweep.png", work_precision_figure), ("sweep-outputs.png", outputs_figure)):
+        path = Path(out) / name
+        fig = make(table, grid)
+        if fig is None:
+            path.unlink(missing_ok=True)
+            continue
+        fig.savefig(path, dpi=100)
+        written.append(path)
+    return written

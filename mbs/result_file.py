@@ -27,7 +27,8 @@ goes)::
                                           (c0,c1), (c1,c2), (c2,c0) (tet10 bodies)
                                           → deformed surface x = R + A (u0 + phi · q_f)
     /energy/kinetic, /energy/potential      (n,) [J]          (when recorded)
-    /outputs/<name>           (n, ...) the requested outputs (node positions [m], ...)
+    /outputs/<name>           (n, ...) the requested outputs (node positions [m], ...);
+                              attrs: units, label (what it is, when the scene says)
     /contacts/<contact>/      attrs: law (class name), set_valued (bool)
         active (n,) int8      closed at the last step's midpoint
         gap (n,) [m]          normal gap g_N (NaN while no contact point is located)
@@ -321,6 +322,8 @@ class ResultRecorder:
         for name, probe in st.probes.items():
             shape = np.shape(np.asarray(probe(integ.t, integ.q, integ.u), dtype=float))
             _create(f, f"outputs/{name}", shape, float, units.get(name) or "SI")
+            if self.meta.get("labels", {}).get(name):
+                f[f"outputs/{name}"].attrs["label"] = self.meta["labels"][name]
         for name in st.result.contacts:
             for key, (shape, dtype, unit) in CONTACT_FIELDS.items():
                 _create(f, f"contacts/{name}/{key}", shape, dtype, unit)

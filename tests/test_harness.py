@@ -224,3 +224,28 @@ def test_a_case_with_rows_and_a_skipped_part_is_ok(tmp_path, demo):
     doc, report = read_outputs(tmp_path)
     assert doc["cases"]["demo"]["status"] == "ok" and doc["cases"]["empty"]["status"] == "ok"
     assert "| demo | 4 | ok |" in report and "| empty | 0 | ok |" in report
+
+
+def warning_run(quick):
+    """A case whose scene warns three times (a fit warning) and logs a validity warning."""
+    import logging
+    import warnings
+
+    for _ in range(3):
+        warnings.warn("contour top: fit deviation 1.2 mm at the nodes")
+    logging.getLogger("ffrmbs.validity").warning("body 'beam' spins at 5 rad/s")
+    return CaseResult(rows=[make_row("warns", {"n": 1}, 0.1, 1e-3, "rel.", "r")])
+
+
+def test_a_case_s_warnings_go_to_its_report_not_to_the_terminal(tmp_path, capfd):
+    lines = []
+    with __import__("warnings").catch_warnings():
+        __import__("warnings").simplefilter("error")            # a warning that escaped would raise here
+        run_validation(tmp_path, cases=[fake_case("warns", warning_run)], progress=lines.append)
+    out, err = capfd.readouterr()
+    assert "fit deviation" not in out + err and "spins" not in out + err
+    assert "warns: 1 rows" in lines[1] and "2 warning(s) in the report" in lines[1]
+    doc, report = read_outputs(tmp_path)
+    assert doc["cases"]["warns"]["warnings"] == ["contour top: fit deviation 1.2 mm at the nodes (3 times)",
+                                                 "body 'beam' spins at 5 rad/s"]
+    assert "- contour top: fit deviation 1.2 mm at the nodes (3 times)" in report

@@ -126,3 +126,24 @@ def test_cli_plot(result, tmp_path, capsys):
     assert cli.main(["plot", str(result), "nothing"]) == 2
     err = capsys.readouterr().err
     assert err.startswith("ffrmbs: error: ") and "available: tip, vy, energy, contact:impact" in err
+
+
+def test_panels_say_what_an_output_is_and_ticks_carry_no_offset(tmp_path):
+    """A panel's title is the output's label and unit; values that differ little from a large
+    one (0.1 + 3e-5 t) are labelled in plain numbers, never by an offset such as "1e-5+1e-1"."""
+    path = write_result(tmp_path / "r.h5")
+    with h5py.File(path, "a") as f:
+        f["outputs/node19"] = np.stack([0.1 + 3e-5 * T, 2e-6 * np.sin(T), 0 * T], axis=1)
+        f["outputs/node19"].attrs.update(units="m", label="beam node 19 displacement")
+    fig = result_figure(path, ["node19", "vy", "energy", "contact:impact"])
+    fig.canvas.draw()
+    assert fig.axes[0].get_title(loc="left") == "node19: beam node 19 displacement [m]"
+    assert fig.axes[1].get_title(loc="left") == "vy"                       # no label, no unit in the file
+    assert len(fig.axes) == 5                                              # 4 panels, the contact's twin axis
+    for axis in [ax.yaxis for ax in fig.axes] + [fig.axes[3].xaxis]:      # the shared t axis, at the bottom
+        lo, hi = sorted(axis.get_view_interval())
+        texts = [t.label1.get_text() for t in axis.get_major_ticks() if lo <= t.get_loc() <= hi]
+        assert texts and all(texts) and len(set(texts)) == len(texts), texts
+    assert [a.get_offset_text().get_text() for ax in fig.axes for a in (ax.xaxis, ax.yaxis)] == [""] * 10
+    y_ticks = [float(t.get_text()) for t in fig.axes[0].yaxis.get_ticklabels() if t.get_text()]
+    assert min(y_ticks) < 0.1 and max(y_ticks) > 0.1     # the values themselves, not their offset from 0.1

@@ -681,3 +681,14 @@ def test_band_on_an_unstructured_rim_catches_a_ball(rim_scene):
 def test_faults_of_an_edge_group_name_their_key(rim_scene, old, new, fragment, line):
     text, path, _ = rim_scene
     assert_fault_at(path.with_name("rim-fault.toml"), text, old, new, fragment, line)
+
+
+def test_outputs_say_what_they_are(body_dir, sink_path):
+    """Each output's label names the body, the node (the one nearest to ``at``), the point,
+    the quantity and the component, as the plot's panel titles show them."""
+    scene = read_scene(sink_path)
+    u0 = read_body(body_dir / "body.h5").u0
+    nearest = int(np.argmin(np.linalg.norm(u0 - [0.25, 0.05, 0.05], axis=1)))
+    assert scene.labels == {"tip": f"beam node {nearest} (nearest to (0.25, 0.05, 0.05) m) position", "tip_v": "beam node 7 velocity",
+                            "tip_u": "clamped node 7 displacement y", "spin": "block angular velocity",
+                            "modal": "beam modal coordinates q_f", "bob": "bob point (0, 0, 0.1) m position"}

@@ -23,6 +23,7 @@ from __future__ import annotations
 import datetime
 import importlib
 import json
+import logging
 import math
 import numbers
 import os
@@ -31,6 +32,7 @@ import re
 import tempfile
 import time
 import traceback
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import NamedTuple
@@ -38,9 +40,9 @@ from typing import NamedTuple
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
-from matplotlib.ticker import NullFormatter
 
 from ffrmbs_app.compile_clock import CompileClock
+from ffrmbs_app.ticks import label_log_axis, series_label
 from ffrmbs.errors import FfrmbsError, ModelError
 
 ROW_KEYS = ("case", "code", "config", "cpu_s", "error", "error_kind", "reference")
@@ -212,6 +214,7 @@ class _Outcome:
     failure: str | None = None
     traceback: str | None = None
     cpu_s: float = math.nan
+    warnings: list = field(default_factory=list)
 
 
 def _check_result(result):
@@ -235,20 +238,67 @@ def _check_result(result):
             raise ModelError(f"row {i}: error = {row['error']!r} is neither a number nor None")
 
 
+QUIET_CATEGORIES = (DeprecationWarning, PendingDeprecationWarning, ImportWarning, ResourceWarning)
+
+
+class _Collector(logging.Handler):
+    """A logging handler keeping the messages of WARNING and above."""
+
+    def __init__(self):
+        super().__init__(logging.WARNING)
+        self.messages = []
+
+    def emit(self, record):
+        self.messages.append(record.getMessage())
+
+
+class CaseWarnings:
+    """The warnings a case raises while it runs (``warnings.warn``, and the "ffrmbs"
+    loggers' warnings, which repeat them), kept for its report instead of printed: they
+    are about our own validation scenes, which the user cannot change. :attr:`lines`:
+    each distinct message once, with its count ("… (3 times)"); deprecation, import and
+    resource warnings are left to Python's filters."""
+
+    def __enter__(self):
+        self._catch = warnings.catch_warnings(record=True)
+        self._seen = self._catch.__enter__()
+        warnings.simplefilter("always")
+        for category in QUIET_CATEGORIES:
+            warnings.simplefilter("ignore", category)
+        self._handler = _Collector()
+        self._logger = logging.getLogger("ffrmbs")
+        self._logger.addHandler(self._handler)
+        return self
+
+    def __exit__(self, *exc):
+        self._logger.removeHandler(self._handler)
+        self._catch.__exit__(*exc)
+        counts = {}
+        for message in [str(w.message) for w in self._seen]:
+            counts[message] = counts.get(message, 0) + 1
+        for message in self._handler.messages:              # logged only, not also warned
+            counts.setdefault(message, 1)
+        self.lines = [m if n == 1 else f"{m} ({n} times)" for m, n in counts.items()]
+        return False
+
+
 def run_case(registry, name, quick):
-    """Load and run one case; an exception becomes a failed outcome."""
+    """Load and run one case; an exception becomes a failed outcome, the warnings it
+    raises go to the outcome (:class:`CaseWarnings`)."""
     outcome = _Outcome(name)
     start = time.process_time()
-    try:
-        module = registry[name]
-        outcome.description = str(module.DESCRIPTION)
-        result = module.run(quick)
-        _check_result(result)
-        outcome.result = result
-    except Exception as exc:  # noqa: BLE001 -- a failing case must not stop the others
-        outcome.failure = f"{type(exc).__name__}: {exc}"
-        outcome.traceback = traceback.format_exc()
+    with CaseWarnings() as caught:
+        try:
+            module = registry[name]
+            outcome.description = str(module.DESCRIPTION)
+            result = module.run(quick)
+            _check_result(result)
+            outcome.result = result
+        except Exception as exc:  # noqa: BLE001 -- a failing case must not stop the others
+            outcome.failure = f"{type(exc).__name__}: {exc}"
+            outcome.traceback = traceback.format_exc()
     outcome.cpu_s = time.process_time() - start
+    outcome.warnings = caught.lines
     return outcome
 
 
@@ -258,7 +308,8 @@ def outcome_line(outcome) -> str:
         return f"{outcome.name}: FAILED: {outcome.failure}"
     if not outcome.result.rows and outcome.result.skipped:
         return f"{outcome.name}: {_status(outcome)}"
-    return f"{outcome.name}: {len(outcome.result.rows)} rows, {outcome.cpu_s:.3g} s CPU"
+    warned = f", {len(outcome.warnings)} warning(s) in the report" if outcome.warnings else ""
+    return f"{outcome.name}: {len(outcome.result.rows)} rows, {outcome.cpu_s:.3g} s CPU{warned}"
 
 
 def _as_registry(cases):
@@ -333,31 +384,68 @@ def _lookup(row, key):
     return row[key] if key in row else row["config"].get(key)
 
 
-def _plot(path, name, rows, group_keys):
-    """Log-log work-precision plot (x: CPU time, y: error) of the plottable rows to ``path``."""
+def _unit(error_kind) -> str:
+    """The unit of an error kind: the "[...]" it ends with ("impact time [s]" -> "s"), else
+    "-" (a relative or dimensionless error)."""
+    match = re.search(r"\[([^\[\]]+)\]\s*$", error_kind)
+    return match[1] if match else "-"
+
+
+def _series(rows, group_keys):
+    """{repr of the values: (values of the varying keys, rows)} of one panel, the group keys
+    that vary among its rows (the legend's) and those that do not (the panel's constants).
+    Values are told apart by their repr (a mesh may be a list)."""
+    keys = [key for key in group_keys if key != "error_kind"]
+    varying = [key for key in keys if len({repr(_lookup(row, key)) for row in rows}) > 1]
+    constant = [key for key in keys if key not in varying and _lookup(rows[0], key) is not None]
     groups = {}
     for row in rows:
-        groups.setdefault(tuple(_lookup(row, key) for key in group_keys), []).append(row)
-    fig = Figure(figsize=(6.4, 4.8))
-    FigureCanvasAgg(fig)
-    ax = fig.add_subplot()
-    for i, (key, members) in enumerate(groups.items()):
-        members = [r for r in members if _plottable(r)]
-        if not members:
-            continue
+        values = tuple(_lookup(row, key) for key in varying)
+        groups.setdefault(repr(values), (values, []))[1].append(row)
+    return groups, varying, constant
+
+
+def _panel(ax, kind, rows, group_keys):
+    """One error kind's work-precision panel: a marker series per value of the varying
+    group keys, legend right of the axes, the constant keys in the panel title."""
+    groups, varying, constant = _series(rows, group_keys)
+    for i, (values, members) in enumerate(groups.values()):
         ax.loglog([r["cpu_s"] for r in members], [abs(r["error"]) for r in members],
                   linestyle="-", linewidth=0.8, marker=_MARKERS[i % len(_MARKERS)],
-                  label=", ".join(str(k) for k in key))
-    kinds = {row["error_kind"] for row in rows}
-    ax.xaxis.set_minor_formatter(NullFormatter())
-    ax.yaxis.set_minor_formatter(NullFormatter())
+                  label=series_label(varying, values) if varying else None)
+    label_log_axis(ax, "x")
+    label_log_axis(ax, "y")
     ax.set_xlabel("CPU time [s]")
-    ax.set_ylabel(f"|error| ({kinds.pop()})" if len(kinds) == 1 else "|error|")
-    ax.set_title(f"{name}: work-precision")
+    ax.set_ylabel(f"|error| [{_unit(kind)}]")
+    title = kind if not constant else f"{kind}\n{series_label(constant, [_lookup(rows[0], k) for k in constant])}"
+    ax.set_title(title, fontsize="medium")
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize="small")
-    fig.tight_layout()
-    write_atomic(path, lambda f: fig.savefig(f, format="png", dpi=120))
+    if varying:
+        ax.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
+
+
+def work_precision_figure(name, rows, group_keys):
+    """The Figure (Agg canvas attached) of a case's work-precision plot: one log-log panel
+    (|error| against CPU time) per error kind, so errors in s, m and relative ones never
+    share an axis (:func:`_panel`)."""
+    panels = {}
+    for row in rows:
+        panels.setdefault(row["error_kind"], []).append(row)
+    series = [len(_series(members, group_keys)[0]) for members in panels.values()]
+    heights = [max(3.0, 0.9 + 0.22 * n) for n in series]
+    fig = Figure(figsize=(9.5, 0.5 + sum(heights)), layout="constrained")
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(len(panels), 1, squeeze=False, gridspec_kw={"height_ratios": heights})[:, 0]
+    for ax, (kind, members) in zip(axes, panels.items()):
+        _panel(ax, kind, members, group_keys)
+    fig.suptitle(f"{name}: work-precision")
+    return fig
+
+
+def _plot(path, name, rows, group_keys):
+    """Write the work-precision plot (:func:`work_precision_figure`) of the plottable rows to ``path``."""
+    fig = work_precision_figure(name, rows, group_keys)
+    write_atomic(path, lambda f: fig.savefig(f, format="png", dpi=110))
 
 
 def cell(value):
@@ -431,6 +519,9 @@ def _case_report(outcome, png_name, figures=()):
         lines += [note, ""]
     if result.skipped:
         lines += ["Skipped:", ""] + [f"- {s}" for s in result.skipped] + [""]
+    if outcome.warnings:
+        lines += ["Warnings raised while the case ran (about its own scenes):", ""] + \
+                 [f"- {cell(w)}" for w in outcome.warnings] + [""]
     return lines
 
 
@@ -477,6 +568,7 @@ def _results_json(outcomes, quick, machine, date):
         cases[o.name] = {"description": o.description,
                          "status": _status(o),
                          "failure": o.failure, "traceback": o.traceback, "cpu_s": o.cpu_s,
+                         "warnings": list(o.warnings),
                          "skipped": list(r.skipped) if r else [], "notes": list(r.notes) if r else []}
     rows = [row for o in outcomes if o.result for row in o.result.rows]
     return json_safe({"date": date, "quick": quick, "machine": machine, "rows": rows, "cases": cases})

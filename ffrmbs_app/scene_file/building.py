@@ -40,6 +40,7 @@ class SceneBuilder:
         self.steps: list = []               # (keypath, label, build(env)) after the bodies
         self.outputs: dict = {}             # name -> (keypath, label, make(env))
         self.units: dict = {}               # name -> unit of the output's quantity
+        self.labels: dict = {}              # name -> what the output is ("beam node 19 displacement")
         self.settings = self._settings()
         self.bodies = BodyReader(doc, self.inputs).read(self._entries("body", "body"))
         self._links()
@@ -241,6 +242,8 @@ class SceneBuilder:
             self.outputs[name] = (keypath, label, _probe(frame, quantity, component))
             if quantity in QUANTITY_UNITS:
                 self.units[name] = QUANTITY_UNITS[quantity]
+            self.labels[name] = output_label(frame, quantity, t.get("component") if component is not None else None,
+                                             at=t.get("at") if t.has("at") else None)
 
     # --- pass 2 ----------------------------------------------------------------------------------------
     def build(self) -> Scene:
@@ -259,7 +262,21 @@ class SceneBuilder:
         return run(doc, ("scene",), "[scene]", lambda: Scene(
             env.system, settings["t_end"], settings["dt"], settings["integrator"], settings["options"],
             settings["n_out"], outputs, settings["energies"], settings["plan"], settings["tolerance"],
-            settings["name"], dict(self.inputs), settings["description"], units=dict(self.units)))
+            settings["name"], dict(self.inputs), settings["description"], units=dict(self.units),
+            labels=dict(self.labels)))
+
+
+def output_label(ref: FrameRef, quantity, component=None, at=None) -> str:
+    """What an output is, in words: "beam node 19 displacement", "point mass velocity y",
+    "bob point (0, 0, 0.1) m position", "beam modal coordinates q_f"; a node given by
+    ``at`` [m] says so: "beam node 412 (nearest to (0.25, 0.05, 0.025) m) displacement"."""
+    where = ref.body if ref.node is None else f"{ref.body} node {ref.node}"
+    if at is not None:
+        where += f" (nearest to ({', '.join(f'{x:g}' for x in at)}) m)"
+    if ref.point is not None and quantity not in BODY_QUANTITIES:
+        where += f" point ({', '.join(f'{x:g}' for x in ref.point)}) m"
+    words = {"q_f": "modal coordinates q_f", "angular_velocity": "angular velocity"}.get(quantity, quantity)
+    return " ".join([where, words] + ([component] if component else []))
 
     def _static_equilibrium(self, env: Env):
         """The bodies with initial = "static" put at rest in static equilibrium

@@ -46,6 +46,8 @@ SETUPS = {"A": (0.235, 0.052, 0.025), "B": (0.235, 0.052, 0.040)}   # initial po
 NODE_19 = (0.25, 0.05, 0.025)                     # the thesis's output node [m]
 PENALTY_K = 1e7                                   # [N/m], the thesis's soft contact
 OUTPUT_UNITS = {"y": "m", "vy": "m/s", "node19": "m"}
+OUTPUT_LABELS = {"y": "point mass position y", "vy": "point mass velocity y",
+                 "node19": "beam node 19 (thesis numbering) displacement"}
 CONTACT = "impact"                                # the contact's name, whatever its law
 
 
@@ -135,7 +137,7 @@ class Scene:
     def outputs(self):
         """Point-mass y position [m] and velocity [m/s], node 19's displacement Φ q_f [m]
         (body-frame components; the frame is fixed, so also world components). Their units:
-        :data:`OUTPUT_UNITS`."""
+        :data:`OUTPUT_UNITS`, what they are: :data:`OUTPUT_LABELS`."""
         mass, beam, j = self.mass, self.beam, self.node
         return {"y": lambda t, q, u: q[mass.q_slice][1],
                 "vy": lambda t, q, u: u[mass.u_slice][1],
