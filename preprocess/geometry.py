@@ -54,7 +54,10 @@ PLANE_RTOL = 1e-9          # a node on a bounding plane: within this x the body'
 def gmsh_session():
     """Initialize gmsh quietly for one job and finalize it afterwards. Off the main thread
     (e.g. a Dask worker's task) gmsh is not made interruptible: its Ctrl-C handler can
-    only be installed by the main thread."""
+    only be installed by the main thread. CAD files (a ``.geo`` file's ``Merge``) are read
+    in OpenCASCADE's default unit, mm, whatever unit an earlier session set: OpenCASCADE
+    keeps the last ``Geometry.OCCTargetUnit`` for the whole process, an empty one does
+    not reset it."""
     import gmsh
 
     owner = not gmsh.isInitialized()
@@ -64,6 +67,7 @@ def gmsh_session():
     gmsh.clear()
     gmsh.option.setNumber("General.NumThreads", 1)
     gmsh.option.setNumber("Mesh.MaxNumThreads3D", 1)
+    gmsh.option.setString("Geometry.OCCTargetUnit", "MM")
     try:
         yield gmsh
     finally:
@@ -202,6 +206,116 @@ def mesh_geo_file(path, order=2, mesh_size=None, check_limits=True) -> Mesh:
         except Exception as exc:  # gmsh reports parse and meshing errors as Exception
             raise InputFileError(path, None, f"gmsh: {exc}") from None
         return mesh_from_gmsh_model(gmsh, path)
+
+
+#: CAD files gmsh reads with OpenCASCADE: STEP and IGES
+CAD_SUFFIXES = (".step", ".stp", ".iges", ".igs")
+BOX_GROW = 1e-6            # a face lies in a selection box grown by this x the model's size, plus this
+
+
+def mesh_cad_file(path, order=2, mesh_size=None, check_limits=True, length_unit="m", face_boxes=None) -> Mesh:
+    """Mesh the solids of a STEP or IGES file (:data:`CAD_SUFFIXES`, gmsh's OpenCASCADE
+    reader) with tetrahedra of ``order`` and maximum size ``mesh_size`` (in ``length_unit``).
+
+    Coordinates are converted from the file's own length unit to ``length_unit`` ("m" or
+    "mm", the run's unit system). Node groups:
+
+    * the names the file gives its entities (STEP labels: a product, a face, ...), each
+      named by the last part of its label path — ``Shapes/bracket`` gives ``bracket``;
+    * ``face_boxes`` {name: (xmin, ymin, zmin, xmax, ymax, zmax)} (``length_unit``): the
+      faces whose bounding box lies inside the box, grown by BOX_GROW x the model's size
+      plus BOX_GROW (OpenCASCADE's bounding boxes carry a tolerance); a ModelError names a
+      box that holds no face. They replace a file name of the same name;
+    * the bounding planes ``x0 .. z1`` of :func:`bounding_face_groups` that hold a face
+      of the mesh (a surface triangle with all its corners on the plane), and ``body``.
+
+    A file of faces only (IGES mostly is) is sewn into the solid they bound
+    (:func:`_solid_from_faces`); one whose faces bound none is an InputFileError.
+    ``check_limits`` as for :func:`box`."""
+    path = Path(path)
+    with gmsh_session() as gmsh:
+        _import_cad(gmsh, path, length_unit)
+        if not gmsh.model.getEntities(3):
+            _solid_from_faces(gmsh, path)
+        _cad_groups(gmsh, path, face_boxes or {})
+        try:
+            _generate(gmsh, order, mesh_size, path, check_limits)
+        except ModelError:
+            raise
+        except Exception as exc:
+            raise InputFileError(path, None, f"gmsh cannot mesh the CAD solid: {exc}") from None
+        mesh = mesh_from_gmsh_model(gmsh, path)
+    for name, nodes in face_planes(mesh).items():
+        mesh.node_groups.setdefault(name, nodes)
+    return mesh
+
+
+def _import_cad(gmsh, path, length_unit):
+    """Import the CAD file ``path`` into the current model, converted to ``length_unit``
+    (gmsh's option ``Geometry.OCCTargetUnit``; every :func:`gmsh_session` starts with
+    OpenCASCADE's default, "MM")."""
+    gmsh.option.setString("Geometry.OCCTargetUnit", length_unit.upper())
+    try:
+        gmsh.model.occ.importShapes(str(path))
+        gmsh.model.occ.synchronize()
+    except Exception as exc:  # gmsh raises a bare Exception with its log line
+        raise InputFileError(path, None, f"gmsh cannot read the CAD file: {exc}") from None
+
+
+def _solid_from_faces(gmsh, path):
+    """Make the solid of a CAD model given by its faces only (as IGES files mostly are):
+    the faces sewn into one closed shell (OpenCASCADE's sewing, within its tolerance),
+    the solid it bounds replacing them. An InputFileError when there are no faces or
+    they do not close."""
+    faces = gmsh.model.getEntities(2)
+    fault = "no solid in the CAD file, and no faces that bound one (a wire model?)"
+    if faces:
+        try:
+            shell = gmsh.model.occ.addSurfaceLoop([tag for _, tag in faces], sewing=True)
+            solid = gmsh.model.occ.addVolume([shell])
+            gmsh.model.occ.remove(faces, recursive=True)
+            gmsh.model.occ.synchronize()
+            if gmsh.model.occ.getMass(3, solid) > 0:
+                return
+        except Exception:  # gmsh raises a bare Exception when the faces do not close
+            pass
+        fault = (f"no solid in the CAD file, and the {len(faces)} face(s) in it do not close into one "
+                 "(an open surface?)")
+    raise InputFileError(path, None, f"{fault}: ffrmbs meshes volumes with tetrahedra")
+
+
+def _cad_groups(gmsh, path, face_boxes):
+    """Physical groups of the imported CAD model: its entities' names, then the faces
+    inside each of ``face_boxes`` (:func:`mesh_cad_file`)."""
+    named = {}
+    for dim, tag in gmsh.model.getEntities():
+        label = gmsh.model.getEntityName(dim, tag).rstrip("/").rpartition("/")[2].strip()
+        if label and label not in face_boxes:
+            named.setdefault((label, dim), []).append(tag)
+    for (label, dim), tags in named.items():
+        gmsh.model.setPhysicalName(dim, gmsh.model.addPhysicalGroup(dim, tags), label)
+    box = np.array(gmsh.model.getBoundingBox(-1, -1))
+    grow = BOX_GROW * (1.0 + float(np.linalg.norm(box[3:] - box[:3])))
+    for name, corners in face_boxes.items():
+        lo, hi = np.asarray(corners[:3], dtype=float) - grow, np.asarray(corners[3:], dtype=float) + grow
+        faces = [tag for _, tag in gmsh.model.getEntitiesInBoundingBox(*lo, *hi, dim=2)]
+        if not faces:
+            extent = ", ".join(f"{v:g}" for v in box)
+            raise ModelError(f"{path}: group {name!r}: no face lies inside the box "
+                             f"{', '.join(f'{v:g}' for v in corners)} (the model spans {extent})")
+        gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, faces), name)
+
+
+def face_planes(mesh: Mesh) -> dict:
+    """The bounding-plane groups ``x0 .. z1`` of :func:`bounding_face_groups` that hold a
+    face of ``mesh`` (a surface triangle with its three corners on the plane), and ``body``."""
+    corners = mesh.surface_triangles()[:, :3]
+    groups = {}
+    for name, nodes in bounding_face_groups(mesh.points).items():
+        on_plane = np.isin(corners, nodes).all(axis=1)
+        if name == "body" or on_plane.any():
+            groups[name] = nodes
+    return groups
 
 
 _GEO_COMMENT = re.compile(r"//[^\n]*|/\*.*?\*/", re.DOTALL)
