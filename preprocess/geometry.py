@@ -54,10 +54,7 @@ PLANE_RTOL = 1e-9          # a node on a bounding plane: within this x the body'
 def gmsh_session():
     """Initialize gmsh quietly for one job and finalize it afterwards. Off the main thread
     (e.g. a Dask worker's task) gmsh is not made interruptible: its Ctrl-C handler can
-    only be installed by the main thread. CAD files (a ``.geo`` file's ``Merge``) are read
-    in OpenCASCADE's default unit, mm, whatever unit an earlier session set: OpenCASCADE
-    keeps the last ``Geometry.OCCTargetUnit`` for the whole process, an empty one does
-    not reset it."""
+    only be installed by the main thread."""
     import gmsh
 
     owner = not gmsh.isInitialized()
@@ -67,7 +64,6 @@ def gmsh_session():
     gmsh.clear()
     gmsh.option.setNumber("General.NumThreads", 1)
     gmsh.option.setNumber("Mesh.MaxNumThreads3D", 1)
-    gmsh.option.setString("Geometry.OCCTargetUnit", "MM")
     try:
         yield gmsh
     finally:
@@ -218,43 +214,50 @@ def mesh_cad_file(path, order=2, mesh_size=None, check_limits=True, length_unit=
     reader) with tetrahedra of ``order`` and maximum size ``mesh_size`` (in ``length_unit``).
 
     Coordinates are converted from the file's own length unit to ``length_unit`` ("m" or
-    "mm", the run's unit system). Node groups:
+    "mm", the run's unit system): OpenCASCADE reads the file in mm (:func:`_import_cad`),
+    gmsh meshes it in mm (``mesh_size`` converted), and the mesh is scaled by
+    :data:`UNIT_PER_MM` (scaling the CAD model instead would turn its planes and
+    cylinders into B-spline surfaces). Node groups:
 
     * the names the file gives its entities (STEP labels: a product, a face, ...), each
       named by the last part of its label path — ``Shapes/bracket`` gives ``bracket``;
     * ``face_boxes`` {name: (xmin, ymin, zmin, xmax, ymax, zmax)} (``length_unit``): the
       faces whose bounding box lies inside the box, grown by BOX_GROW x the model's size
-      plus BOX_GROW (OpenCASCADE's bounding boxes carry a tolerance); a ModelError names a
-      box that holds no face. They replace a file name of the same name;
+      plus BOX_GROW, in mm (OpenCASCADE's bounding boxes carry a tolerance); a ModelError
+      names a box that holds no face. They replace a file name of the same name;
     * the bounding planes ``x0 .. z1`` of :func:`bounding_face_groups` that hold a face
       of the mesh (a surface triangle with all its corners on the plane), and ``body``.
 
     A file of faces only (IGES mostly is) is sewn into the solid they bound
     (:func:`_solid_from_faces`); one whose faces bound none is an InputFileError.
     ``check_limits`` as for :func:`box`."""
-    path = Path(path)
+    path, scale = Path(path), UNIT_PER_MM[length_unit]
     with gmsh_session() as gmsh:
-        _import_cad(gmsh, path, length_unit)
+        _import_cad(gmsh, path)
         if not gmsh.model.getEntities(3):
             _solid_from_faces(gmsh, path)
-        _cad_groups(gmsh, path, face_boxes or {})
+        _cad_groups(gmsh, path, face_boxes or {}, scale)
         try:
-            _generate(gmsh, order, mesh_size, path, check_limits)
+            _generate(gmsh, order, None if mesh_size is None else mesh_size / scale, path, check_limits)
         except ModelError:
             raise
         except Exception as exc:
             raise InputFileError(path, None, f"gmsh cannot mesh the CAD solid: {exc}") from None
-        mesh = mesh_from_gmsh_model(gmsh, path)
+        mesh = mesh_from_gmsh_model(gmsh, path).scaled(scale)
     for name, nodes in face_planes(mesh).items():
         mesh.node_groups.setdefault(name, nodes)
     return mesh
 
 
-def _import_cad(gmsh, path, length_unit):
-    """Import the CAD file ``path`` into the current model, converted to ``length_unit``
-    (gmsh's option ``Geometry.OCCTargetUnit``; every :func:`gmsh_session` starts with
-    OpenCASCADE's default, "MM")."""
-    gmsh.option.setString("Geometry.OCCTargetUnit", length_unit.upper())
+#: the run's length unit per millimetre, OpenCASCADE's unit of imported CAD files
+UNIT_PER_MM = {"m": 1e-3, "mm": 1.0}
+
+
+def _import_cad(gmsh, path):
+    """Import the CAD file ``path`` into the current model, in millimetres: OpenCASCADE
+    converts the file's unit to its default target unit, mm, which ffrmbs never changes
+    (``Geometry.OCCTargetUnit`` would stay set for the whole process, and an IGES file
+    cannot take it before a STEP file was read)."""
     try:
         gmsh.model.occ.importShapes(str(path))
         gmsh.model.occ.synchronize()
@@ -284,9 +287,10 @@ def _solid_from_faces(gmsh, path):
     raise InputFileError(path, None, f"{fault}: ffrmbs meshes volumes with tetrahedra")
 
 
-def _cad_groups(gmsh, path, face_boxes):
-    """Physical groups of the imported CAD model: its entities' names, then the faces
-    inside each of ``face_boxes`` (:func:`mesh_cad_file`)."""
+def _cad_groups(gmsh, path, face_boxes, scale):
+    """Physical groups of the imported CAD model (in mm): its entities' names, then the
+    faces inside each of ``face_boxes`` (in the run's unit, ``scale`` of them per mm;
+    :func:`mesh_cad_file`)."""
     named = {}
     for dim, tag in gmsh.model.getEntities():
         label = gmsh.model.getEntityName(dim, tag).rstrip("/").rpartition("/")[2].strip()
@@ -297,10 +301,11 @@ def _cad_groups(gmsh, path, face_boxes):
     box = np.array(gmsh.model.getBoundingBox(-1, -1))
     grow = BOX_GROW * (1.0 + float(np.linalg.norm(box[3:] - box[:3])))
     for name, corners in face_boxes.items():
-        lo, hi = np.asarray(corners[:3], dtype=float) - grow, np.asarray(corners[3:], dtype=float) + grow
-        faces = [tag for _, tag in gmsh.model.getEntitiesInBoundingBox(*lo, *hi, dim=2)]
+        corners_mm = np.asarray(corners, dtype=float) / scale
+        faces = [tag for _, tag in gmsh.model.getEntitiesInBoundingBox(*(corners_mm[:3] - grow),
+                                                                        *(corners_mm[3:] + grow), dim=2)]
         if not faces:
-            extent = ", ".join(f"{v:g}" for v in box)
+            extent = ", ".join(f"{v * scale:g}" for v in box)
             raise ModelError(f"{path}: group {name!r}: no face lies inside the box "
                              f"{', '.join(f'{v:g}' for v in corners)} (the model spans {extent})")
         gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, faces), name)

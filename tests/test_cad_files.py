@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from ffrmbs_app.cli import main
-from preprocess import read_body
+from preprocess import read_body, read_mesh
 
 L, B, H, R = 200.0, 40.0, 10.0, 6.0          # plate [mm] and its through hole's radius, hole at (100, 20)
 ALUMINIUM_SI = ["--density", "2700", "--young", "70e9", "--poisson", "0.33"]
@@ -87,11 +87,23 @@ def test_a_cad_bar_in_mm_weighs_rho_v_and_rings_at_beam_theory(tmp_path, capsys,
     frequency (about the thin axis) within 3 % of Euler–Bernoulli's clamped-free beam,
     f1 = (1.8751²/2π) √(E I / (ρ A L⁴)), I = B H³/12 (L/H = 20)."""
     cad = write_cad(tmp_path / f"bar{suffix}", hole=False)
-    out, _ = preprocess(capsys, cad, "--units", "si-mm", "--mesh-size", "5", *ALUMINIUM_MM, "--out", tmp_path / "o")
+    out, _ = preprocess(capsys, cad, "--units", "si-mm", "--mesh-size", "10", *ALUMINIUM_MM, "--out", tmp_path / "o")
     assert printed_mass(out) == pytest.approx(2700 * L * B * H * 1e-9, rel=1e-9)
     E, rho, area, inertia = 70e9, 2700.0, B * H * 1e-6, B * H ** 3 / 12 * 1e-12
     f1 = 1.87510407 ** 2 / (2 * math.pi) * math.sqrt(E * inertia / (rho * area * (L * 1e-3) ** 4))
     assert first_frequency(out) == pytest.approx(f1, rel=0.03)
+
+
+@pytest.mark.parametrize("length_unit, per_metre", [("m", 1.0), ("mm", 1e3)])
+def test_a_step_file_in_metres_is_read_in_the_runs_unit(tmp_path, length_unit, per_metre):
+    """The plate's numbers in a STEP file that states metres: a 200 m plate, 200 in m and
+    200 000 in mm."""
+    step = write_cad(tmp_path / "bar.step", hole=False)
+    text = step.read_text()
+    assert "SI_UNIT(.MILLI.,.METRE.)" in text                 # gmsh states mm for the numbers it writes
+    step.write_text(text.replace("SI_UNIT(.MILLI.,.METRE.)", "SI_UNIT($,.METRE.)"))
+    mesh = read_mesh(step, order=1, mesh_size=L * per_metre, length_unit=length_unit)
+    assert np.ptp(mesh.points, axis=0) == pytest.approx(np.array([L, B, H]) * per_metre, rel=1e-9)
 
 
 def test_a_box_selecting_no_face_is_one_line(tmp_path, capsys):
