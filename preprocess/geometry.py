@@ -1,4 +1,9 @@
-"""Meshing with gmsh: ``.geo`` files and the built-in validation geometries.
+"""Meshing with gmsh: ``.geo`` files, STEP and IGES files and the built-in validation geometries.
+
+CAD files (:data:`preprocess.mesh.CAD_SUFFIXES`) are read by gmsh's OpenCASCADE kernel
+in mm, meshed and scaled to the run's length unit (:func:`mesh_cad_file`); their node
+groups come from the names in the file, selection boxes (``--group``) and the bounding
+planes that hold a face.
 
 Built-in bodies (OpenCASCADE kernel, meshed with tetrahedra of order 1 or 2):
 
@@ -204,14 +209,13 @@ def mesh_geo_file(path, order=2, mesh_size=None, check_limits=True) -> Mesh:
         return mesh_from_gmsh_model(gmsh, path)
 
 
-#: CAD files gmsh reads with OpenCASCADE: STEP and IGES
-CAD_SUFFIXES = (".step", ".stp", ".iges", ".igs")
 BOX_GROW = 1e-6            # a face lies in a selection box grown by this x the model's size, plus this
 
 
 def mesh_cad_file(path, order=2, mesh_size=None, check_limits=True, length_unit="m", face_boxes=None) -> Mesh:
-    """Mesh the solids of a STEP or IGES file (:data:`CAD_SUFFIXES`, gmsh's OpenCASCADE
-    reader) with tetrahedra of ``order`` and maximum size ``mesh_size`` (in ``length_unit``).
+    """Mesh the solids of a STEP or IGES file (:data:`preprocess.mesh.CAD_SUFFIXES`, gmsh's
+    OpenCASCADE reader) with tetrahedra of ``order`` and maximum size ``mesh_size`` (in
+    ``length_unit``).
 
     Coordinates are converted from the file's own length unit to ``length_unit`` ("m" or
     "mm", the run's unit system): OpenCASCADE reads the file in mm (:func:`_import_cad`),

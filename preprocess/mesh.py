@@ -206,8 +206,10 @@ def _sort_mid_nodes(points, tets, source):
     return out
 
 
-#: geometry files meshed here (gmsh ``.geo`` and the CAD files of :mod:`preprocess.geometry`)
-MESHED_SUFFIXES = (".geo", ".step", ".stp", ".iges", ".igs")
+#: CAD files, read by gmsh's OpenCASCADE kernel (:func:`preprocess.geometry.mesh_cad_file`): STEP and IGES
+CAD_SUFFIXES = (".step", ".stp", ".iges", ".igs")
+#: geometry files meshed here: gmsh ``.geo`` and CAD files
+MESHED_SUFFIXES = (".geo", *CAD_SUFFIXES)
 
 
 def read_mesh(path, order=None, mesh_size=None, check_limits=True, length_unit="m", face_boxes=None) -> Mesh:
@@ -231,7 +233,7 @@ def read_mesh(path, order=None, mesh_size=None, check_limits=True, length_unit="
         from preprocess.geometry import mesh_geo_file
 
         return mesh_geo_file(path, order, mesh_size, check_limits)
-    if suffix in MESHED_SUFFIXES:
+    if suffix in CAD_SUFFIXES:
         from preprocess.geometry import mesh_cad_file
 
         return mesh_cad_file(path, order, mesh_size, check_limits, length_unit, face_boxes)
@@ -244,7 +246,7 @@ def check_meshing_options(path, order=None, mesh_size=None, face_boxes=None):
     (and built-in geometries) only, a mesh file keeps its own elements; likewise for
     ``face_boxes`` (``--group``) given for anything but a STEP or IGES file."""
     suffix = Path(path).suffix.lower()
-    if face_boxes and suffix not in MESHED_SUFFIXES[1:]:
+    if face_boxes and suffix not in CAD_SUFFIXES:
         raise ModelError(f"--group applies to STEP and IGES files (.step, .stp, .iges, .igs), not {path}")
     if suffix in MESHED_SUFFIXES:
         return

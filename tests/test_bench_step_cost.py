@@ -89,7 +89,8 @@ def test_the_bench_runs_from_an_installed_copy_and_its_baseline_from_the_old_tre
     assert run.returncode == 0, run.stderr[-3000:]
     doc = json.loads(run.stdout.strip().splitlines()[-1])
     assert doc["root"] == str(site)
-    assert doc["why"] == f"{site} is not a git clone (an installed copy?): no commit {step_cost.BASELINE} to compare with"
+    assert doc["why"] == (f"{site} is not a git clone (an installed copy?): "
+                          f"no commit {step_cost.BASELINE} to compare with")
     assert "ffrmbs_app" in doc["this"]["origins"] and set(doc["this"]["origins"].values()) == {str(site)}
     assert "ffrmbs_app" not in doc["baseline"]["origins"]
     assert set(doc["baseline"]["origins"].values()) == {str(baseline)}

@@ -137,7 +137,8 @@ def test_a_group_for_a_mesh_file_is_refused(tmp_path, capsys):
                "--out", str(tmp_path / "o"), "--group", "a=0,0,0,1,1,1"])
     err = capsys.readouterr().err
     assert rc == 2 and err.strip().splitlines()[-1] == (
-        f"ffrmbs: error: --group applies to STEP and IGES files (.step, .stp, .iges, .igs), not {tmp_path / 'part.msh'}")
+        "ffrmbs: error: --group applies to STEP and IGES files (.step, .stp, .iges, .igs), "
+        f"not {tmp_path / 'part.msh'}")
 
 
 def test_a_cad_file_without_a_solid_or_unreadable_is_one_line(tmp_path, capsys):
