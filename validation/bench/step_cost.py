@@ -186,7 +186,7 @@ def benchmark(rounds, repeats, t_end, baseline=BASELINE, log=print) -> dict:
     header = (f"Per-step cost, median of {rounds} rounds x {repeats} runs, this checkout and baseline {baseline} "
               f"alternately in separate processes" + (f"; baseline: {why_not}" if why_not else "")
               + ("" if exudyn is not None else "; Exudyn: not installed (pip install '.[peers]')")
-              + "".join(f"; {who}'s code from {', '.join(dirs)}" for who, dirs in origins.items()))
+              + "".join(f"; {who}: code from {', '.join(dirs)}" for who, dirs in origins.items()))
     return {"benchmark": "step_cost", "machine": machine(), "baseline": baseline, "origins": origins, "rows": rows,
             "table": header + "\n\n" + "\n".join(table), "verdicts": verdicts}
 
