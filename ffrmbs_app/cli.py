@@ -82,7 +82,11 @@ def _stage(label, fn, *args, announce_in=None, on_start=None, **kwargs):
 
 
 def _preprocess(spec, modes, clamp, units, density, young, poisson, order, mesh_size, out, check_limits=True,
-                structured=None, geometric_stiffness=False, mass="lumped"):
+                structured=None, geometric_stiffness=False, mass="lumped", groups=None):
+    """``ffrmbs preprocess``: mesh, body data, body files in ``out``; prints the mesh
+    statistics, the total mass and the frequencies, and warns of a density, Young's
+    modulus or mass outside the ranges of :mod:`preprocess.plausible` (units mistakes)."""
+    from preprocess import plausible
     from preprocess.bodyfiles import write_body
     from preprocess.pipeline import Material, build_body, check_mass_kind, check_n_modes, mesh_source, \
         mesh_statistics
@@ -92,9 +96,12 @@ def _preprocess(spec, modes, clamp, units, density, young, poisson, order, mesh_
     material = Material(density, young, poisson)        # every option checked before meshing:
     check_n_modes(modes)                                # these here, the mesh options by mesh_source
     check_mass_kind(mass)
+    for message in plausible.material_warnings(density, young, units):
+        warnings.warn(message, stacklevel=2)
     with stage_bar(3 + (out is not None) + bool(geometric_stiffness), "preprocess") as bar:
         mesh = _stage(f"meshing {spec}", mesh_source, spec, order, mesh_size, check_limits,
-                      announce_in="announce", on_start=lambda: bar.stage("meshing"), structured=structured)
+                      announce_in="announce", on_start=lambda: bar.stage("meshing"), structured=structured,
+                      units=units, groups=groups)
         write(mesh_statistics(mesh), sys.stdout)
         params = dict(input=spec, mesh_size=mesh_size, structured=structured)
         body = build_body(mesh, material, modes, clamp=clamp, units=units, params=params, log=_log,
@@ -103,6 +110,9 @@ def _preprocess(spec, modes, clamp, units, density, young, poisson, order, mesh_
         if out is not None:
             bar.stage("writing body files")
             _stage(f"writing body files to {out}", write_body, out, body)
+    print(body.mass_line())
+    for message in plausible.mass_warnings(body.total_mass, units):
+        warnings.warn(message, stacklevel=2)
     print(body.frequency_table())
     return body
 
@@ -110,7 +120,7 @@ def _preprocess(spec, modes, clamp, units, density, young, poisson, order, mesh_
 def cmd_preprocess(args):
     _preprocess(args.input, args.modes, None if args.free else args.clamp, args.units,
                 args.density, args.young, args.poisson, args.order, args.mesh_size, args.out, not args.no_limits,
-                args.structured, args.geometric_stiffness, args.mass)
+                args.structured, args.geometric_stiffness, args.mass, args.group)
 
 
 def cmd_info(args):
@@ -253,27 +263,33 @@ def build_parser():
     sub = p.add_subparsers(dest="command", required=True)
 
     pre = sub.add_parser("preprocess", help="mesh -> FE model -> modes -> body files")
-    pre.add_argument("input", help="mesh file (.geo, .msh, .inp) or built-in geometry: "
+    pre.add_argument("input", help="mesh or geometry file (.geo, .step/.stp, .iges/.igs, .msh, .inp) or built-in "
+                                   "geometry: "
                                    f"{', '.join(BUILTINS[:-1])} or {BUILTINS[-1]} (input units)")
     pre.add_argument("--modes", type=int, required=True, help="number of elastic modes")
     bc = pre.add_mutually_exclusive_group(required=True)
     bc.add_argument("--clamp", metavar="GROUP", help="clamp this node group (e.g. z0)")
     bc.add_argument("--free", action="store_true", help="free-free modes, rigid-body modes removed")
     pre.add_argument("--units", choices=("si", "si-mm"), default="si",
-                     help="units of the input geometry and material (written files are SI)")
+                     help="units of the input geometry and material (written files are SI); a STEP or IGES "
+                          "file is converted from the length unit it states to m (si) or mm (si-mm)")
     pre.add_argument("--density", type=float, required=True, help="kg/m^3 (t/mm^3 for si-mm)")
     pre.add_argument("--young", type=float, required=True, help="Pa (N/mm^2 for si-mm)")
     pre.add_argument("--poisson", type=float, required=True)
     pre.add_argument("--order", type=int, choices=(1, 2),
-                     help="tet4 (1) or tet10 (2) elements for a built-in geometry or a .geo file (default 2); "
-                          "a .msh or .inp mesh keeps its own order")
-    pre.add_argument("--mesh-size", type=float, help="maximum element size, input units (built-in geometries "
-                                                     "and .geo files; default: half the smallest dimension of "
-                                                     "a built-in geometry, 5 for stepped-beam)")
+                     help="tet4 (1) or tet10 (2) elements for a built-in geometry, a .geo, STEP or IGES file "
+                          "(default 2); a .msh or .inp mesh keeps its own order")
+    pre.add_argument("--mesh-size", type=float, help="maximum element size, input units (built-in geometries, "
+                                                     ".geo, STEP and IGES files; default: half the smallest "
+                                                     "dimension of a built-in geometry, 5 for stepped-beam)")
     pre.add_argument("--structured", metavar="NX,NY,NZ",
                      help="box:LX,LY,LZ only: a structured (transfinite) mesh of NX x NY x NZ cells along x, y, z "
                           "(6 tetrahedra each) instead of --mesh-size; every face's nodes then form a grid "
                           "(exact contour interpolation)")
+    pre.add_argument("--group", action="append", metavar="NAME=XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX",
+                     help="STEP/IGES only, repeatable: a node group NAME of the CAD faces inside the box (input "
+                          "units; e.g. clamp=-1,-1,-1,0.001,1,1 for the faces on x = 0). Named CAD entities and "
+                          "the bounding planes x0 .. z1 that hold a face are groups too")
     pre.add_argument("--geometric-stiffness", action="store_true",
                      help="also store the geometric stiffness of the frame's inertia loads (for bodies that spin: "
                           "geometric_stiffening in the FFR body); in body.h5 only")

@@ -2,7 +2,7 @@
 
 Public surface::
 
-    mesh = box(1, 1, 5, mesh_size=0.5)                 # or read_mesh("part.msh" | ".geo" | ".inp")
+    mesh = box(1, 1, 5, mesh_size=0.5)                 # or read_mesh("part.msh" | ".geo" | ".step" | ".inp")
     body = build_body(mesh, Material(8000, 200e9, 0.0), n_modes=10, clamp="z0")
     write_body("beam/", body)                          # u0.dat, modeShapeMatrix.dat, mij.dat,
     body = read_body("beam/body.h5")                   # stiffnessMatrix.dat and body.h5

@@ -170,14 +170,23 @@ class BodyData:
             f"nodes:          {self.n_nodes}",
             f"surface nodes:  {len(self.surface_nodes) if self.surface_triangles is not None else 'unknown'}",
             f"modes:          {self.n_modes}",
-            f"total mass:     {self.total_mass:.6g} kg "
-            f"({'lumped' if self.mass_matrix is None else 'consistent'} mass)",
+            self.mass_line(),
             f"centre of mass: ({c[0]:.6g}, {c[1]:.6g}, {c[2]:.6g}) m",
         ]
         if self.node_groups:
             lines.append("node groups:    " + ", ".join(
                 f"{k} ({len(v)})" for k, v in sorted(self.node_groups.items())))
         return "\n".join(lines) + "\n" + self.frequency_table()
+
+    def mass_line(self) -> str:
+        """'total mass: m kg (lumped mass, density ρ kg/m³ x volume V m³)': the total mass
+        (:attr:`total_mass`) and the mesh volume V = m / ρ it implies (the mass is the
+        density integrated over the elements, curved ones included)."""
+        density = self.material.get("density") if self.material else None
+        kind = "lumped" if self.mass_matrix is None else "consistent"
+        split = (f", density {density:.6g} kg/m³ x volume {self.total_mass / density:.6g} m³"
+                 if density else "")
+        return f"total mass:     {self.total_mass:.6g} kg ({kind} mass{split})"
 
     def frequency_table(self) -> str:
         """One line per mode: number, ω [rad/s], f [Hz]."""

@@ -1,4 +1,9 @@
-"""Meshing with gmsh: ``.geo`` files and the built-in validation geometries.
+"""Meshing with gmsh: ``.geo`` files, STEP and IGES files and the built-in validation geometries.
+
+CAD files (:data:`preprocess.mesh.CAD_SUFFIXES`) are read by gmsh's OpenCASCADE kernel
+in mm, meshed and scaled to the run's length unit (:func:`mesh_cad_file`); their node
+groups come from the names in the file, selection boxes (``--group``) and the bounding
+planes that hold a face.
 
 Built-in bodies (OpenCASCADE kernel, meshed with tetrahedra of order 1 or 2):
 
@@ -202,6 +207,124 @@ def mesh_geo_file(path, order=2, mesh_size=None, check_limits=True) -> Mesh:
         except Exception as exc:  # gmsh reports parse and meshing errors as Exception
             raise InputFileError(path, None, f"gmsh: {exc}") from None
         return mesh_from_gmsh_model(gmsh, path)
+
+
+BOX_GROW = 1e-6            # a face lies in a selection box grown by this x the model's size, plus this
+
+
+def mesh_cad_file(path, order=2, mesh_size=None, check_limits=True, length_unit="m", face_boxes=None) -> Mesh:
+    """Mesh the solids of a STEP or IGES file (:data:`preprocess.mesh.CAD_SUFFIXES`, gmsh's
+    OpenCASCADE reader) with tetrahedra of ``order`` and maximum size ``mesh_size`` (in
+    ``length_unit``).
+
+    Coordinates are converted from the file's own length unit to ``length_unit`` ("m" or
+    "mm", the run's unit system): OpenCASCADE reads the file in mm (:func:`_import_cad`),
+    gmsh meshes it in mm (``mesh_size`` converted), and the mesh is scaled by
+    :data:`UNIT_PER_MM` (scaling the CAD model instead would turn its planes and
+    cylinders into B-spline surfaces). Node groups:
+
+    * the names the file gives its entities (STEP labels: a product, a face, ...), each
+      named by the last part of its label path — ``Shapes/bracket`` gives ``bracket``;
+    * ``face_boxes`` {name: (xmin, ymin, zmin, xmax, ymax, zmax)} (``length_unit``): the
+      faces whose bounding box lies inside the box, grown by BOX_GROW x the model's size
+      plus BOX_GROW, in mm (OpenCASCADE's bounding boxes carry a tolerance); a ModelError
+      names a box that holds no face. They replace a file name of the same name;
+    * the bounding planes ``x0 .. z1`` of :func:`bounding_face_groups` that hold a face
+      of the mesh (a surface triangle with all its corners on the plane), and ``body``.
+
+    A file of faces only (IGES mostly is) is sewn into the solid they bound
+    (:func:`_solid_from_faces`); one whose faces bound none is an InputFileError.
+    ``check_limits`` as for :func:`box`."""
+    path, scale = Path(path), UNIT_PER_MM[length_unit]
+    with gmsh_session() as gmsh:
+        _import_cad(gmsh, path)
+        if not gmsh.model.getEntities(3):
+            _solid_from_faces(gmsh, path)
+        _cad_groups(gmsh, path, face_boxes or {}, scale)
+        try:
+            _generate(gmsh, order, None if mesh_size is None else mesh_size / scale, path, check_limits)
+        except ModelError:
+            raise
+        except Exception as exc:
+            raise InputFileError(path, None, f"gmsh cannot mesh the CAD solid: {exc}") from None
+        mesh = mesh_from_gmsh_model(gmsh, path).scaled(scale)
+    for name, nodes in face_planes(mesh).items():
+        mesh.node_groups.setdefault(name, nodes)
+    return mesh
+
+
+#: the run's length unit per millimetre, OpenCASCADE's unit of imported CAD files
+UNIT_PER_MM = {"m": 1e-3, "mm": 1.0}
+
+
+def _import_cad(gmsh, path):
+    """Import the CAD file ``path`` into the current model, in millimetres: OpenCASCADE
+    converts the file's unit to its default target unit, mm, which ffrmbs never changes
+    (``Geometry.OCCTargetUnit`` would stay set for the whole process, and an IGES file
+    cannot take it before a STEP file was read)."""
+    try:
+        gmsh.model.occ.importShapes(str(path))
+        gmsh.model.occ.synchronize()
+    except Exception as exc:  # gmsh raises a bare Exception with its log line
+        raise InputFileError(path, None, f"gmsh cannot read the CAD file: {exc}") from None
+
+
+def _solid_from_faces(gmsh, path):
+    """Make the solid of a CAD model given by its faces only (as IGES files mostly are):
+    the faces sewn into one closed shell (OpenCASCADE's sewing, within its tolerance),
+    the solid it bounds replacing them. An InputFileError when there are no faces or
+    they do not close."""
+    faces = gmsh.model.getEntities(2)
+    fault = "no solid in the CAD file, and no faces that bound one (a wire model?)"
+    if faces:
+        try:
+            shell = gmsh.model.occ.addSurfaceLoop([tag for _, tag in faces], sewing=True)
+            solid = gmsh.model.occ.addVolume([shell])
+            gmsh.model.occ.remove(faces, recursive=True)
+            gmsh.model.occ.synchronize()
+            if gmsh.model.occ.getMass(3, solid) > 0:
+                return
+        except Exception:  # gmsh raises a bare Exception when the faces do not close
+            pass
+        fault = (f"no solid in the CAD file, and the {len(faces)} face(s) in it do not close into one "
+                 "(an open surface?)")
+    raise InputFileError(path, None, f"{fault}: ffrmbs meshes volumes with tetrahedra")
+
+
+def _cad_groups(gmsh, path, face_boxes, scale):
+    """Physical groups of the imported CAD model (in mm): its entities' names, then the
+    faces inside each of ``face_boxes`` (in the run's unit, ``scale`` of them per mm;
+    :func:`mesh_cad_file`)."""
+    named = {}
+    for dim, tag in gmsh.model.getEntities():
+        label = gmsh.model.getEntityName(dim, tag).rstrip("/").rpartition("/")[2].strip()
+        if label and label not in face_boxes:
+            named.setdefault((label, dim), []).append(tag)
+    for (label, dim), tags in named.items():
+        gmsh.model.setPhysicalName(dim, gmsh.model.addPhysicalGroup(dim, tags), label)
+    box = np.array(gmsh.model.getBoundingBox(-1, -1))
+    grow = BOX_GROW * (1.0 + float(np.linalg.norm(box[3:] - box[:3])))
+    for name, corners in face_boxes.items():
+        corners_mm = np.asarray(corners, dtype=float) / scale
+        faces = [tag for _, tag in gmsh.model.getEntitiesInBoundingBox(*(corners_mm[:3] - grow),
+                                                                        *(corners_mm[3:] + grow), dim=2)]
+        if not faces:
+            extent = ", ".join(f"{v * scale:g}" for v in box)
+            raise ModelError(f"{path}: group {name!r}: no face lies inside the box "
+                             f"{', '.join(f'{v:g}' for v in corners)} (the model spans {extent})")
+        gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, faces), name)
+
+
+def face_planes(mesh: Mesh) -> dict:
+    """The bounding-plane groups ``x0 .. z1`` of :func:`bounding_face_groups` that hold a
+    face of ``mesh`` (a surface triangle with its three corners on the plane), and ``body``."""
+    corners = mesh.surface_triangles()[:, :3]
+    groups = {}
+    for name, nodes in bounding_face_groups(mesh.points).items():
+        on_plane = np.isin(corners, nodes).all(axis=1)
+        if name == "body" or on_plane.any():
+            groups[name] = nodes
+    return groups
 
 
 _GEO_COMMENT = re.compile(r"//[^\n]*|/\*.*?\*/", re.DOTALL)

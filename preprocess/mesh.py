@@ -18,6 +18,9 @@ Readers (regular files only, :mod:`preprocess.inputfiles`):
 * ``.geo`` and ``.msh``: the gmsh Python API (``.geo`` is meshed, see
   :func:`preprocess.geometry.mesh_geo_file`, after the checks of
   :func:`preprocess.geometry.check_geo_file`); physical groups become node groups.
+* ``.step``, ``.stp``, ``.iges``, ``.igs``: CAD solids read by gmsh's OpenCASCADE
+  kernel and meshed (:func:`preprocess.geometry.mesh_cad_file`); node groups from the
+  file's names, selection boxes and the bounding planes.
 * ``.inp`` and other formats meshio reads: node sets and element sets become node groups;
   surface and line elements are ignored, other volume elements refused. A fault meshio
   finds is one line naming the file (for ``.inp`` also the line and the fault,
@@ -203,35 +206,54 @@ def _sort_mid_nodes(points, tets, source):
     return out
 
 
-def read_mesh(path, order=None, mesh_size=None, check_limits=True) -> Mesh:
-    """Read a tetrahedral mesh from ``.msh`` (gmsh), ``.geo`` or ``.inp`` (Abaqus)
-    and other meshio formats. Units are those of the file.
+#: CAD files, read by gmsh's OpenCASCADE kernel (:func:`preprocess.geometry.mesh_cad_file`): STEP and IGES
+CAD_SUFFIXES = (".step", ".stp", ".iges", ".igs")
+#: geometry files meshed here: gmsh ``.geo`` and CAD files
+MESHED_SUFFIXES = (".geo", *CAD_SUFFIXES)
+
+
+def read_mesh(path, order=None, mesh_size=None, check_limits=True, length_unit="m", face_boxes=None) -> Mesh:
+    """Read a tetrahedral mesh from ``.msh`` (gmsh), ``.geo``, a STEP or IGES file, ``.inp``
+    (Abaqus) and other meshio formats. Units are those of the file, but a CAD file's are
+    converted to ``length_unit`` ("m" or "mm"; STEP and IGES files state their unit).
 
     ``order`` (1 or 2; None: 2), ``mesh_size`` (maximum element size, file units) and
     ``check_limits`` (the limits of :mod:`preprocess.limits`, checked before meshing)
-    apply to ``.geo`` files, which are meshed here; meshes read from files keep their
-    order, and an ``order`` or a ``mesh_size`` for them is a ModelError.
+    apply to the geometry files of :data:`MESHED_SUFFIXES`, which are meshed here; meshes
+    read from files keep their order, and an ``order`` or a ``mesh_size`` for them is a
+    ModelError. ``face_boxes`` ({name: (xmin, ymin, zmin, xmax, ymax, zmax)}, CAD files
+    only): node groups of the faces inside each box
+    (:func:`preprocess.geometry.mesh_cad_file`).
     """
     path = regular_file(path)
     suffix = path.suffix.lower()
-    check_meshing_options(path, order, mesh_size)
-    if suffix in (".geo", ".msh"):
+    check_meshing_options(path, order, mesh_size, face_boxes)
+    order = 2 if order is None else order
+    if suffix == ".geo":
         from preprocess.geometry import mesh_geo_file
 
-        return (mesh_geo_file(path, 2 if order is None else order, mesh_size, check_limits) if suffix == ".geo"
-                else _read_gmsh_msh(path))
-    return _read_meshio(path)
+        return mesh_geo_file(path, order, mesh_size, check_limits)
+    if suffix in CAD_SUFFIXES:
+        from preprocess.geometry import mesh_cad_file
+
+        return mesh_cad_file(path, order, mesh_size, check_limits, length_unit, face_boxes)
+    return _read_gmsh_msh(path) if suffix == ".msh" else _read_meshio(path)
 
 
-def check_meshing_options(path, order=None, mesh_size=None):
+def check_meshing_options(path, order=None, mesh_size=None, face_boxes=None):
     """A ModelError when an element ``order`` or a ``mesh_size`` is given (not None) for
-    the mesh file ``path``: they apply to ``.geo`` files (and built-in geometries) only,
-    a mesh file keeps its own elements."""
-    if Path(path).suffix.lower() == ".geo":
+    the mesh file ``path``: they apply to the geometry files of :data:`MESHED_SUFFIXES`
+    (and built-in geometries) only, a mesh file keeps its own elements; likewise for
+    ``face_boxes`` (``--group``) given for anything but a STEP or IGES file."""
+    suffix = Path(path).suffix.lower()
+    if face_boxes and suffix not in CAD_SUFFIXES:
+        raise ModelError(f"--group applies to STEP and IGES files (.step, .stp, .iges, .igs), not {path}")
+    if suffix in MESHED_SUFFIXES:
         return
     for option, value in (("--order", order), ("--mesh-size", mesh_size)):
         if value is not None:
-            raise ModelError(f"{option} applies to built-in geometries and .geo files; {path} is already meshed")
+            raise ModelError(f"{option} applies to built-in geometries, .geo, STEP and IGES files; "
+                             f"{path} is already meshed")
 
 
 def _read_gmsh_msh(path) -> Mesh:
@@ -261,7 +283,7 @@ def _read_meshio(path) -> Mesh:
     reader = getattr(getattr(meshio, formats[0], None), "read", None)
     if reader is None:
         raise InputFileError(path, None, f"unknown mesh format {quote(path.suffix)} "
-                                         "(.geo, .msh, .inp or another format meshio reads)")
+                                         "(.geo, .step, .stp, .iges, .igs, .msh, .inp or another format meshio reads)")
     try:
         m = reader(str(path))
     except Exception as exc:  # meshio raises ReadError, ValueError, KeyError, ...

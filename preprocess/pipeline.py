@@ -2,7 +2,7 @@
 
 ``build_body`` turns a mesh (in the units of its source) and a material into the
 body data of thesis Sec. 4.2.1 in SI units; ``mesh_source`` resolves the INPUT of
-``ffrmbs preprocess``: a mesh file or a built-in geometry (:data:`BUILTINS`: ``box``,
+``ffrmbs preprocess``: a mesh, ``.geo``, STEP or IGES file or a built-in geometry (:data:`BUILTINS`: ``box``,
 ``cylinder``, ``spherical-cap``, ``grooved-block`` with their dimensions after a
 colon, ``stepped-beam``), the box also structured (``--structured NX,NY,NZ``).
 """
@@ -96,18 +96,47 @@ def structured_divisions(text: str) -> tuple:
     return divisions
 
 
-def check_mesh_options(spec: str, order=None, mesh_size=None, structured=None):
+def face_boxes(texts) -> dict:
+    """{name: (xmin, ymin, zmin, xmax, ymax, zmax)} of ``--group NAME=XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX``
+    texts (input units), each naming a node group of the faces inside the box
+    (:func:`~preprocess.geometry.mesh_cad_file`); a ModelError for a text not of that
+    form, a bound not finite, a minimum above its maximum or a name given twice."""
+    boxes = {}
+    for text in texts or ():
+        name, equals, values = str(text).partition("=")
+        name = name.strip()
+        try:
+            box = tuple(float(v) for v in values.split(","))
+        except ValueError:
+            box = ()
+        if not (equals and name and len(box) == 6 and np.all(np.isfinite(box))):
+            raise ModelError(f"--group needs NAME=XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX (six finite numbers, input units), "
+                             f"e.g. clamp=-1,-1,-1,0.001,1,1 — got {text!r}")
+        if any(lo > hi for lo, hi in zip(box[:3], box[3:])):
+            raise ModelError(f"--group {name}: each minimum must be at most its maximum, got {text!r}")
+        if name in boxes:
+            raise ModelError(f"--group {name} is given twice")
+        boxes[name] = box
+    return boxes
+
+
+def check_mesh_options(spec: str, order=None, mesh_size=None, structured=None, groups=None):
     """The checks of :func:`mesh_source` on its options, before anything is read or
     meshed: a ModelError for a ``mesh_size`` that is not positive and finite, for a
     built-in geometry's dimensions (:func:`builtin_shape`), for ``structured`` divisions
     that are not three whole numbers >= 1 or given for anything but a ``box:`` or with a
     ``mesh_size``, and for an ``order`` or a ``mesh_size`` given for a mesh file
-    (:func:`~preprocess.mesh.check_meshing_options`); an InputFileError for a file that
-    is missing or not a regular file (:func:`~preprocess.inputfiles.regular_file`).
+    (:func:`~preprocess.mesh.check_meshing_options`), and for ``groups`` (``--group``
+    texts, :func:`face_boxes`) malformed or given for anything but a STEP or IGES file;
+    an InputFileError for a file that is missing or not a regular file
+    (:func:`~preprocess.inputfiles.regular_file`).
     Returns the divisions (nx, ny, nz), or None."""
     if mesh_size is not None:
         fe.check_positive("mesh size", mesh_size)
+    boxes = face_boxes(groups)
     shape = builtin_shape(spec)
+    if boxes and shape is not None:
+        raise ModelError(f"--group applies to STEP and IGES files, not the built-in {spec}")
     if structured is not None:
         if shape is None or shape[0] is not geometry.box:
             raise ModelError(f"--structured applies to the built-in box:LX,LY,LZ only, not {spec}")
@@ -115,11 +144,12 @@ def check_mesh_options(spec: str, order=None, mesh_size=None, structured=None):
             raise ModelError("--mesh-size does not apply with --structured: the divisions set the elements")
         return structured_divisions(structured)
     if shape is None:
-        check_meshing_options(regular_file(spec), order, mesh_size)
+        check_meshing_options(regular_file(spec), order, mesh_size, boxes)
     return None
 
 
-def mesh_source(spec: str, order=None, mesh_size=None, check_limits=True, announce=None, structured=None) -> Mesh:
+def mesh_source(spec: str, order=None, mesh_size=None, check_limits=True, announce=None, structured=None,
+                units: str = "si", groups=None) -> Mesh:
     """The mesh named by ``spec``: a file path or a built-in geometry of :data:`BUILTINS`
     (``box:LX,LY,LZ``, ``cylinder:R,L``, ``spherical-cap:R,H``, ``grooved-block:LX,LY,LZ,R``,
     ``stepped-beam``; see :mod:`preprocess.geometry`).
@@ -136,13 +166,17 @@ def mesh_source(spec: str, order=None, mesh_size=None, check_limits=True, announ
     limits of :mod:`preprocess.limits` is a ModelError before meshing. ``announce``: called
     (no arguments) once the options pass :func:`check_mesh_options`, before anything is
     read or meshed, so a caller reporting progress says nothing for a refused option.
+    ``units`` (:mod:`preprocess.units`): a STEP or IGES file is converted from its own
+    length unit to the system's (m or mm). ``groups``: ``--group NAME=XMIN,...,ZMAX``
+    texts (:func:`face_boxes`, STEP and IGES only), node groups of the faces in each box.
     """
-    divisions = check_mesh_options(spec, order, mesh_size, structured)
+    divisions = check_mesh_options(spec, order, mesh_size, structured, groups)
+    length_unit = unitsys.unit_system(units).length_unit
     if announce is not None:
         announce()
     shape = builtin_shape(spec)
     if shape is None:
-        return read_mesh(Path(spec), order, mesh_size, check_limits)
+        return read_mesh(Path(spec), order, mesh_size, check_limits, length_unit, face_boxes(groups))
     mesher, dims = shape
     order = 2 if order is None else order
     if divisions is not None:

@@ -200,8 +200,8 @@ def test_mesh_size_for_a_meshed_file_is_refused(tmp_path, capsys, name):
                "--out", str(tmp_path / "o")])
     out, err = capsys.readouterr()
     assert rc == 2 and "Traceback" not in err
-    assert err.strip().splitlines()[-1] == (f"ffrmbs: error: --mesh-size applies to built-in geometries and "
-                                            f".geo files; {path} is already meshed")
+    assert err.strip().splitlines()[-1] == (f"ffrmbs: error: --mesh-size applies to built-in geometries, "
+                                            f".geo, STEP and IGES files; {path} is already meshed")
 
 
 # --- 3. files a .geo reads --------------------------------------------------------------------------

@@ -19,10 +19,14 @@ and planning included, compilation excluded — every case runs once untimed fir
 The baseline (default :data:`BASELINE`, the main of before the Model/Data split) is
 exported with ``git archive`` into a temporary directory; this checkout and the baseline
 each run :mod:`validation.bench.step_worker` in their own process, alternately,
-``rounds`` times; the table gives medians over all timed runs and the ratio baseline /
-this checkout. Each case also reports a result figure (v_y(T) or |r_A(T)|) from both, so
-that a speed-up that changed the answer shows. Without git or the baseline commit, the
-baseline columns say why they are empty.
+``rounds`` times, each importing the project's packages from its own tree only (an
+installed ``ffrmbs`` never fills in what the old tree lacks); the table gives medians
+over all timed runs and the ratio baseline / this checkout, and its header names the
+directory each side's code came from. Each case also reports a result figure (v_y(T) or
+|r_A(T)|) from both, so that a speed-up that changed the answer shows. When the baseline
+cannot run — no git, this code is an installed copy rather than a clone, the commit is
+missing, or its worker fails — the header says why in one line and the baseline
+columns stay empty.
 
 Run::
 
@@ -32,7 +36,6 @@ Run::
 from __future__ import annotations
 
 import json
-import os
 import subprocess
 import sys
 import tempfile
@@ -65,27 +68,41 @@ def cases(t_end) -> list[dict]:
                 "modes": FREE_MODES}])
 
 
-def export_baseline(rev, into) -> str | None:
-    """Export commit ``rev`` of this repository into ``into``; None, or why it could not."""
+def export_baseline(rev, into, root=ROOT) -> str | None:
+    """Export commit ``rev`` of the git clone ``root`` into ``into``; None, or why it could not."""
     try:
-        archive = subprocess.run(["git", "-C", str(ROOT), "archive", "--format=tar", rev],
-                                 capture_output=True, check=False)
+        top = subprocess.run(["git", "-C", str(root), "rev-parse", "--show-toplevel"], capture_output=True,
+                             text=True, check=False)
     except OSError as exc:
         return f"git not available ({exc.strerror})"
+    if top.returncode or Path(top.stdout.strip()).resolve() != Path(root).resolve():
+        return f"{root} is not a git clone (an installed copy?): no commit {rev} to compare with"
+    archive = subprocess.run(["git", "-C", str(root), "archive", "--format=tar", rev], capture_output=True, check=False)
     if archive.returncode:
         return f"commit {rev} not found ({archive.stderr.decode(errors='replace').strip()})"
     subprocess.run(["tar", "-x", "-C", str(into)], input=archive.stdout, check=True)
     return None
 
 
+class WorkerFailed(RuntimeError):
+    """A step worker ended with an error; the message ends with the last lines it printed."""
+
+
 def run_worker(checkout, spec) -> dict:
-    """The worker's measurements with ``checkout`` first on the path."""
-    env = {**os.environ, "PYTHONPATH": str(checkout)}
-    out = subprocess.run([sys.executable, str(WORKER), json.dumps(spec)], env=env, capture_output=True,
+    """The worker's measurements of the product in ``checkout`` (its project packages
+    imported from there only): {"cases": {name: {"walls", "steps", "check"}}, "origins":
+    {package: directory}}."""
+    out = subprocess.run([sys.executable, str(WORKER), str(checkout), json.dumps(spec)], capture_output=True,
                          text=True, check=False)
     if out.returncode:
-        raise RuntimeError(f"step worker in {checkout} failed:\n{out.stderr[-3000:]}")
+        raise WorkerFailed(f"step worker in {checkout} failed:\n{out.stderr[-3000:]}")
     return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def last_line(text) -> str:
+    """The last non-empty line of ``text`` (an error's one-line summary)."""
+    lines = [line.strip() for line in text.splitlines() if line.strip()]
+    return lines[-1] if lines else text
 
 
 def exudyn_us_per_step(repeats) -> float | None:
@@ -111,16 +128,28 @@ def benchmark(rounds, repeats, t_end, baseline=BASELINE, log=print) -> dict:
     walls = {"this": {}, "baseline": {}}
     checks = {"this": {}, "baseline": {}}
     steps = {}
+    origins = {}
     with tempfile.TemporaryDirectory(prefix="ffrmbs-baseline-") as tmp:
         why_not = export_baseline(baseline, tmp)
         checkouts = {"this": ROOT} if why_not else {"this": ROOT, "baseline": Path(tmp)}
         for k in range(rounds):
-            for who, checkout in checkouts.items():
+            for who, checkout in list(checkouts.items()):
                 start = time.perf_counter()
-                for name, m in run_worker(checkout, spec).items():
+                try:
+                    measured = run_worker(checkout, spec)
+                except WorkerFailed as exc:
+                    if who == "this":
+                        raise
+                    why_not = f"its worker failed: {last_line(str(exc))}"
+                    del checkouts[who]
+                    walls[who], checks[who] = {}, {}
+                    log(f"round {k + 1}/{rounds}: baseline skipped, {why_not}")
+                    continue
+                for name, m in measured["cases"].items():
                     walls[who].setdefault(name, []).extend(m["walls"])
                     checks[who][name] = m["check"]
                     steps[name] = m["steps"]
+                origins[who] = sorted(set(measured["origins"].values()))
                 log(f"round {k + 1}/{rounds}: {who} in {time.perf_counter() - start:.1f} s")
     exudyn = exudyn_us_per_step(max(3, repeats))
     rows = []
@@ -156,8 +185,9 @@ def benchmark(rounds, repeats, t_end, baseline=BASELINE, log=print) -> dict:
                     f"{whole - pairs:.1%}) — {'met' if abs(pairs) <= FLAT_TOL else 'NOT met'}")
     header = (f"Per-step cost, median of {rounds} rounds x {repeats} runs, this checkout and baseline {baseline} "
               f"alternately in separate processes" + (f"; baseline: {why_not}" if why_not else "")
-              + ("" if exudyn is not None else "; Exudyn: not installed (pip install '.[peers]')"))
-    return {"benchmark": "step_cost", "machine": machine(), "baseline": baseline, "rows": rows,
+              + ("" if exudyn is not None else "; Exudyn: not installed (pip install '.[peers]')")
+              + "".join(f"; {who}: code from {', '.join(dirs)}" for who, dirs in origins.items()))
+    return {"benchmark": "step_cost", "machine": machine(), "baseline": baseline, "origins": origins, "rows": rows,
             "table": header + "\n\n" + "\n".join(table), "verdicts": verdicts}
 
 

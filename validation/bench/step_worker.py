@@ -1,6 +1,14 @@
 """One process's share of :mod:`validation.bench.step_cost`: the per-step cost of the
-product found first on ``sys.path`` (this checkout, or an older one put first by
-``PYTHONPATH``), printed as one JSON line.
+product in one checkout (this one, an older commit's exported tree, or an installed
+copy's directory), printed as one JSON line.
+
+The checkout alone supplies the product: every top-level package of the project
+(:data:`PROJECT_PACKAGES`) is imported from it and from nowhere else, whatever else is on
+``sys.path`` — an installed ``ffrmbs`` (``pip install .`` or editable) would otherwise lend
+an older checkout the packages it lacks (``ffrmbs_app`` did not exist before the
+Model/Data split), and the mix fails. A package the checkout lacks cannot be imported.
+Third-party packages (numpy, numba, ...) come from the environment as usual. The JSON
+names the directory each project package was imported from (``"origins"``).
 
 It uses only the public API that every version since the first benchmark has (the
 built-in point-mass-on-beam scene, ``System.simulate``, the free-flight case's scene),
@@ -9,16 +17,49 @@ compiles or loads its cache), then ``repeats`` timed runs whose wall times are r
 
 Run by :mod:`validation.bench.step_cost`::
 
-    PYTHONPATH=CHECKOUT python3 validation/bench/step_worker.py '{"repeats": 3, ...}'
+    python3 validation/bench/step_worker.py CHECKOUT '{"repeats": 3, ...}'
 """
 
 from __future__ import annotations
 
+import importlib.abc
+import importlib.machinery
 import json
+import os
 import sys
 import time
 
 import numpy as np
+
+PROJECT_PACKAGES = ("ffrmbs", "ffrmbs_app", "preprocess", "mbs", "contours", "contact", "validation")
+
+
+class CheckoutOnly(importlib.abc.MetaPathFinder):
+    """A meta path finder that finds the top-level project packages in ``checkout`` only
+    (their submodules follow from the package's ``__path__``); a project package the
+    checkout lacks raises ModuleNotFoundError. Other names pass to the next finder."""
+
+    def __init__(self, checkout):
+        self.checkout = os.fspath(checkout)
+
+    def find_spec(self, name, path=None, target=None):
+        if path is not None or name not in PROJECT_PACKAGES:
+            return None
+        spec = importlib.machinery.PathFinder.find_spec(name, [self.checkout])
+        if spec is None:
+            raise ModuleNotFoundError(f"No module named {name!r} in {self.checkout}", name=name)
+        return spec
+
+
+def confine_to(checkout) -> None:
+    """Import the project's packages from ``checkout`` only, from now on in this process."""
+    sys.meta_path.insert(0, CheckoutOnly(checkout))
+
+
+def origins() -> dict:
+    """{project package: the directory it was imported from} for those imported so far."""
+    return {name: os.path.dirname(os.path.dirname(sys.modules[name].__file__))
+            for name in PROJECT_PACKAGES if getattr(sys.modules.get(name), "__file__", None)}
 
 
 def point_mass_beam():
@@ -101,4 +142,7 @@ def measure(spec: dict) -> dict:
 
 
 if __name__ == "__main__":
-    print(json.dumps(measure(json.loads(sys.argv[1]))))
+    confine_to(sys.argv[1])
+    point_mass_beam()                              # the product's packages, imported before any timing
+    measured = measure(json.loads(sys.argv[2]))
+    print(json.dumps({"cases": measured, "origins": origins()}))
