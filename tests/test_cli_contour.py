@@ -177,7 +177,7 @@ def test_face_with_a_hole_is_trimmed_with_its_rims(tmp_path, capsys):
     lx, ly, lz = case.PLATE
     hx, hy, radius = case.HOLE
     assert re.search(rf"outer edge: \d+ nodes, length {2 * (lx + ly):.4g} m", text)
-    assert f"rim 1: " in text and f"centre ({hx:.4g}, {hy:.4g}, {lz:.4g}) m, mean radius {radius:.4g} m" in text
+    assert "rim 1: " in text and f"centre ({hx:.4g}, {hy:.4g}, {lz:.4g}) m, mean radius {radius:.4g} m" in text
     assert max(report_row(text, "geometry")) < 1e-12
     contour = meshio.read(tmp_path / "o" / "top-contour.vtu")
     centres = contour.points[contour.cells[0].data].mean(axis=1)

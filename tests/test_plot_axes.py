@@ -1,7 +1,6 @@
 """Plots read by a user: one axis per error kind, legends of what varies placed outside the
 data, tick labels always present, no offset text (structure of the matplotlib Figures)."""
 
-import math
 
 import numpy as np
 import pytest

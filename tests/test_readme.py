@@ -165,7 +165,7 @@ def _argv(words):
 
 
 WRITTEN_INTO = ("examples",)        # the README preprocesses example parts into examples/scenes/
-IGNORED = ("plate", "channel", "__pycache__")     # bodies a user made there (.gitignore)
+IGNORED = ("plate", "plate_hole", "channel", "__pycache__")     # bodies a user made there (.gitignore)
 
 
 def _fresh_clone(tmp):

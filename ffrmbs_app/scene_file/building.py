@@ -265,19 +265,6 @@ class SceneBuilder:
             settings["name"], dict(self.inputs), settings["description"], units=dict(self.units),
             labels=dict(self.labels)))
 
-
-def output_label(ref: FrameRef, quantity, component=None, at=None) -> str:
-    """What an output is, in words: "beam node 19 displacement", "point mass velocity y",
-    "bob point (0, 0, 0.1) m position", "beam modal coordinates q_f"; a node given by
-    ``at`` [m] says so: "beam node 412 (nearest to (0.25, 0.05, 0.025) m) displacement"."""
-    where = ref.body if ref.node is None else f"{ref.body} node {ref.node}"
-    if at is not None:
-        where += f" (nearest to ({', '.join(f'{x:g}' for x in at)}) m)"
-    if ref.point is not None and quantity not in BODY_QUANTITIES:
-        where += f" point ({', '.join(f'{x:g}' for x in ref.point)}) m"
-    words = {"q_f": "modal coordinates q_f", "angular_velocity": "angular velocity"}.get(quantity, quantity)
-    return " ".join([where, words] + ([component] if component else []))
-
     def _static_equilibrium(self, env: Env):
         """The bodies with initial = "static" put at rest in static equilibrium
         (:meth:`mbs.System.static_equilibrium`); a ModelError is reported at the
@@ -290,6 +277,19 @@ def output_label(ref: FrameRef, quantity, component=None, at=None) -> str:
         except ModelError as exc:
             body = next((b for b in static if f"body {b.name!r}" in str(exc)), static[0])
             self.doc.fail(body.keypath + ("initial",), f"body {body.name!r}: initial = \"static\": {exc}")
+
+
+def output_label(ref: FrameRef, quantity, component=None, at=None) -> str:
+    """What an output is, in words: "beam node 19 displacement", "point mass velocity y",
+    "bob point (0, 0, 0.1) m position", "beam modal coordinates q_f"; a node given by
+    ``at`` [m] says so: "beam node 412 (nearest to (0.25, 0.05, 0.025) m) displacement"."""
+    where = ref.body if ref.node is None else f"{ref.body} node {ref.node}"
+    if at is not None:
+        where += f" (nearest to ({', '.join(f'{x:g}' for x in at)}) m)"
+    if ref.point is not None and quantity not in BODY_QUANTITIES:
+        where += f" point ({', '.join(f'{x:g}' for x in ref.point)}) m"
+    words = {"q_f": "modal coordinates q_f", "angular_velocity": "angular velocity"}.get(quantity, quantity)
+    return " ".join([where, words] + ([component] if component else []))
 
 
 def _probe(ref: FrameRef, quantity, component):
