@@ -6,10 +6,10 @@ The job, for a scene (:class:`ffrmbs_app.scene.Scene`) built fresh by ``make_sce
 
 0. the checks, before anything is written: the options, the step count and memory
    (:mod:`ffrmbs_app.limits`), the lock ``OUT/<scene>.lock`` held for the job
-   (:mod:`ffrmbs_app.output_lock`: one job per result file), and that a result file
-   already at ``OUT/<scene>.h5`` is one of the same scene (:func:`refuse_another_scene`:
-   the default scene and a scene file, or two scene files, that name their results alike
-   do not overwrite each other's);
+   (:mod:`ffrmbs_app.output_lock`: one job per result file); a result file already at
+   ``OUT/<scene>.h5`` of another scene (the default scene and a scene file, or two scene
+   files, that name their results alike) is named in a warning before this run replaces
+   it (:func:`warn_another_scene`);
 1. warm-up (the scene's ``warmup`` run, if any): a short run that compiles the numba
    kernels (or loads them from numba's disk cache) before the timed run. Compilation
    anywhere in the job is announced on its own line and measured apart
@@ -46,12 +46,13 @@ import math
 import signal
 import threading
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
 
 from ffrmbs_app.compile_clock import CompileClock
-from ffrmbs.errors import FfrmbsError, InputFileError, ModelError
+from ffrmbs.errors import InputFileError, ModelError
 from ffrmbs_app.limits import check_resources
 from ffrmbs_app.output_lock import output_lock
 from ffrmbs_app.scene import MOREAU
@@ -137,11 +138,12 @@ def scene_source(inputs: dict) -> str:
     return "the default scene"
 
 
-def refuse_another_scene(path, scene) -> None:
-    """FfrmbsError (one line) if ``path`` holds the result file of another scene than
-    ``scene`` (:func:`scene_source`): two scenes whose results have the same name do not
-    overwrite each other. A missing, unreadable or foreign file is left to the recorder
-    (replaced)."""
+def warn_another_scene(path, scene) -> None:
+    """A warning (one line; the command line prints ``ffrmbs: warning: …``) if ``path``
+    holds the result file of another scene than ``scene`` (:func:`scene_source`), which
+    this run replaces: two scenes whose results have the same name (the default scene
+    and ``examples/scenes/point_mass_beam.toml``) do not overwrite each other's unsaid.
+    A missing, unreadable or foreign file says nothing (the recorder replaces it)."""
     path = Path(path)
     if not path.is_file():
         return
@@ -152,8 +154,8 @@ def refuse_another_scene(path, scene) -> None:
         return
     ours = scene_source(scene.inputs)
     if theirs != ours:
-        raise FfrmbsError(f"{path} holds the result of {theirs}, not of this run's {ours}; choose another --out, "
-                          f"or remove {path} to replace it")
+        warnings.warn(f"{path} held the result of {theirs}; this run of {ours} replaces it (its plot and ParaView "
+                      "export too; another --out keeps both)", stacklevel=2)
 
 
 class JobRecorder(ResultRecorder):
@@ -190,7 +192,7 @@ def run_scene(make_scene, out, check=True, resume=False, checkpoint_every=60.0, 
     path = result_path(scene, out) if result is None else Path(result)
     with output_lock(path):
         if not resume:
-            refuse_another_scene(path, scene)
+            warn_another_scene(path, scene)
         return _run(make_scene, scene, path, check, resume, checkpoint_every, flush_every, export, plot, log)
 
 
