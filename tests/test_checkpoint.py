@@ -201,7 +201,8 @@ def beam_scene(pair, law):
     """The clamped 250 x 50 x 50 mm beam (4 modes, frame fixed, gravity −y) with the
     surface kind ``pair[1]`` on it — the top face (2s; with residual flexibility for a
     point), the top face's centre line (1s), a band on it, a cylinder of radius 25 mm
-    around the beam's axis — and the side ``pair[0]`` landing at x = 0.2 m on top."""
+    around the beam's axis, the top front edge (edge) — and the side ``pair[0]`` landing
+    at x = 0.2 m on top (on the edge for an edge)."""
     system = System(gravity=(0.0, -9.81, 0.0))
     system.cache_dir = cache_dir()
     beam = system.add(FlexibleBodyFFR(pmb.default_beam_data(), modes=4, frame=PrescribedFrameMotion.fixed(),
@@ -210,9 +211,12 @@ def beam_scene(pair, law):
                                                  degree=4)
     surface = {"2s": lambda: Contour2sNeutralFFR(beam, "y1", residual_flexibility=pair[0] == "point"),
                "1s": top, "band": lambda: FlexibleBand(top(), width=0.05),
+               "edge": lambda: CONTOURS["edge"].along_line(beam, (0.0, 0.05, 0.05), (1, 0, 0), normal=(0, 1, 0),
+                                                          degree=4),
                "cylinder": lambda: FlexibleCylinder(Contour1sNeutralFFR.along_line(
                    beam, (0.0, 0.025, 0.025), (1, 0, 0), normal=(0, 1, 0), degree=4), radius=0.025)}[pair[1]]()
-    side, frame = moving_side(system, pair[0], np.array([0.2, 0.05, 0.025]), (0, 1, 0), law == "bilateral")
+    at = np.array([0.2, 0.05, 0.05 if pair[1] == "edge" else 0.025])
+    side, frame = moving_side(system, pair[0], at, (0, 1, 0), law == "bilateral")
     system.add(connect(side, surface, make_law(law, **LAW_PARAMETERS[law]), name="contact"))
     return system, {"x": frame}
 
@@ -253,6 +257,8 @@ KIND_SCENES = {     # (contour pair, law): the scene's builder
     (("point", "plane"), "coulomb"): table_scene, (("sphere", "plane"), "impact"): table_scene,
     (("sphere", "sphere"), "penalty"): table_scene, (("point", "sphere"), "impact"): table_scene,
 }
+if "edge" in CONTOURS:      # a sharp edge (the rims of a face with holes), on the beam's top front edge
+    KIND_SCENES.update({(("point", "edge"), "impact"): beam_scene, (("sphere", "edge"), "coulomb"): beam_scene})
 KIND_RUN = dict(options=dict(integrator="moreau", trace=True), t_end=2e-3, dt=1e-4, n_out=5)
 KIND_STOP = 5e-4        # [s] the checkpoint: the contact closed (it closes at 0.2 ms)
 
