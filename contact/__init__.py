@@ -17,7 +17,7 @@ Public API::
 from .broad_phase import BroadPhase, overlapping
 from .contact import Contact, ContactElement, CurveConstraint, connect
 from .kinematics import (ContactKinematics, ContactKinematicsPointContour1s, ContactKinematicsPointContour2s,
-                         ContactKinematicsPointEdge, ContactKinematicsPointPlane, ContactKinematicsSphereContour1s,
+                         ContactKinematicsPointPlane, ContactKinematicsSphereContour1s,
                          ContactKinematicsSphereEdge,
                          ContactKinematicsSphereContour2s, ContactKinematicsSpherePlane,
                          ContactKinematicsSphereSphere, PointOnCurveConstraint)
@@ -28,7 +28,7 @@ from .search import Contact1sSearch, Contact2sSearch
 from .solver import ContactSolution, ProxSolver
 
 __all__ = ["BILATERAL_KINEMATICS", "Bilateral", "BroadPhase", "Contact", "Contact1sSearch", "Contact2sSearch", "ContactElement", "ContactKinematics",
-           "ContactKinematicsPointContour1s", "ContactKinematicsPointContour2s", "ContactKinematicsPointEdge", "ContactKinematicsPointPlane",
+           "ContactKinematicsPointContour1s", "ContactKinematicsPointContour2s", "ContactKinematicsPointPlane",
            "ContactKinematicsSphereContour1s", "ContactKinematicsSphereContour2s", "ContactKinematicsSphereEdge", "ContactKinematicsSpherePlane",
            "ContactKinematicsSphereSphere", "ContactSolution", "CurveConstraint", "LAWS",
            "LinearRegularizedUnilateralConstraint", "PAIR_KINEMATICS", "PointOnCurveConstraint", "ProxSolver",

@@ -136,7 +136,7 @@ class CurveConstraint(ContactElement):
     set_valued = True
     unilateral = False
     dim = 2
-    run_state = ("closed", "kinematics")
+    run_state = ("kinematics",)     # (mbs.state_arrays); whether it is closed is the run's Data
 
     def __init__(self, kinematics: PointOnCurveConstraint, name="on curve"):
         if not isinstance(kinematics, PointOnCurveConstraint):

@@ -336,11 +336,6 @@ class ContactKinematicsSphereEdge(_EdgeFrame, ContactKinematicsSphereContour1s):
     """A sphere against an edge (see :class:`_EdgeFrame`): a ball on a hole's rim."""
 
 
-class ContactKinematicsPointEdge(_EdgeFrame, ContactKinematicsPointContour1s):
-    """A point against an edge (see :class:`_EdgeFrame`, ρ = 0): g_N >= 0, the point
-    touches the edge only where it meets the curve (a ball needs a sphere)."""
-
-
 class _PlaneProjection(_CentreContact):
     """Contour 2 a PlaneContour: C2 is the orthogonal projection of c onto the plane,
     (η, ξ) = (x, y)ᵀ (c − O) in the plane's axes. The plane is unbounded for contact (its

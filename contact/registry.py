@@ -19,7 +19,7 @@ from ffrmbs.errors import ModelError
 from ffrmbs.registry import Registry
 
 from .kinematics import (ContactKinematicsPointContour1s, ContactKinematicsPointContour2s,
-                         ContactKinematicsPointPlane, ContactKinematicsPointEdge, ContactKinematicsSphereContour1s,
+                         ContactKinematicsPointPlane, ContactKinematicsSphereContour1s,
                          ContactKinematicsSphereEdge,
                          ContactKinematicsSphereContour2s, ContactKinematicsSpherePlane,
                          ContactKinematicsSphereSphere, PointOnCurveConstraint)
@@ -41,7 +41,6 @@ for _curve in ("1s", "1s-rigid"):
     PAIR_KINEMATICS.register(("point", _curve), ContactKinematicsPointContour1s)
     PAIR_KINEMATICS.register(("sphere", _curve), ContactKinematicsSphereContour1s)
 PAIR_KINEMATICS.register(("sphere", "edge"), ContactKinematicsSphereEdge)   # a ball on a sharp edge (a rim)
-PAIR_KINEMATICS.register(("point", "edge"), ContactKinematicsPointEdge)     # normal from the edge to the point
 PAIR_KINEMATICS.register(("point", "plane"), ContactKinematicsPointPlane)
 PAIR_KINEMATICS.register(("sphere", "plane"), ContactKinematicsSpherePlane)
 PAIR_KINEMATICS.register(("sphere", "sphere"), ContactKinematicsSphereSphere)

@@ -38,8 +38,10 @@ Series
 File names: ``<out_dir>/<series>/<series>_<k>.vtu`` with ``k`` the sample's index in the
 result file; series names are the body names with characters other than letters,
 digits, ``_ . -`` replaced by ``_``. The export is written into a temporary directory
-beside ``out_dir`` and renamed into place, so a failed export leaves nothing behind; an
-existing ``out_dir`` is replaced only when it is empty or an earlier export (it holds the
+beside ``out_dir`` (``.<out_dir name>.tmp-<pid>-…``) and renamed into place, so a failed
+or interrupted export (Ctrl-C, SIGTERM) leaves nothing behind; what an export killed
+outright (kill -9) left is removed by the next export to the same ``out_dir``
+(:func:`remove_stale_exports`). An existing ``out_dir`` is replaced only when it is empty or an earlier export (it holds the
 marker file ``.ffrmbs-export``). The ``.vtu`` files are raw binary by default (fast to
 write); ``compress=True`` (``ffrmbs export --compress``) zlib-compresses them.
 
@@ -63,7 +65,7 @@ import h5py
 import numpy as np
 
 from ffrmbs.errors import FfrmbsError, InputFileError, OutputFileError, os_reason
-from ffrmbs_app.output_dirs import new_directories
+from ffrmbs_app.output_dirs import new_directories, remove_stale, temporary_name, terminate_interrupts
 from mbs.result_file import attribute, damaged_result_file, open_result_file
 
 MARKER = ".ffrmbs-export"
@@ -211,15 +213,16 @@ def export_paraview(result_path, out_dir=None, every=1, bodies=None, compress=Fa
     if isinstance(every, bool) or not isinstance(every, (int, np.integer)) or every < 1:
         raise FfrmbsError(f"every must be a positive integer, got {every!r}")
     every = int(every)
-    out_dir = Path(out_dir) if out_dir is not None else result_path.with_name(result_path.stem + "-paraview")
+    out_dir = Path(out_dir) if out_dir is not None else default_export_dir(result_path)
     out_dir = out_dir.absolute()
-    if out_dir.exists() and not (out_dir.is_dir() and (not any(out_dir.iterdir()) or (out_dir / MARKER).exists())):
+    if out_dir.exists() and not _is_export(out_dir):
         raise FfrmbsError(f"{out_dir} exists and is not an ffrmbs export; remove it or choose another output directory")
 
     with open_result(result_path) as f:
         plan = _plan(f, result_path, bodies)
+        remove_stale_exports(out_dir)
         try:
-            with new_directories(out_dir.parent), _temporary_dir(out_dir) as tmp:
+            with terminate_interrupts(), new_directories(out_dir.parent), _temporary_dir(out_dir) as tmp:
                 main = _write_series(tmp, plan, result_path, every, compress)
                 _replace_dir(tmp, out_dir)
         except OSError as exc:
@@ -227,10 +230,39 @@ def export_paraview(result_path, out_dir=None, every=1, bodies=None, compress=Fa
     return out_dir / main.name
 
 
+def default_export_dir(result_path) -> Path:
+    """``<result stem>-paraview/`` beside the result file: where :func:`export_paraview`
+    writes by default."""
+    result_path = Path(result_path)
+    return result_path.with_name(result_path.stem + "-paraview")
+
+
+def _is_export(out_dir: Path) -> bool:
+    """Whether ``out_dir`` is a directory that an export may replace: empty or an earlier export."""
+    return out_dir.is_dir() and (not any(out_dir.iterdir()) or (out_dir / MARKER).exists())
+
+
+def remove_stale_exports(out_dir) -> list:
+    """Remove the temporary directories beside ``out_dir`` that exports to it killed
+    mid-write left (``.<name>.tmp-<pid>-…`` and ``.<name>.old-<pid>-…`` of ended
+    processes, :func:`ffrmbs_app.output_dirs.remove_stale`); returns them."""
+    out_dir = Path(out_dir)
+    return [p for kind in ("tmp", "old") for p in remove_stale(out_dir.parent, f".{out_dir.name}.{kind}-")]
+
+
+def remove_export(out_dir) -> None:
+    """Remove the export ``out_dir`` (only an earlier ffrmbs export, marked by
+    :data:`MARKER`) and what killed exports to it left beside it."""
+    out_dir = Path(out_dir)
+    if (out_dir / MARKER).exists():
+        shutil.rmtree(out_dir)
+    remove_stale_exports(out_dir)
+
+
 @contextmanager
 def _temporary_dir(out_dir: Path):
     """A new hidden directory beside ``out_dir`` for the block, removed if the block raises."""
-    tmp = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.tmp-", dir=out_dir.parent))
+    tmp = Path(tempfile.mkdtemp(prefix=temporary_name(f".{out_dir.name}.tmp-"), dir=out_dir.parent))
     try:
         yield tmp
     except BaseException:
@@ -270,7 +302,7 @@ def _write_series(tmp: Path, plan, result_path: Path, every, compress) -> Path:
 def _replace_dir(tmp: Path, out_dir: Path):
     """Move ``tmp`` to ``out_dir``, replacing an earlier export there."""
     if out_dir.exists():
-        old = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.old-", dir=out_dir.parent))
+        old = Path(tempfile.mkdtemp(prefix=temporary_name(f".{out_dir.name}.old-"), dir=out_dir.parent))
         old.rmdir()
         os.replace(out_dir, old)
         os.replace(tmp, out_dir)

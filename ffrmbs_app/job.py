@@ -5,14 +5,19 @@ ParaView export.
 The job, for a scene (:class:`ffrmbs_app.scene.Scene`) built fresh by ``make_scene()``:
 
 0. the checks, before anything is written: the options, the step count and memory
-   (:mod:`ffrmbs_app.limits`), and the lock ``OUT/<scene>.lock`` held for the job
-   (:mod:`ffrmbs_app.output_lock`: one job per result file);
+   (:mod:`ffrmbs_app.limits`), the lock ``OUT/<scene>.lock`` held for the job
+   (:mod:`ffrmbs_app.output_lock`: one job per result file); a result file already at
+   ``OUT/<scene>.h5`` of another scene (the default scene and a scene file, or two scene
+   files, that name their results alike) is named in a warning before this run replaces
+   it (:func:`warn_another_scene`);
 1. warm-up (the scene's ``warmup`` run, if any): a short run that compiles the numba
    kernels (or loads them from numba's disk cache) before the timed run. Compilation
    anywhere in the job is announced on its own line and measured apart
    (:class:`ffrmbs_app.compile_clock.CompileClock`); it is reported as such and subtracted from
    the run's wall and CPU seconds, so the per-step cost never contains it;
-2. the run, streamed to ``OUT/<scene>.h5`` (:mod:`mbs.result_file`) with a checkpoint
+2. the run, streamed to ``OUT/<scene>.h5`` (:mod:`mbs.result_file`; starting it removes
+   the plot and ParaView export of the run before, and what an export killed mid-write
+   left, so that none can be taken for this run's, :class:`JobRecorder`) with a checkpoint
    every ``checkpoint_every`` seconds of wall time; SIGINT and SIGTERM stop it at its next
    output sample with a checkpoint and a cleanly closed file (status "interrupted"); a
    second signal stops it after the current step. ``resume=True`` continues a killed or
@@ -36,22 +41,24 @@ The job, for a scene (:class:`ffrmbs_app.scene.Scene`) built fresh by ``make_sce
 from __future__ import annotations
 
 import contextlib
+import json
 import math
 import signal
 import threading
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
 
 from ffrmbs_app.compile_clock import CompileClock
-from ffrmbs.errors import ModelError
+from ffrmbs.errors import InputFileError, ModelError
 from ffrmbs_app.limits import check_resources
 from ffrmbs_app.output_dirs import shown
 from ffrmbs_app.output_lock import output_lock
 from ffrmbs_app.scene import MOREAU
 from mbs.integrators import driver
-from mbs.result_file import ResultRecorder, resume_checkpoint
+from mbs.result_file import ResultRecorder, attribute, open_result_file, resume_checkpoint
 
 
 def contact_intervals(t, dt, closed):
@@ -117,6 +124,55 @@ def result_path(scene, out) -> Path:
     return Path(out) / f"{scene.name}.h5"
 
 
+SOURCES = ("scene file", "model script")       # the inputs that say which scene a result file is of
+
+
+def scene_source(inputs: dict) -> str:
+    """Which scene a run is of, from its ``inputs`` ({label: path}, as a Scene has them, or
+    {label: {"path", "sha256"}} as a result file records them): "scene file <absolute
+    path>", "model script <absolute path>", or "the default scene" (no such file)."""
+    for label in SOURCES:
+        entry = inputs.get(label)
+        if entry is not None:
+            path = entry.get("path") if isinstance(entry, dict) else entry
+            return f"{label} {Path(str(path)).absolute()}"
+    return "the default scene"
+
+
+def warn_another_scene(path, scene) -> None:
+    """A warning (one line; the command line prints ``ffrmbs: warning: …``) if ``path``
+    holds the result file of another scene than ``scene`` (:func:`scene_source`), which
+    this run replaces: two scenes whose results have the same name (the default scene
+    and ``examples/scenes/point_mass_beam.toml``) do not overwrite each other's unsaid.
+    A missing, unreadable or foreign file says nothing (the recorder replaces it)."""
+    path = Path(path)
+    if not path.is_file():
+        return
+    try:
+        with open_result_file(path) as f:
+            theirs = scene_source(json.loads(attribute(f, "inputs", "{}")))
+    except (InputFileError, ValueError, TypeError, AttributeError):
+        return
+    ours = scene_source(scene.inputs)
+    if theirs != ours:
+        warnings.warn(f"{path} held the result of {theirs}; this run of {ours} replaces it (its plot and ParaView "
+                      "export too; another --out keeps both)", stacklevel=2)
+
+
+class JobRecorder(ResultRecorder):
+    """The job's result recorder: starting a new result file first removes the outputs
+    derived from the run before — its plot ``<stem>.png``, its ParaView export
+    ``<stem>-paraview/`` and what exports killed mid-write left beside it — so that a
+    killed or failed run leaves no older plot or export next to its result file."""
+
+    def begin(self, integ):
+        from ffrmbs_app.export import default_export_dir, remove_export
+
+        self.path.with_suffix(".png").unlink(missing_ok=True)
+        remove_export(default_export_dir(self.path))
+        super().begin(integ)
+
+
 def run_scene(make_scene, out, check=True, resume=False, checkpoint_every=60.0, flush_every=2.0,
               export=True, plot=True, log=print, no_limits=False, result=None) -> dict:
     """Run the job (module docstring) on ``make_scene()`` (a fresh Scene per call);
@@ -136,16 +192,17 @@ def run_scene(make_scene, out, check=True, resume=False, checkpoint_every=60.0, 
     check_resources(scene, check, no_limits)
     path = result_path(scene, out) if result is None else Path(result)
     with output_lock(path):
+        if not resume:
+            warn_another_scene(path, scene)
         return _run(make_scene, scene, path, check, resume, checkpoint_every, flush_every, export, plot, log)
 
 
 def _run(make_scene, scene, path, check, resume, checkpoint_every, flush_every, export, plot, log) -> dict:
     log(header(scene))
     units = scene.output_units()
-    recorder = ResultRecorder(path, {"scene": scene.name, "description": scene.description, "inputs": scene.inputs,
-                                     "overrides": scene.overrides, "units": units,
-                                     "labels": scene.labels},
-                              flush_every=flush_every, checkpoint_every=checkpoint_every)
+    recorder = JobRecorder(path, {"scene": scene.name, "description": scene.description, "inputs": scene.inputs,
+                                  "overrides": scene.overrides, "units": units, "labels": scene.labels},
+                         flush_every=flush_every, checkpoint_every=checkpoint_every)
     warm_s = 0.0
     with CompileClock(log) as clock:
         if scene.warmup is not None:

@@ -27,6 +27,7 @@ import numpy as np
 from ffrmbs.errors import FfrmbsError, InputFileError, OutputFileError, os_reason
 from ffrmbs_app.export import _check_shape, _dataset, _group, open_result
 from ffrmbs_app.ticks import plain_axis
+from ffrmbs_app.output_dirs import remove_stale
 from mbs.result_file import attribute
 
 COMPONENTS = ("x", "y", "z")
@@ -223,6 +224,7 @@ def plot_result(result_path, names=None, out=None, overwrite=False) -> Path:
     result_path = Path(result_path)
     out = Path(out) if out is not None else new_plot_path(result_path, overwrite)
     fig = result_figure(result_path, names)
+    remove_stale(out.parent, f".{out.name}.tmp-")        # what a plot killed while writing left
     tmp = out.with_name(f".{out.name}.tmp-{os.getpid()}")
     try:
         if out.parent and not out.parent.exists():

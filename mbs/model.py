@@ -44,6 +44,12 @@ N_FACTORS = 8          # Cholesky factors of a constant M̂ kept for different s
 CACHES = ("contact_sets", "problem_views", "factor_dt", "factor_last", "comp_entries")
 # ^ Data rebuilt on demand (the last step's factor of a constant M̂ is looked up again in
 #   ``factors``; the compliant contacts' entries are made each step): not in a checkpoint
+CARRIED = ("t", "q", "u", "closed", "lam_prev", "warm", "lam_joints", "warm_joints", "comp_force", "comp_delta",
+           "comp_delta_dot", "stats")
+# ^ the Data a Moreau step reads of the steps before it (the rest it writes before reading):
+#   the state, the closed flags (a planned run keeps closed contacts live), the warm
+#   starts, the compliant contacts' springs and the counters; what a step taken back
+#   puts back (mbs.integrators.moreau.AdaptiveMoreauTimeStepping)
 
 
 @dataclass(frozen=True)

@@ -126,11 +126,14 @@ def sha256(path) -> str:
 
 
 def input_hashes(inputs: dict) -> dict:
-    """{label: {"path", "sha256"}} of the input files (built-in sources have no file)."""
+    """{label: {"path", "sha256"}} of the input files, the path of a file made absolute
+    (which file it was, whatever the working directory; built-in sources have no file
+    and keep their name)."""
     out = {}
     for label, path in inputs.items():
         p = Path(path)
-        out[label] = {"path": str(path), "sha256": sha256(p) if p.exists() else None}
+        out[label] = {"path": str(p.absolute()), "sha256": sha256(p)} if p.exists() else {"path": str(path),
+                                                                                         "sha256": None}
     return out
 
 

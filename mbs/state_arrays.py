@@ -19,6 +19,10 @@ of the same kind. An attribute may hold
 The kind of each entry ("array", "float", "int", "bool", "tuple", "none") goes into
 ``kinds`` (kept in the checkpoint's JSON header), so restoring needs no code from the
 file. A new piece of run state is one more name in its class's ``run_state``.
+
+:class:`StateCopy` keeps the same state in memory, in buffers made once: a step that
+is taken back (the adaptive Moreau step, :mod:`mbs.integrators.moreau`) copies it
+before and puts it back after.
 """
 
 from __future__ import annotations
@@ -98,3 +102,58 @@ def take(key, current, arrays, kinds):
     if saved.shape != () or saved.dtype != dtype:
         raise StateMismatch(f"{key} is not a {kind} (shape {saved.shape}, {saved.dtype})")
     return python(saved[()])
+
+
+class StateCopy:
+    """A copy of run state kept in memory: :meth:`save` copies it into buffers made on
+    the first save (no allocation after that while shapes stay), :meth:`restore` puts it
+    back — arrays written into the objects' own arrays (views of them stay valid),
+    scalars, tuples and None set again, a dict (counters) copied.
+
+    ``owners``: [(object, names)] — the attributes ``names`` of each object, or its
+    ``run_state`` for names None; an attribute holding an object with its own
+    ``run_state`` is walked as :func:`collect` walks it."""
+
+    def __init__(self, owners):
+        self._slots = []
+        for obj, names in owners:
+            self._add(obj, type(obj).run_state if names is None else names)
+        self._kept = [None] * len(self._slots)
+
+    def _add(self, obj, names):
+        for name in names:
+            value = getattr(obj, name)
+            if hasattr(type(value), "run_state"):
+                self._add(value, type(value).run_state)
+            else:
+                self._slots.append((obj, name))
+
+    def save(self) -> None:
+        """Copy the state as it is now."""
+        kept = self._kept
+        for j, (obj, name) in enumerate(self._slots):
+            value = getattr(obj, name)
+            if isinstance(value, np.ndarray):
+                buf = kept[j]
+                if isinstance(buf, np.ndarray) and buf.shape == value.shape and buf.dtype == value.dtype:
+                    buf[...] = value
+                else:
+                    kept[j] = value.copy()
+            elif isinstance(value, dict):
+                kept[j] = dict(value)
+            else:
+                kept[j] = value
+
+    def restore(self) -> None:
+        """Put back the state of the last :meth:`save`."""
+        for (obj, name), value in zip(self._slots, self._kept):
+            if isinstance(value, np.ndarray):
+                current = getattr(obj, name)
+                if isinstance(current, np.ndarray) and current.shape == value.shape and current.dtype == value.dtype:
+                    current[...] = value
+                else:
+                    setattr(obj, name, value.copy())
+            elif isinstance(value, dict):
+                setattr(obj, name, dict(value))
+            else:
+                setattr(obj, name, value)

@@ -1,16 +1,21 @@
 """Issue 18, leftovers of the fault audit: result files damaged under `ffrmbs plot` and
 `ffrmbs export`, `--order` for an already meshed file, a FIFO or a directory as the
-scene file."""
+scene file. Issue 30: two scenes whose results have one name do not overwrite each
+other's; a new run removes the plot and export of the run before; an export killed or
+stopped leaves no temporary directory for good."""
 
 from __future__ import annotations
 
 import contextlib
 import io
+import json
 import os
 import re
 import shutil
+import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import h5py
@@ -146,6 +151,168 @@ def test_load_result_of_a_fifo_is_refused_without_opening_it(tmp_path):
     except subprocess.TimeoutExpired:
         pytest.fail("load_result opened the FIFO and blocked")
     assert res.stdout == f"{fifo}: not a regular file (a FIFO)\n", res.stderr
+
+
+# --- outputs of another scene, of the run before, of an export killed (issue 30) --------------------
+
+DROP = """\
+[scene]
+name = "drop"
+t_end = {t_end}
+dt = 1e-4
+n_out = 11
+gravity = [0.0, 0.0, -9.81]
+{options}
+[[body]]
+name = "bob"
+kind = "point_mass"
+mass = {mass}
+position = [0.0, 0.0, 0.001]
+
+[[contact]]
+name = "floor"
+contour1 = {{ kind = "point", body = "bob" }}
+contour2 = {{ kind = "plane" }}
+law = "impact"
+
+[outputs]
+z = {{ body = "bob", quantity = "position", component = "z" }}
+"""
+
+
+def drop_scene(path, mass=1.0, t_end=0.05, options="") -> Path:
+    """A point mass of ``mass`` [kg] dropped 1 mm onto the ground plane, its result
+    named "drop" whatever the file's name."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(DROP.format(mass=mass, t_end=t_end, options=options))
+    return path
+
+
+def files_in(directory) -> dict:
+    """{name: bytes or "dir"} of every entry of ``directory`` (hidden ones included)."""
+    return {p.name: "dir" if p.is_dir() else p.read_bytes() for p in sorted(Path(directory).iterdir())}
+
+
+def dead_pid() -> int:
+    """The pid of a process that has ended."""
+    proc = subprocess.Popen([sys.executable, "-c", "pass"])
+    proc.wait()
+    return proc.pid
+
+
+def replaced(path, theirs, ours) -> str:
+    return (f"ffrmbs: warning: {path} held the result of {theirs}; this run of {ours} replaces it (its plot and "
+            "ParaView export too; another --out keeps both)\n")
+
+
+def test_two_scene_files_naming_their_results_alike_say_so_when_one_replaces_the_other(tmp_path):
+    """Scene files a/drop.toml and b/drop.toml both name their result "drop": the second
+    into the same --out warns in one line naming the file and both scenes before it
+    replaces the first's result; a scene run again over its own result says nothing."""
+    a, b, out = drop_scene(tmp_path / "a" / "drop.toml"), drop_scene(tmp_path / "b" / "drop.toml", 2.0), tmp_path / "out"
+    for scene, warning in ((a, ""), (a, ""), (b, replaced(out / "drop.h5", f"scene file {a}", f"scene file {b}"))):
+        code, _, stderr = run_cli("run", scene, "--no-check", "--no-export", "--out", out)
+        assert code == 0 and stderr == warning, stderr
+    with h5py.File(out / "drop.h5", "r") as f:
+        assert json.loads(f.attrs["inputs"])["scene file"]["path"] == str(b)
+
+
+@pytest.mark.slow
+def test_the_example_scene_file_says_it_replaces_the_default_scenes_result(result_file, tmp_path):
+    """examples/scenes/point_mass_beam.toml and the default scene both write
+    point_mass_beam.*: the scene file run into the default scene's --out says so."""
+    out = tmp_path / "out"
+    shutil.copytree(result_file.parent, out)
+    example = Path(REPO) / "examples" / "scenes" / "point_mass_beam.toml"
+    code, _, stderr = run_cli("run", example, "--no-check", "--no-export", "--set", "scene.t_end=2e-5", "--set",
+                              "scene.n_out=3", "--out", out)
+    assert code == 0 and stderr == replaced(out / "point_mass_beam.h5", "the default scene", f"scene file {example}")
+
+
+def stale_exports(out) -> list:
+    """Temporary directories of exports to ``out/drop-paraview`` left by processes that
+    ended (a kill -9 mid-export)."""
+    pid = dead_pid()
+    made = [out / f".drop-paraview.tmp-{pid}-x1y2z3", out / f".drop-paraview.old-{pid}-a1b2c3"]
+    for d in made:
+        (d / "body").mkdir(parents=True)
+        (d / "body" / "body_000001.vtu").write_text("partial")
+    return made
+
+
+def test_a_new_run_removes_the_plot_and_export_of_the_run_before(tmp_path):
+    """A run that fails (here: a penetration beyond its bound at the first impact) after
+    starting its result file leaves no plot or ParaView export of the run before beside
+    it, nor what a killed export left; the result file says "failed"."""
+    scene, out = drop_scene(tmp_path / "drop.toml"), tmp_path / "out"
+    code, _, stderr = run_cli("run", scene, "--no-check", "--out", out)
+    assert code == 0, stderr
+    stale = stale_exports(out)
+    drop_scene(scene, options="[scene.options]\npenetration_bound = 1e-9\n")
+    code, _, stderr = run_cli("run", scene, "--no-check", "--out", out)
+    assert code == 2 and "penetration" in stderr, stderr
+    assert sorted(files_in(out)) == ["drop.h5"]
+    with h5py.File(out / "drop.h5", "r") as f:
+        assert f.attrs["status"].startswith("failed: ")
+    assert not any(d.exists() for d in stale)
+
+
+def test_an_export_removes_what_killed_exports_left_and_keeps_a_running_ones(tmp_path):
+    scene, out = drop_scene(tmp_path / "drop.toml"), tmp_path / "out"
+    code, _, stderr = run_cli("run", scene, "--no-check", "--no-export", "--out", out)
+    assert code == 0, stderr
+    stale = stale_exports(out)
+    running = out / f".drop-paraview.tmp-{os.getpid()}-r4s5t6"       # an export of a live process
+    running.mkdir()
+    code, _, stderr = run_cli("export", out / "drop.h5")
+    assert code == 0, stderr
+    assert not any(d.exists() for d in stale) and running.is_dir()
+    assert (out / "drop-paraview" / "drop.pvd").is_file()
+
+
+@pytest.mark.slow
+def test_a_run_killed_after_starting_its_file_leaves_no_plot_or_export_of_the_run_before(tmp_path):
+    """kill -9 of a run once it has replaced the result file of the run before: the new
+    file (status "running") stands alone."""
+    scene, out = drop_scene(tmp_path / "drop.toml"), tmp_path / "out"
+    code, _, stderr = run_cli("run", scene, "--no-check", "--out", out)
+    assert code == 0, stderr
+    path = out / "drop.h5"
+    first = path.stat().st_ino
+    drop_scene(scene, t_end=200.0)           # 2e6 steps: still running when killed
+    proc = subprocess.Popen([sys.executable, "-m", "ffrmbs_app.cli", "run", str(scene), "--no-check", "--no-limits",
+                             "--out", str(out)], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                            env=os.environ | {"PYTHONPATH": REPO})
+    deadline = time.monotonic() + 300
+    while not (path.exists() and path.stat().st_ino != first):
+        assert proc.poll() is None, proc.communicate()
+        assert time.monotonic() < deadline, "the run did not start its file"
+        time.sleep(0.01)
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.communicate()
+    assert sorted(files_in(out)) == ["drop.h5", "drop.lock"]        # the lock file of the killed job stays
+    with h5py.File(path, "r") as f:
+        assert f.attrs["status"] == "running"
+
+
+@pytest.mark.slow
+def test_sigterm_during_an_export_leaves_no_temporary_directory(result_file, tmp_path):
+    """SIGTERM while `ffrmbs export` writes: it stops like Ctrl-C (exit 130) and removes
+    its temporary directory; nothing is left in the output's directory."""
+    target = tmp_path / "exports" / "pmb-paraview"
+    target.parent.mkdir()
+    proc = subprocess.Popen([sys.executable, "-m", "ffrmbs_app.cli", "export", str(result_file), "--out", str(target)],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                            env=os.environ | {"PYTHONPATH": REPO})
+    deadline = time.monotonic() + 300
+    while not list(target.parent.glob(".pmb-paraview.tmp-*/*/*.vtu")):
+        assert proc.poll() is None, proc.communicate()
+        assert time.monotonic() < deadline, "the export wrote nothing"
+        time.sleep(0.01)
+    proc.send_signal(signal.SIGTERM)
+    _, stderr = proc.communicate(timeout=120)
+    assert proc.returncode == 130 and stderr == "ffrmbs: interrupted\n", stderr
+    assert not any(target.parent.iterdir())
 
 
 # --- --order for an already meshed file -----------------------------------------------------------

@@ -1,8 +1,10 @@
 """Checkpoints are the run's state as arrays (mbs.checkpoint, mbs.state_arrays): a run
 stopped at an output sample and continued from its checkpoint — the scene built afresh,
 the arrays loaded into it — gives the uninterrupted run's result bit for bit, for every
-integrator, with contacts closed at the checkpoint; a checkpoint of another run, a
-damaged file and a pickle are refused with one line, and nothing in the file runs.
+integrator, with contacts closed at the checkpoint, and for a scene of every registered
+contour kind, pair kind and contact law (a kind registered without a scene here fails
+the coverage test); a checkpoint of another run, a damaged file and a pickle are refused
+with one line, and nothing in the file runs.
 
 The oracle is the uninterrupted run of the same scene in the same process, its result
 arrays and its result file compared byte for byte."""
@@ -16,12 +18,16 @@ import h5py
 import numpy as np
 import pytest
 
+from contact import BILATERAL_KINEMATICS, LAWS, PAIR_KINEMATICS, connect, make_law
+from contours import (CONTOURS, Contour1sNeutralFFR, Contour1sNeutralRigid, Contour2sNeutralFFR,
+                      Contour2sNeutralRigid, FlexibleBand, FlexibleCylinder, PlaneContour, PointContour, SphereContour)
 from ffrmbs.errors import InputFileError, RunInterrupted
 from ffrmbs_app.scenes import point_mass_beam as pmb
-from mbs import FlexibleBodyFFR, Joint, System
+from ffrmbs_app.scenes.cache import cache_dir
+from mbs import FlexibleBodyFFR, Joint, PointMass, PrescribedFrameMotion, RigidBody, System, ground_frame
 from mbs import state_arrays
 from mbs.checkpoint import read_checkpoint
-from mbs.integrators import driver
+from mbs.integrators import driver, integrator_class
 from mbs.result_file import ResultRecorder
 
 
@@ -60,7 +66,13 @@ def simulate(case, path, stop_at=None, checkpoint=None, modes=None):
     sample from then on (a checkpoint is taken there); with ``checkpoint`` continue it."""
     make, options, t_end, dt, n_out, *_ = CASES[case]
     system, outputs = make() if modes is None else make(modes=modes)
+    return run_scene(system, outputs, options, t_end, dt, n_out, path, stop_at, checkpoint)
 
+
+def run_scene(system, outputs, options, t_end, dt, n_out, path, stop_at=None, checkpoint=None):
+    """``system.simulate`` with ``options`` to ``t_end`` [s] in steps ``dt`` [s], ``n_out``
+    samples, energies and contact records, recording to ``path``; ``stop_at`` and
+    ``checkpoint`` as for :func:`simulate`."""
     def progress(t):
         if stop_at is not None and t >= stop_at:
             driver.request_stop("test")
@@ -101,34 +113,43 @@ COUNTERS = ("steps", "newton_iterations", "closed_contacts", "solver_iterations"
             "pruned_contacts", "rejected_steps", "forced_steps", "smallest_dt", "largest_dt")
 
 
-@pytest.fixture(scope="module")
-def runs(tmp_path_factory):
-    """{case: (uninterrupted result, its file, the checkpoint, resumed result, its file)}."""
-    out = {}
-    for case in CASES:
-        d = tmp_path_factory.mktemp(case)
-        whole = simulate(case, d / "whole.h5")
-        with pytest.raises(RunInterrupted):
-            simulate(case, d / "cut.h5", stop_at=CASES[case][5])
-        kept = d / "kept.h5.ckpt"            # the run removes its checkpoint when it completes
-        kept.write_bytes((d / "cut.h5.ckpt").read_bytes())
-        ckpt = read_checkpoint(kept)
-        resumed = simulate(case, d / "cut.h5", checkpoint=ckpt)
-        out[case] = whole, d / "whole.h5", ckpt, resumed, d / "cut.h5"
-    return out
+def stopped_and_resumed(run, stop_at, d):
+    """(uninterrupted result, its file, the checkpoint, resumed result, its file) of
+    ``run(path, stop_at=None, checkpoint=None)`` stopped at ``stop_at`` [s], files in ``d``."""
+    whole = run(d / "whole.h5")
+    with pytest.raises(RunInterrupted):
+        run(d / "cut.h5", stop_at=stop_at)
+    kept = d / "kept.h5.ckpt"            # the run removes its checkpoint when it completes
+    kept.write_bytes((d / "cut.h5.ckpt").read_bytes())
+    ckpt = read_checkpoint(kept)
+    resumed = run(d / "cut.h5", checkpoint=ckpt)
+    return whole, d / "whole.h5", ckpt, resumed, d / "cut.h5"
 
 
-@pytest.mark.parametrize("case", list(CASES))
-def test_a_resumed_run_equals_the_uninterrupted_one_bit_for_bit(runs, case):
-    whole, whole_file, ckpt, resumed, resumed_file = runs[case]
-    closed = ckpt.arrays["data/closed"]
-    assert bool(closed.any()) == CASES[case][6], "the checkpoint is taken with the contact closed"
+def assert_resumed_equals_whole(whole, whole_file, ckpt, resumed, resumed_file):
+    """The resumed run's result and file equal the uninterrupted run's bit for bit, its
+    counters too, and it says where it resumed."""
     assert 0 < ckpt.arrays["run/recorded"] < len(whole.t)
     assert_same_bits(result_arrays(whole), result_arrays(resumed))
     assert_same_bits(datasets(whole_file), datasets(resumed_file))
     for key in COUNTERS:
         assert whole.stats.get(key) == resumed.stats.get(key), key
     assert resumed.stats["resumed_at"] == [float(ckpt.arrays["data/t"])]
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory):
+    """{case: (uninterrupted result, its file, the checkpoint, resumed result, its file)}."""
+    return {case: stopped_and_resumed(lambda path, **kw: simulate(case, path, **kw), CASES[case][5],
+                                      tmp_path_factory.mktemp(case))
+            for case in CASES}
+
+
+@pytest.mark.parametrize("case", list(CASES))
+def test_a_resumed_run_equals_the_uninterrupted_one_bit_for_bit(runs, case):
+    ckpt = runs[case][2]
+    assert bool(ckpt.arrays["data/closed"].any()) == CASES[case][6], "the checkpoint is taken with the contact closed"
+    assert_resumed_equals_whole(*runs[case])
 
 
 def test_a_checkpoint_holds_only_plain_arrays(runs):
@@ -152,6 +173,180 @@ def test_the_contour_and_search_state_is_in_the_checkpoint(runs):
     state = ckpt.arrays["contour/1/_state"]
     modes = 20
     assert np.array_equal(state[-2 * modes:-modes], ckpt.arrays["data/q_m"][:modes])
+
+
+# --- every contour kind, pair kind and law -----------------------------------------------------
+
+GAP, SPEED = 1e-5, 0.05          # [m] the moving side starts this far above the surface, [m/s] its speed
+LAW_PARAMETERS = {"impact": {}, "coulomb": {"e": 0.0, "mu": 0.3}, "penalty": {"k": 1e4, "d": 1.0}, "bilateral": {}}
+
+
+def moving_side(system, kind, at, up, bilateral):
+    """A 50 g point mass (``kind`` "point") or a ball of radius 10 mm ("sphere") touching
+    down at ``at`` [m] from ``GAP`` above along ``up``, sliding along x at ``SPEED``;
+    on the curve and moving along it only, for a ``bilateral`` law. (contour, frame)."""
+    up = np.asarray(up, dtype=float)
+    gap = 0.0 if bilateral else GAP
+    velocity = (SPEED, 0.0, 0.0) - (0.0 if bilateral else SPEED) * up
+    if kind == "point":
+        bob = system.add(PointMass(0.05, position=at + gap * up, velocity=velocity, name="bob"))
+        return PointContour(bob.point), bob.point
+    radius = 0.01
+    ball = system.add(RigidBody(0.05, 2e-6 * np.eye(3), name="ball").set_initial(R=at + (gap + radius) * up,
+                                                                                   v=velocity))
+    return SphereContour(ball.origin, radius), ball.origin
+
+
+def beam_scene(pair, law):
+    """The clamped 250 x 50 x 50 mm beam (4 modes, frame fixed, gravity −y) with the
+    surface kind ``pair[1]`` on it — the top face (2s; with residual flexibility for a
+    point), the top face's centre line (1s), a band on it, a cylinder of radius 25 mm
+    around the beam's axis, the top front edge (edge) — and the side ``pair[0]`` landing
+    at x = 0.2 m on top (on the edge for an edge)."""
+    system = System(gravity=(0.0, -9.81, 0.0))
+    system.cache_dir = cache_dir()
+    beam = system.add(FlexibleBodyFFR(pmb.default_beam_data(), modes=4, frame=PrescribedFrameMotion.fixed(),
+                                      name="beam"))
+    top = lambda: Contour1sNeutralFFR.along_line(beam, (0.0, 0.05, 0.025), (1, 0, 0), normal=(0, 1, 0),  # noqa: E731
+                                                 degree=4)
+    surface = {"2s": lambda: Contour2sNeutralFFR(beam, "y1", residual_flexibility=pair[0] == "point"),
+               "1s": top, "band": lambda: FlexibleBand(top(), width=0.05),
+               "edge": lambda: CONTOURS["edge"].along_line(beam, (0.0, 0.05, 0.05), (1, 0, 0), normal=(0, 1, 0),
+                                                          degree=4),
+               "cylinder": lambda: FlexibleCylinder(Contour1sNeutralFFR.along_line(
+                   beam, (0.0, 0.025, 0.025), (1, 0, 0), normal=(0, 1, 0), degree=4), radius=0.025)}[pair[1]]()
+    at = np.array([0.2, 0.05, 0.05 if pair[1] == "edge" else 0.025])
+    side, frame = moving_side(system, pair[0], at, (0, 1, 0), law == "bilateral")
+    system.add(connect(side, surface, make_law(law, **LAW_PARAMETERS[law]), name="contact"))
+    return system, {"x": frame}
+
+
+def table_scene(pair, law):
+    """Under gravity −z, the side ``pair[0]`` landing at the origin on the surface kind
+    ``pair[1]``: a rigid table welded to the ground (2s-rigid: a 200 mm square; 1s-rigid:
+    a 200 mm line along x), the ground plane z = 0, or a ground sphere of radius 0.1 m
+    whose top is the origin."""
+    system = System(gravity=(0.0, 0.0, -9.81))
+    if pair[1] in ("2s-rigid", "1s-rigid"):
+        table = system.add(RigidBody(10.0, 0.1 * np.eye(3), name="table"))
+        system.add(Joint.fixed(system.ground, table.origin))
+        s = np.linspace(-0.1, 0.1, 5)
+        if pair[1] == "2s-rigid":
+            grid = np.stack(np.meshgrid(s, s, [0.0], indexing="ij"), axis=-1)[:, :, 0]
+            surface = Contour2sNeutralRigid(table, grid, outward=1)
+        else:
+            surface = Contour1sNeutralRigid(table, np.stack((s, 0 * s, 0 * s), axis=-1), normal=(0, 0, 1))
+    elif pair[1] == "plane":
+        surface = PlaneContour(ground_frame())
+    else:
+        surface = SphereContour(ground_frame((0.0, 0.0, -0.1)), 0.1)
+    side, frame = moving_side(system, pair[0], np.zeros(3), (0, 0, 1), law == "bilateral")
+    system.add(connect(side, surface, make_law(law, **LAW_PARAMETERS[law]), name="contact"))
+    return system, {"x": frame}
+
+
+KIND_SCENES = {     # (contour pair, law): the scene's builder
+    (("point", "2s"), "impact"): beam_scene, (("sphere", "2s"), "coulomb"): beam_scene,
+    (("point", "band"), "penalty"): beam_scene, (("sphere", "band"), "impact"): beam_scene,
+    (("point", "cylinder"), "coulomb"): beam_scene, (("sphere", "cylinder"), "penalty"): beam_scene,
+    (("point", "1s"), "impact"): beam_scene, (("sphere", "1s"), "coulomb"): beam_scene,
+    (("point", "1s"), "bilateral"): beam_scene,
+    (("point", "2s-rigid"), "coulomb"): table_scene, (("sphere", "2s-rigid"), "impact"): table_scene,
+    (("point", "1s-rigid"), "penalty"): table_scene, (("sphere", "1s-rigid"), "impact"): table_scene,
+    (("point", "1s-rigid"), "bilateral"): table_scene,
+    (("point", "plane"), "coulomb"): table_scene, (("sphere", "plane"), "impact"): table_scene,
+    (("sphere", "sphere"), "penalty"): table_scene, (("point", "sphere"), "impact"): table_scene,
+}
+KIND_SCENES[("sphere", "edge"), "coulomb"] = beam_scene    # a sharp edge (a hole's rim): the beam's top front edge
+KIND_RUN = dict(options=dict(integrator="moreau", trace=True), t_end=2e-3, dt=1e-4, n_out=5)
+KIND_STOP = 5e-4        # [s] the checkpoint: the contact closed (it closes at 0.2 ms)
+
+
+def kind_id(key):
+    (side1, side2), law = key
+    return f"{side1}-{side2}-{law}"
+
+
+def test_every_registered_contour_pair_and_law_has_a_checkpoint_scene():
+    """The scenes below cover every registered contour kind, pair (unilateral with a
+    unilateral law, bilateral with "bilateral") and law, each built through the
+    registries: a kind registered without a scene here fails."""
+    built = set()
+    for (pair, law), make in KIND_SCENES.items():
+        system, _ = make(pair, law)
+        contact, = system.contacts
+        k = contact.kinematics
+        built.add(((CONTOURS.name_of(k.contour1), CONTOURS.name_of(k.contour2)), LAWS.name_of(contact.law)))
+    assert built == set(KIND_SCENES)
+    unilateral = {pair for pair, law in built if law != "bilateral"}
+    bilateral = {pair for pair, law in built if law == "bilateral"}
+    assert set(PAIR_KINEMATICS.names()) <= unilateral, "a pair kind without a scene"
+    assert set(BILATERAL_KINEMATICS.names()) <= bilateral, "a bilateral pair kind without a scene"
+    assert {kind for pair in unilateral | bilateral for kind in pair} == set(CONTOURS.names())
+    assert {law for _, law in built} == set(LAWS.names())
+
+
+@pytest.mark.parametrize("key", [pytest.param(key, id=kind_id(key), marks=() if key[1] == "bilateral" else
+                                              pytest.mark.slow) for key in KIND_SCENES])
+def test_a_resumed_run_of_every_kind_equals_the_uninterrupted_one(key, tmp_path):
+    """Stopped at 0.5 ms with the contact closed (the compliant spring's state, the
+    searches' warm starts, the bead on its curve), resumed from the checkpoint: the
+    uninterrupted run bit for bit. About a second each: the bilateral scenes are in the
+    fast subset, the others marked slow."""
+    pair, law = key
+
+    def run(path, **kw):
+        system, outputs = KIND_SCENES[key](pair, law)
+        return run_scene(system, outputs, **KIND_RUN, path=path, **kw)
+
+    runs = stopped_and_resumed(run, KIND_STOP, tmp_path)
+    ckpt = runs[2]
+    assert ckpt.arrays["data/closed"].all(), "the checkpoint is taken with the contact closed"
+    assert_resumed_equals_whole(*runs)
+
+
+def started(system, integrator, dt, t_end, **options):
+    """``integrator`` prepared on ``system`` for a run to ``t_end`` [s] in steps ``dt`` [s]
+    (no plan, no outputs) and started at its initial state."""
+    integ = integrator_class(integrator)(system, **options)
+    q0, u0 = system.initial_state()
+    integ.dt = dt
+    integ.state = integ._prepare(q0, u0, t_end, dt, None, {}, False, (), None, False)
+    integ.start(integ.t, integ.q, integ.u)
+    return integ
+
+
+def run_state(integ) -> dict:
+    """What a checkpoint keeps of ``integ``'s Data and of its contours and contacts, but
+    the factors of M̂ kept per step size (a cache)."""
+    arrays, kinds = {}, {}
+    integ.data.collect("data", arrays, kinds)
+    for k, (contour, *_) in enumerate(integ.model.contours):
+        state_arrays.collect(contour, f"contour/{k}", arrays, kinds)
+    for i, contact in enumerate(integ.model.contacts):
+        state_arrays.collect(contact, f"contact/{i}", arrays, kinds)
+    return {key: np.array(value) for key, value in arrays.items() if not key.startswith("data/factors/")}
+
+
+@pytest.mark.parametrize("key", [(("point", "2s"), "impact"), (("sphere", "band"), "impact")], ids=kind_id)
+def test_a_step_the_adaptive_integrator_takes_back_leaves_no_trace(key):
+    """Step doubling takes a step of H, puts the state back and takes two of H/2: those
+    must start from the state before the step of H — the compliant spring's force and
+    deflection, the contact searches' warm starts and counters included — i.e. equal
+    bit for bit two steps of H/2 of the same scene that never took the step of H."""
+    pair, law = key
+    h, t_closed = 1e-4, 5e-4          # [s] the step of H is taken with the contact closed
+    taken_back, direct = (started(KIND_SCENES[key](pair, law)[0], "moreau-adaptive", h, 2e-3) for _ in range(2))
+    for integ in (taken_back, direct):
+        integ.advance(t_closed, h)
+        assert integ.data.closed.all()
+    taken_back._save()
+    taken_back.step(h)
+    taken_back._restore()
+    for integ in (taken_back, direct):
+        integ.step(0.5 * h)
+        integ.step(0.5 * h)
+    assert_same_bits(run_state(direct), run_state(taken_back))
 
 
 # --- refusals --------------------------------------------------------------------------------

@@ -68,7 +68,12 @@ penetration max(0, −g_N) at the step's end over its start, divided by ``gap_to
 keeps the depth at which it closed) does not.
 A step is accepted when that weighted error e <= 1 and the next H is
 H · min(2, max(0.2, 0.9 e^(−1/2))) (first order in the positions across impacts);
-a rejected step is retaken with the smaller H. An impact inside a step separates the
+a rejected step is retaken with the smaller H. A step taken back (the step of H before
+its two halves, a rejected step) leaves no trace: what a step reads of the steps before
+it — the Data of :data:`mbs.model.CARRIED` (state, closed flags, warm starts, the
+compliant contacts' springs, counters) and the contours' and contacts' ``run_state``
+(the searches' warm starts and counters) — is copied before it and put back after
+(:class:`mbs.state_arrays.StateCopy`). An impact inside a step separates the
 two solutions by about the approach velocity times the mistimed interval, so the step
 shrinks around contact closing and grows again in free flight and steady contact.
 ``dt`` of ``simulate`` is the initial and largest step; ``dt_min`` the smallest (a step
@@ -87,6 +92,7 @@ from contact.solver import ProxSolver
 from ffrmbs.errors import ModelError
 
 from .. import stages, state_arrays
+from ..model import CARRIED
 from .driver import Integrator, StepFailure, non_finite
 
 TRACE_KEYS = ("t", "dt", "closed", "penetration", "iterations", "residual", "impulse_work", "energy")
@@ -224,10 +230,11 @@ class AdaptiveMoreauTimeStepping(MoreauTimeStepping):
 
     def _prepare(self, *args):
         state = super()._prepare(*args)
-        self.data.stats.update(rejected_steps=0, forced_steps=0, smallest_dt=np.inf, largest_dt=0.0)
-        self._saved = (np.zeros(self.model.nq), np.zeros(self.model.nu), np.zeros(self.data.lam_prev.size),
-                       np.zeros(self.data.warm.size, dtype=bool), np.zeros(self.model.n_c))
-        self._q_full = np.zeros(self.model.nq)
+        model, data = self.model, self.data
+        data.stats.update(rejected_steps=0, forced_steps=0, smallest_dt=np.inf, largest_dt=0.0)
+        self._saved = state_arrays.StateCopy([(data, CARRIED)] + [(c, None) for c, *_ in model.contours]
+                                             + [(c, None) for c in model.contacts])
+        self._q_full = np.zeros(model.nq)
         return state
 
     def start(self, t, q, u):
@@ -254,19 +261,15 @@ class AdaptiveMoreauTimeStepping(MoreauTimeStepping):
         return pen
 
     def _save(self):
-        """The Data a rejected or repeated step restores: t, q, u, warm starts, counters."""
-        d = self.data
-        q, u, lam, warm, lam_joints = self._saved
-        q[:], u[:], lam[:], warm[:], lam_joints[:] = d.q, d.u, d.lam_prev, d.warm, d.lam_joints
-        return d.t, d.warm_joints, dict(d.stats)
+        """Keep what a rejected or repeated step puts back: the Data a step reads of the
+        steps before it (:data:`mbs.model.CARRIED`: t, q, u, closed flags, warm starts,
+        compliant springs, counters) and the run state of the contours and contacts
+        (searches' warm starts and counters)."""
+        self._saved.save()
 
-    def _restore(self, saved):
-        d = self.data
-        q, u, lam, warm, lam_joints = self._saved
-        d.t, d.warm_joints, stats = saved
-        d.q[:], d.u[:], d.lam_prev[:], d.warm[:], d.lam_joints[:] = q, u, lam, warm, lam_joints
-        d.stats = dict(stats)
-        d.last[:] = 0, 0.0, 0, 0.0, 0.0
+    def _restore(self):
+        self._saved.restore()
+        self.data.last[:] = 0, 0.0, 0, 0.0, 0.0
 
     def advance(self, end, dt):
         """Controlled steps of at most ``dt`` from ``self.t`` to exactly ``end``."""
@@ -279,17 +282,17 @@ class AdaptiveMoreauTimeStepping(MoreauTimeStepping):
                 h = rest
             elif h > 0.5 * rest:                      # avoid a sliver before ``end``
                 h = 0.5 * rest
-            saved = self._save()
+            self._save()
             try:
                 self.step(h)
                 self._q_full[:] = self.q
-                self._restore(saved)
+                self._restore()
                 self.step(0.5 * h)
                 self.step(0.5 * h)
             except StepFailure:
                 if h <= self.dt_min * (1 + 1e-12):
                     raise
-                self._restore(saved)                  # e.g. a penalty contact too stiff for H: retake smaller
+                self._restore()                 # e.g. a penalty contact too stiff for H: retake smaller
                 stats()["rejected_steps"] += 1
                 h = self.h_next = max(0.2 * h, self.dt_min)
                 continue
@@ -307,7 +310,7 @@ class AdaptiveMoreauTimeStepping(MoreauTimeStepping):
                 self._pen = pen
                 self.h_next = max(h * factor, h_ctrl)        # landing on ``end`` does not shrink H
             else:
-                self._restore(saved)
+                self._restore()
                 stats()["rejected_steps"] += 1
                 self.h_next = h * factor
             h = self.h_next
