@@ -25,7 +25,10 @@ linearization of nonlinear forces over a step. The bodies a planned run solves a
 (:mod:`mbs.plan`) are not in the integrated Model and not in these terms.
 
 A step of a Model without loads or damping costs nothing; otherwise one compiled call
-for the damping and one ``add_forces`` per load into a preallocated vector.
+for the damping and the loads added into a preallocated vector as the body stage adds
+them (:meth:`mbs.body_stage.BodyStage.add_applied_loads`): no numpy allocation for
+point loads of step tables and bodily damping; a spring-damper's dissipation and
+other force elements allocate as their ``add_forces`` does.
 """
 
 from __future__ import annotations
@@ -42,7 +45,7 @@ class StepWork:
     def __init__(self, model):
         self.model = model
         forces = model.equations.forces
-        self.loads = tuple(f for f in forces if f.applied)
+        self.loads = model.body_stage.has_applied_loads
         self.dissipative = tuple(f for f in forces if f.dissipative)
         D = model.body_stage.D0
         self.damped_rows = np.flatnonzero(D.any(axis=0) | D.any(axis=1)).astype(np.int64)
@@ -57,8 +60,7 @@ class StepWork:
             return 0.0
         Q = self.Q
         Q.fill(0.0)
-        for f in self.loads:
-            f.add_forces(data.t_m, data.q_m, data.u_prev, Q)
+        self.model.body_stage.add_applied_loads(data.t_m, data.q_m, data.u_prev, Q)
         return dt * K.path_power(self.model.theta, data.u, data.u_prev, Q)
 
     def damping_loss(self, data, dt) -> float:

@@ -196,3 +196,65 @@ def test_contact_intervals_are_where_the_contact_force_acts(tmp_path):
     assert len(iv) == 1 and iv[0] == pytest.approx((0.1, 0.2), abs=1e-9)
     assert line(lines, "contact: force transmitted in 1 interval(s): 100.000-200.000 ms")
     assert s["final"]["z"] == 0.0
+
+
+# --- the per-step terms (mbs.step_work) --------------------------------------------------------
+
+def test_the_energy_term_kernels_are_their_numpy_references():
+    from mbs import _stage_kernels as SK
+
+    rng = np.random.default_rng(7)
+    u, u_prev, Q = rng.normal(size=(3, 9))
+    rows = np.array([1, 4, 5, 8], dtype=np.int64)
+    A = rng.normal(size=(4, 4))
+    D = A @ A.T
+    for theta in (0.5, 0.8, 1.0):
+        v = theta * u + (1 - theta) * u_prev
+        assert SK.path_power(theta, u, u_prev, Q) == pytest.approx(v @ Q, rel=1e-13)
+        assert SK.damping_power(theta, u, u_prev, rows, D) == pytest.approx(v[rows] @ D @ v[rows], rel=1e-13)
+    warm = np.array([True, True, False, False, True])
+    set_valued = np.array([True, True, True, False, False])
+    lam_rows = np.array([[0, 3], [3, 1], [4, 3], [7, 0], [7, 0]], dtype=np.int64)
+    lam_prev, comp_force = np.zeros(7), np.zeros(7)
+    lam_prev[1] = 0.1           # contact 0: a tangential impulse only
+    comp_force[3] = 2.0         # contact 1: its spring pushes
+    lam_prev[5] = 1.0           # contact 2: not closed this step (a stale block)
+    closed = np.array([True, True, False, True, True])
+    force_N = np.array([0.0, 0.0, 0.0, 0.0, 5.0])    # contact 3 touches without force, 4 pushes
+    reference = sum(1 for i in range(5) if (set_valued[i] and warm[i] and (
+        lam_prev[lam_rows[i, 0]:][:lam_rows[i, 1]].any() or comp_force[lam_rows[i, 0]:][:lam_rows[i, 1]].any()))
+        or (not set_valued[i] and closed[i] and force_N[i] != 0.0))
+    assert SK.pressed_contacts(warm, lam_rows, lam_prev, comp_force, closed, force_N, set_valued) == reference == 3
+
+
+def test_the_trace_terms_allocate_no_more_than_the_step_s_own_loads(cantilever):
+    """A damped beam under a tip load, integrated, after warm-up steps: the damping loss and
+    the pressed count allocate no numpy array; the load work allocates what the body stage
+    allocates for the same load (stage 2: here the FFR point load's own path), nothing more."""
+    from numpy_allocations import NumpyAllocations
+
+    from contact.solver import ProxSolver
+    from mbs import stages
+    from mbs.model import Data, compile_model
+    from mbs.step_work import StepWork
+
+    scene = load_scene(cantilever, ["scene.plan=false"])
+    model = compile_model(scene.system, None, theta=0.5, solver=ProxSolver("gauss-seidel"))
+    data = Data(model)
+    data.q[:], data.u[:] = scene.system.initial_state()
+    work = StepWork(model)
+    assert work.loads and work.damped_rows.size == 6
+    dt = 1e-4
+    for _ in range(5):
+        stages.step(model, data, dt)
+        work.load_work(data, dt), work.damping_loss(data, dt), work.pressed(data)
+    counts = {}
+    for name, call in (("damping and pressed", lambda: work.damping_loss(data, dt) + work.pressed(data)),
+                       ("load work", lambda: work.load_work(data, dt)),
+                       ("body stage", lambda: stages.bodies(model, data, dt))):
+        with NumpyAllocations() as count:
+            for _ in range(20):
+                call()
+        counts[name] = count.sizes
+    assert counts["damping and pressed"] == []
+    assert counts["load work"] == counts["body stage"]
