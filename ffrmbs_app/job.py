@@ -26,9 +26,22 @@ The job, for a scene (:class:`ffrmbs_app.scene.Scene`) built fresh by ``make_sce
    of the scene's ``variants`` (e.g. twice the modes, another mesh) estimates the part of
    the error its modelling choice makes;
 4. the summary (in the file's ``summary`` attribute and printed): steps, wall and CPU
-   seconds, µs per step; energy at start and end; for Moreau runs the contact intervals,
-   the largest penetration and the energy balance E(end) − E(0) − W of the impulses
-   (:func:`energy_balance`); the final outputs; the error estimate;
+   seconds, µs per step; the energy E = T + V of every body at the first and last output
+   sample (``energy_J``; V: elastic, gravity, springs, compliant contacts' springs); for
+   Moreau runs with a trace the intervals in which a contact transmits a force (non-zero
+   impulse or force, not a merely touching gap: :func:`contact_intervals`), the largest
+   penetration and the energy balance over the steps (:func:`energy_balance`,
+   :mod:`mbs.step_work`)
+
+       E(t) − E(0) = W_loads − D_damping + W_impulses + residual,
+
+   each term summed step by step — the applied loads' work, the energy the damping of
+   bodies and spring-dampers takes out, the work of the contact and joint impulses —
+   gravity's work being in E as its potential; the residual, the integrator's own energy
+   error, relative to the largest of |E(t) − E(0)| and the terms. Bodies the plan solves
+   apart (exact modal propagation) are not integrated and not in the balance (they are
+   named; a scene of such bodies only takes no step and gives the sampled energies);
+   the final outputs; the error estimate;
 5. ``OUT/<scene>.png`` (the outputs against time, :mod:`ffrmbs_app.plot`; rewritten by
    each run) and the ParaView series ``OUT/<scene>-paraview/`` (:mod:`ffrmbs_app.export`).
 """
@@ -289,6 +302,9 @@ def _report(s, log):
             f"final {e['final']:.6g} J")
     if b is not None:
         log(_balance_text(b, s.get("solved_apart", ())))
+    elif s["steps"] == 0 and "solved_apart" in s:
+        log("energy balance: no time step taken (the plan solves every body apart, by exact modal propagation); "
+            "plan = false in [scene] integrates them and gives the balance")
     for name, value in s["final"].items():
         log(f"at t = {s['t_end_s']:g} s: {name} = {np.array2string(np.asarray(value), precision=6)} "
             f"{s['units'][name]}")
@@ -299,5 +315,8 @@ def _report(s, log):
     for label, part in s.get("error_parts", {}).items():
         est = ", ".join(_estimate_text(name, e) for name, e in part["outputs"].items())
         log(f"accuracy ({label}: max |run - run with {part['against']}|): {est}")
+    if s["timed_steps"] == 0:
+        log(f"cost: no time step, {s['wall_s']:.2f} s wall ({s['cpu_s']:.2f} s CPU)")
+        return
     log(f"cost: {s['timed_steps']} steps in {s['wall_s']:.2f} s wall ({s['cpu_s']:.2f} s CPU), "
         f"{s['us_per_step']:.0f} µs per step" + (f" (resumed: {s['steps']} steps in all)" if "note" in s else ""))

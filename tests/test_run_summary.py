@@ -140,6 +140,8 @@ def test_a_cantilever_solved_by_the_plan_alone_reaches_its_summary(cantilever, t
     assert s["steps"] == 0 and s["solved_apart"] == ["beam"] and "energy_balance_J" not in s
     assert s["energy_J"]["initial"] == 0.0 and s["energy_J"]["final"] > 0.0
     assert line(lines, "energy (kinetic + potential of every body, at the output samples): initial 0 J")
+    assert line(lines, "energy balance: no time step taken (the plan solves every body apart")
+    assert line(lines, "cost: no time step, ")
 
 
 def test_an_integrated_damped_cantilever_balances_load_work_and_damping(cantilever, tmp_path):
