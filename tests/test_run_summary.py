@@ -157,6 +157,40 @@ def test_an_integrated_damped_cantilever_balances_load_work_and_damping(cantilev
     assert "solved_apart" not in s
 
 
+
+BALL = """
+[[body]]
+name = "ball"
+kind = "point_mass"
+mass = 1.0
+position = [1.0, 0.0, 0.0]
+velocity = [0.0, 0.0, -1.0]
+
+[[contact]]
+name = "floor"
+contour1 = { kind = "point", body = "ball" }
+contour2 = { kind = "plane", point = [0.0, 0.0, -0.01] }
+law = "impact"
+"""
+
+
+def test_a_body_the_plan_solves_apart_is_named_and_left_out_of_the_balance(cantilever, tmp_path):
+    """The loaded beam (solved apart by the plan) beside a 1 kg ball at 1 m/s that lands
+    plastically (e = 0) on a plane: the balance is the ball's, E(0) = ½ m v² = 0.5 J and
+    W_impulses = −0.5 J by hand, no load work (the beam's load is not integrated); the
+    sampled energies are every body's (the beam's strain energy at the end)."""
+    path = cantilever.with_name("mixed.toml")
+    path.write_text(CANTILEVER.replace('name = "cantilever"', 'name = "mixed"') + BALL)
+    s, lines = run(path, tmp_path)
+    b = s["energy_balance_J"]
+    assert s["solved_apart"] == ["beam"]
+    assert b["initial"] == 0.5 and b["impulse_work"] == pytest.approx(-0.5, rel=1e-12) and b["load_work"] == 0.0
+    assert abs(b["residual"]) < 1e-12 and s["energy_J"]["final"] > 0.0
+    assert line(lines, "energy balance of the integrated bodies ('beam' solved apart by the plan, exactly, and "
+                       "left out) [J]")
+    assert line(lines, "energy (kinetic + potential of every body, at the output samples): initial 0.5 J")
+
+
 PRESSED = """\
 # A 1 kg point mass touching the plane z = 0 (gap 0: closed) slides at 1 m/s, no gravity;
 # a 10 N load presses it onto the plane from 0.1 s to 0.2 s only.
