@@ -87,7 +87,10 @@ def energy_balance(trace, initial) -> dict | None:
 
     E(0) = ``initial`` [J] (``Result.stats["initial_energy"]``), E(t) the trace's last
     energy (E = T + V; gravity, springs and closed compliant contacts' springs are in V,
-    so gravity's work is no term), the terms summed over the steps [J]; ``largest``:
+    so gravity's work is no term), the terms summed over the steps [J]. W_impulses is
+    the work at the contact laws: the impulses' work on the bodies Σ Λᵀ(γ⁺ + γ⁻)/2 plus
+    the energy the compliant contacts' springs hold at the end (none at the start): a
+    spring charged by the bodies is in E, not lost. ``largest``:
     the name of the largest of |ΔE|, |W_loads|, D_damping, |W_impulses| and
     ``relative``: |residual| / that term (None when every term is zero). None when
     the run took no step (every body solved apart by the plan)."""
@@ -95,6 +98,7 @@ def energy_balance(trace, initial) -> dict | None:
     if not len(energy):
         return None
     b = {"initial": float(initial), "final": float(energy[-1]), **{k: float(trace[k].sum()) for k in BALANCE_TERMS}}
+    b["impulse_work"] += float(trace["contact_springs"][-1])
     b["change"] = b["final"] - b["initial"]
     b["residual"] = b["change"] - (b["load_work"] - b["damping_loss"] + b["impulse_work"])
     sizes = {k: abs(b[k]) for k in ("change", *BALANCE_TERMS)}

@@ -17,7 +17,9 @@ damping made implicit by M̂ (stage 5: the damping force is −D v). So
                their constant −∂h/∂u) and the force elements' own dissipation P_e
                (:meth:`mbs.link.ForceElement.dissipation`, a spring's damper c l̇²);
 
-W_impulses = Λᵀ(γ⁺ + γ⁻)/2 is stage 6's. For θ = ½ and bodies with constant mass
+W_impulses = Λᵀ(γ⁺ + γ⁻)/2 is stage 6's (the impulses' work on the bodies; of it the
+compliant contacts' springs hold ½ Fᵀδ while closed, which is in E, so the run's
+balance adds to the sum what they hold at its end). For θ = ½ and bodies with constant mass
 matrices the balance closes to rounding on a linear system without contacts (the
 trapezoidal rule conserves E(t) − W + D exactly); the residual is the integrator's own
 energy error: the numerical damping of θ > ½, a varying mass matrix, the

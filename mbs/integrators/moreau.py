@@ -52,9 +52,11 @@ short of the surface, from where it falls again in small hops), ``solver`` (a Pr
 or its method name), ``tol``, ``trace`` (True: per-step records in ``Result.trace``:
 t, dt [s], closed contacts, largest penetration [m], solver iterations and residual
 [m/s], the work of the impulses Λᵀ (γ⁺ + γ⁻)/2 [J] (contacts and joints; the energy the
-impact laws take out), total energy E = T + V [J] (gravity and the compliant contacts'
-springs in V), the contacts that transmitted a force (non-zero Λ; "closed" counts
-those touching too), the applied loads' work and the damping's loss [J]
+impact laws take out; with residual flexibility the work on the bodies, of which the
+contacts' springs hold a part while closed), total energy E = T + V [J] (gravity and
+the compliant contacts' springs in V; the springs' ½ Fᵀδ also on their own as
+``contact_springs``), the contacts that transmitted a force (non-zero Λ; "closed"
+counts those touching too), the applied loads' work and the damping's loss [J]
 (:mod:`mbs.step_work`); the energy at the start, E(0) of the integrated bodies, is
 ``Result.stats["initial_energy"]``), ``penetration_bound`` [m] (default None: no
 bound; a penetration max(0, −g_N) at q_θ beyond it, in an accepted step, stops the run). Non-convergence of
@@ -96,9 +98,10 @@ from ..step_work import StepWork
 from .driver import Integrator, StepFailure, non_finite
 
 TRACE_KEYS = ("t", "dt", "closed", "penetration", "iterations", "residual", "impulse_work", "pressed", "load_work",
-              "damping_loss", "energy")      # t, dt, Data.last, energy
+              "damping_loss", "energy", "contact_springs")      # t, dt, Data.last, energies
 TRACE_UNITS = {"t": "s", "dt": "s", "closed": "1", "penetration": "m", "iterations": "1", "residual": "m/s",
-               "impulse_work": "J", "energy": "J", "pressed": "1", "load_work": "J", "damping_loss": "J"}
+               "impulse_work": "J", "energy": "J", "pressed": "1", "load_work": "J", "damping_loss": "J",
+               "contact_springs": "J"}
 TRACE_DTYPES = {"closed": np.int64, "iterations": np.int64, "pressed": np.int64}     # the others float64
 
 
@@ -139,13 +142,16 @@ class MoreauTimeStepping(Integrator):
     def energy(self) -> float:
         """E = T + V [J] of the run's Data: the integrated bodies' kinetic energy, the
         elastic, gravity and spring energies and the compliant contacts' springs
-        (:mod:`contact.compliance`); a body the plan solves apart stands still in Data."""
+        (:meth:`spring_energy`); a body the plan solves apart stands still in Data."""
+        return self._bodies_energy() + self.spring_energy()
+
+    def _bodies_energy(self) -> float:
         data = self.data
         energy = self.model.body_stage.energy(data.q, data.u)
         if energy is None:
             sys = self.system
             energy = sys.kinetic_energy(data.t, data.q, data.u) + sys.potential_energy(data.t, data.q)
-        return energy + self.spring_energy()
+        return energy
 
     def accepted(self, h):
         last = self.data.last
@@ -154,11 +160,11 @@ class MoreauTimeStepping(Integrator):
                               "(a contact tunnelled, or a penalty stiffness is too soft for the load)")
         super().accepted(h)
         if self._trace is not None:
-            data = self.data
-            energy = self.energy()
+            springs = self.spring_energy()
+            energy = self._bodies_energy() + springs
             if not math.isfinite(energy):
                 raise non_finite(self.t, self.steps, "energy")
-            for key, value in zip(TRACE_KEYS, (self.t, h, *last, energy)):
+            for key, value in zip(TRACE_KEYS, (self.t, h, *last, energy, springs)):
                 self._trace[key].append(value)
         last[:] = LAST_STEP
 
