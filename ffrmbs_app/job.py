@@ -31,9 +31,22 @@ The job, for a scene (:class:`ffrmbs_app.scene.Scene`) built fresh by ``make_sce
    of the scene's ``variants`` (e.g. twice the modes, another mesh) estimates the part of
    the error its modelling choice makes;
 4. the summary (in the file's ``summary`` attribute and printed): steps, wall and CPU
-   seconds, µs per step; energy at start and end; for Moreau runs the contact intervals,
-   the largest penetration and the energy balance E(end) − E(0) − W of the impulses
-   (:func:`energy_balance`); the final outputs; the error estimate;
+   seconds, µs per step; the energy E = T + V of every body at the first and last output
+   sample (``energy_J``; V: elastic, gravity, springs, compliant contacts' springs); for
+   Moreau runs with a trace the intervals in which a contact transmits a force (non-zero
+   impulse or force, not a merely touching gap: :func:`contact_intervals`), the largest
+   penetration and the energy balance over the steps (:func:`energy_balance`,
+   :mod:`mbs.step_work`)
+
+       E(t) − E(0) = W_loads − D_damping + W_impulses + residual,
+
+   each term summed step by step — the applied loads' work, the energy the damping of
+   bodies and spring-dampers takes out, the work of the contact and joint impulses —
+   gravity's work being in E as its potential; the residual, the integrator's own energy
+   error, relative to the largest of |E(t) − E(0)| and the terms. Bodies the plan solves
+   apart (exact modal propagation) are not integrated and not in the balance (they are
+   named; a scene of such bodies only takes no step and gives the sampled energies);
+   the final outputs; the error estimate;
 5. ``OUT/<scene>.png`` (the outputs against time, :mod:`ffrmbs_app.plot`; rewritten by
    each run) and the ParaView series ``OUT/<scene>-paraview/`` (:mod:`ffrmbs_app.export`).
 """
@@ -61,23 +74,45 @@ from mbs.integrators import driver
 from mbs.result_file import ResultRecorder, attribute, open_result_file, resume_checkpoint
 
 
-def contact_intervals(t, dt, closed):
-    """[(t_close, t_open)] [s] of the runs of steps with a closed contact (trace arrays:
-    step end times, step sizes, closed-contact counts)."""
-    on = np.asarray(closed) > 0
+def contact_intervals(t, dt, counts):
+    """[(t_start, t_end)] [s] of the runs of steps with a count > 0 (trace arrays: step
+    end times, step sizes, per-step counts: the summary passes ``pressed``, the contacts
+    that transmitted a force — non-zero impulse or force, not merely a touching gap;
+    ``closed`` gives the steps with a closed gap)."""
+    on = np.asarray(counts) > 0
     edges = np.flatnonzero(np.diff(np.concatenate(([0], on.view(np.int8), [0]))))
     starts, stops = edges[::2], edges[1::2] - 1
     return [(float(t[a] - dt[a]), float(t[b])) for a, b in zip(starts, stops)]
 
 
-def energy_balance(system, trace) -> dict:
-    """E(0), E(end) [J], the work of the contact impulses W = Σ Λᵀ(γ⁺ + γ⁻)/2 [J] and the
-    residual E(end) − E(0) − W [J] (the integrator's own energy error) of a Moreau run
-    with ``trace=True`` from the system's initial state."""
-    q0, u0 = system.initial_state()
-    E0 = float(system.kinetic_energy(0.0, q0, u0) + system.potential_energy(0.0, q0))
-    work, E_end = float(trace["impulse_work"].sum()), float(trace["energy"][-1])
-    return {"initial": E0, "final": E_end, "impulse_work": work, "residual": E_end - E0 - work}
+BALANCE_TERMS = ("load_work", "damping_loss", "impulse_work")
+
+
+def energy_balance(trace, initial) -> dict | None:
+    """The energy balance of a Moreau run with ``trace=True`` (:mod:`mbs.step_work`):
+
+        E(t) − E(0) = W_loads − D_damping + W_impulses + residual
+
+    E(0) = ``initial`` [J] (``Result.stats["initial_energy"]``), E(t) the trace's last
+    energy (E = T + V; gravity, springs and closed compliant contacts' springs are in V,
+    so gravity's work is no term), the terms summed over the steps [J]. W_impulses is
+    the work at the contact laws: the impulses' work on the bodies Σ Λᵀ(γ⁺ + γ⁻)/2 plus
+    the energy the compliant contacts' springs hold at the end (none at the start): a
+    spring charged by the bodies is in E, not lost. ``largest``:
+    the name of the largest of |ΔE|, |W_loads|, D_damping, |W_impulses| and
+    ``relative``: |residual| / that term (None when every term is zero). None when
+    the run took no step (every body solved apart by the plan)."""
+    energy = trace["energy"]
+    if not len(energy):
+        return None
+    b = {"initial": float(initial), "final": float(energy[-1]), **{k: float(trace[k].sum()) for k in BALANCE_TERMS}}
+    b["impulse_work"] += float(trace["contact_springs"][-1])
+    b["change"] = b["final"] - b["initial"]
+    b["residual"] = b["change"] - (b["load_work"] - b["damping_loss"] + b["impulse_work"])
+    sizes = {k: abs(b[k]) for k in ("change", *BALANCE_TERMS)}
+    b["largest"] = max(sizes, key=sizes.get)
+    b["relative"] = abs(b["residual"]) / sizes[b["largest"]] if sizes[b["largest"]] > 0 else None
+    return b
 
 
 def _simulate(scene, dt=None, t_end=None, n_out=None, **extra):
@@ -300,27 +335,51 @@ def _summary(scene, res, wall, cpu, warm_s) -> dict:
     if res.energy:
         E = res.total_energy()
         s["energy_J"] = {"initial": float(E[0]), "final": float(E[-1])}
+    if res.stats.get("solved_apart"):
+        s["solved_apart"] = list(res.stats["solved_apart"])
     tr = res.trace
     if scene.integrator in MOREAU and tr:
-        s["contact_intervals_s"] = contact_intervals(tr["t"], tr["dt"], tr["closed"])
-        s["max_penetration_m"] = float(res.stats["max_penetration"])
-        s["energy_J"] = energy_balance(scene.system, tr)      # from the bodies' initial state
+        if scene.system.contacts:
+            s["contact_intervals_s"] = contact_intervals(tr["t"], tr["dt"], tr["pressed"])
+            s["max_penetration_m"] = float(res.stats["max_penetration"])
+        balance = energy_balance(tr, res.stats["initial_energy"]) if "initial_energy" in res.stats else None
+        if balance is not None:
+            s["energy_balance_J"] = balance
     return s
+
+
+BALANCE_NAMES = {"change": "E(t) - E(0)", "load_work": "W_loads", "damping_loss": "D_damping",
+                 "impulse_work": "W_impulses"}
+
+
+def _balance_text(b, solved_apart=()) -> str:
+    """"energy balance [J]: E(t) - E(0) = W_loads - D_damping + W_impulses + residual: ..."."""
+    whose = (f" of the integrated bodies ({', '.join(repr(n) for n in solved_apart)} solved apart by the plan, "
+             "exactly, and left out)" if solved_apart else "")
+    rel = ("every term is zero" if b["relative"] is None
+           else f"{b['relative']:.2e} of the largest term, {BALANCE_NAMES[b['largest']]}")
+    terms = ", ".join(f"{BALANCE_NAMES[k]} = {b[k]:.6g}" for k in ("change", *BALANCE_TERMS))
+    return (f"energy balance{whose} [J]: E(t) - E(0) = W_loads - D_damping + W_impulses + residual with {terms}, "
+            f"residual = {b['residual']:.3g} ({rel}); E(0) = {b['initial']:.6g}, E(t) = {b['final']:.6g} "
+            "(E = kinetic + elastic + gravity + springs + contact springs)")
 
 
 def _report(s, log):
     if "contact_intervals_s" in s:
         iv = s["contact_intervals_s"]
-        log(f"contact: closed in {len(iv)} interval(s)"
+        log(f"contact: force transmitted in {len(iv)} interval(s)"
             + (": " + ", ".join(f"{1e3 * a:.3f}-{1e3 * b:.3f} ms" for a, b in iv[:5]) + (" ..." if len(iv) > 5 else "")
                if iv else ""))
         log(f"maximum penetration: {s['max_penetration_m']:.3g} m")
-    e = s.get("energy_J")
-    if e is not None and "residual" in e:
-        log(f"energy: initial {e['initial']:.6g} J, final {e['final']:.6g} J, impulse work {e['impulse_work']:.6g} J, "
-            f"residual {e['residual']:.3g} J ({e['residual'] / e['initial']:+.2e} of the initial)")
-    elif e is not None:
-        log(f"energy: initial {e['initial']:.6g} J, final {e['final']:.6g} J")
+    e, b = s.get("energy_J"), s.get("energy_balance_J")
+    if e is not None and (b is None or "solved_apart" in s):
+        log(f"energy (kinetic + potential of every body, at the output samples): initial {e['initial']:.6g} J, "
+            f"final {e['final']:.6g} J")
+    if b is not None:
+        log(_balance_text(b, s.get("solved_apart", ())))
+    elif s["steps"] == 0 and "solved_apart" in s:
+        log("energy balance: no time step taken (the plan solves every body apart, by exact modal propagation); "
+            "plan = false in [scene] integrates them and gives the balance")
     for name, value in s["final"].items():
         log(f"at t = {s['t_end_s']:g} s: {name} = {np.array2string(np.asarray(value), precision=6)} "
             f"{s['units'][name]}")
@@ -331,5 +390,8 @@ def _report(s, log):
     for label, part in s.get("error_parts", {}).items():
         est = ", ".join(_estimate_text(name, e) for name, e in part["outputs"].items())
         log(f"accuracy ({label}: max |run - run with {part['against']}|): {est}")
+    if s["timed_steps"] == 0:
+        log(f"cost: no time step, {s['wall_s']:.2f} s wall ({s['cpu_s']:.2f} s CPU)")
+        return
     log(f"cost: {s['timed_steps']} steps in {s['wall_s']:.2f} s wall ({s['cpu_s']:.2f} s CPU), "
         f"{s['us_per_step']:.0f} µs per step" + (f" (resumed: {s['steps']} steps in all)" if "note" in s else ""))

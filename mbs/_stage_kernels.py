@@ -136,3 +136,50 @@ def keep_warm_start_into(lam_rows, closed_idx, n_closed, lam, n_c, warm, lam_pre
             lam_prev[at + k] = lam[row + k]
         warm[i] = True
         row += dim
+
+
+@njit(cache=True)
+def path_power(theta, u, u_prev, Q):
+    """vᵀQ with v = θ u_{k+1} + (1 − θ) u_k (nu,) [m/s] the velocity the step's positions
+    advance with (stage 8: q_{k+1} = q_k ⊕ Δt v) and Q (nu,) [N] generalized forces:
+    their power [W] along the step (:mod:`mbs.step_work`). Numpy reference:
+    ``(theta * u + (1 - theta) * u_prev) @ Q``."""
+    s = 0.0
+    for i in range(Q.shape[0]):
+        s += (theta * u[i] + (1.0 - theta) * u_prev[i]) * Q[i]
+    return s
+
+
+@njit(cache=True)
+def damping_power(theta, u, u_prev, rows, D):
+    """vᵀ D v [W] over the damped rows ``rows`` (k,) of u, D (k, k) [N s/m] the damping
+    on them and v = θ u_{k+1} + (1 − θ) u_k as in :func:`path_power`. Numpy reference:
+    ``v[rows] @ D @ v[rows]``."""
+    s = 0.0
+    for a in range(rows.shape[0]):
+        va = theta * u[rows[a]] + (1.0 - theta) * u_prev[rows[a]]
+        t = 0.0
+        for b in range(rows.shape[0]):
+            t += D[a, b] * (theta * u[rows[b]] + (1.0 - theta) * u_prev[rows[b]])
+        s += va * t
+    return s
+
+
+@njit(cache=True)
+def pressed_contacts(warm, lam_rows, lam_prev, comp_force, closed, force_N, set_valued):
+    """The contacts that transmit a force in the last step: a set-valued contact closed
+    in it (``warm``) with a non-zero impulse Λ or spring force F (compliant contacts) in
+    its block lam_prev[lam_rows[i, 0]:][:lam_rows[i, 1]], a single-valued one closed with
+    a non-zero normal force. Reference: the same loop in Python."""
+    n = 0
+    for i in range(warm.shape[0]):
+        if set_valued[i]:
+            if warm[i]:
+                at, dim = lam_rows[i, 0], lam_rows[i, 1]
+                for k in range(dim):
+                    if lam_prev[at + k] != 0.0 or comp_force[at + k] != 0.0:
+                        n += 1
+                        break
+        elif closed[i] and force_N[i] != 0.0:
+            n += 1
+    return n

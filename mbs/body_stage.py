@@ -82,6 +82,7 @@ class BodyStage:
             for b, qs, us, work in self._items:
                 F = (b.mass * self.gravity).reshape(1, 3)
                 self._loads.append(("point", b, qs, us, b.com_frame(), GRAVITY_TABLE, F, False, work))
+        self._applied = []          # the entries of the applied loads (mbs.link.ForceElement.applied)
         for f in self.forces:
             load = f.point_load()
             if load is not None and load[0].body is not None and load[0].body in self.active:
@@ -91,6 +92,8 @@ class BodyStage:
                                     self._work[id(b)]))
             else:
                 self._loads.append(("element", f))
+            if f.applied:
+                self._applied.append(self._loads[-1])
         self._force_tangents = [f for f in self.forces if f.has_tangents]
         self._varying = [b for b in self.active if b.varying_tangents]
         self.K0 = np.zeros((self.nu, self.nu))      # the bodies' constant tangents
@@ -229,14 +232,28 @@ class BodyStage:
     def _add_loads(self, t, q, u, h):
         """Gravity and force elements into h, in the System's order."""
         for load in self._loads:
-            if load[0] == "point":
-                _, b, qs, us, frame, times, values, body_axes, work = load
-                if self._one:
-                    b.add_point_load_into(q, frame, times, values, t, body_axes, h, work)
-                else:
-                    b.add_point_load_into(q[qs], frame, times, values, t, body_axes, h[us], work)
+            self._add(load, t, q, u, h)
+
+    @property
+    def has_applied_loads(self) -> bool:
+        return bool(self._applied)
+
+    def add_applied_loads(self, t, q, u, h) -> None:
+        """The applied loads alone (force elements with ``applied``: no gravity, no
+        springs) into h (nu,) [N], as in :meth:`h_only` (allocation-free for point loads
+        of step tables)."""
+        for load in self._applied:
+            self._add(load, t, q, u, h)
+
+    def _add(self, load, t, q, u, h):
+        if load[0] == "point":
+            _, b, qs, us, frame, times, values, body_axes, work = load
+            if self._one:
+                b.add_point_load_into(q, frame, times, values, t, body_axes, h, work)
             else:
-                load[1].add_forces(t, q, u, h)
+                b.add_point_load_into(q[qs], frame, times, values, t, body_axes, h[us], work)
+        else:
+            load[1].add_forces(t, q, u, h)
 
     def tangents(self, t, q, u, K, D) -> None:
         """Write the tangents K = −∂h/∂q (in velocity-increment coordinates) and

@@ -40,9 +40,15 @@ def add_torque(frame, q, t, torque, h):
 
 class ForceElement:
     """A link that contributes smooth generalized forces; ``has_tangents`` is True for
-    elements that override :meth:`add_tangents`."""
+    elements that override :meth:`add_tangents`. For the energy balance of a run
+    (:mod:`mbs.step_work`): ``applied`` is True for an applied load (its force stores no
+    energy, its work is the loads' work), False for an element whose force is −∂V/∂q of
+    its :meth:`potential_energy` plus its damping; ``dissipative`` is True when
+    :meth:`dissipation` may be non-zero."""
 
     has_tangents = False
+    applied = True
+    dissipative = False
 
     def bodies(self):
         """The bodies this element acts on (the System checks they were added)."""
@@ -54,6 +60,10 @@ class ForceElement:
 
     def potential_energy(self, t, q) -> float:
         """Stored energy [J] (springs, gravity); 0 for non-conservative elements."""
+        return 0.0
+
+    def dissipation(self, t, q, u) -> float:
+        """The power [W] the element's damping takes out at (t, q, u) (>= 0); 0 by default."""
         return 0.0
 
     def step_loads(self):

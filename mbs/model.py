@@ -204,6 +204,9 @@ def compile_model(system, plan=None, theta=0.5, solver=None) -> Model:
                  blocks=blocks, idle_rows=idle_rows, residual=residual if residual else None)
 
 
+LAST_STEP = (0, 0.0, 0, 0.0, 0.0, 0, 0.0, 0.0)     # Data.last of a step not yet taken
+
+
 class Data:
     """The state and workspaces of a run of ``model`` (module docstring). Arrays of the
     current contact problem are views of the ``*_buf`` buffers sized for ``m_max``
@@ -275,8 +278,10 @@ class Data:
         self.solution = None                # (iterations, residual, converged) of the last solve
         self.h_last = 0.0
         self.stats = {"closed_contacts": 0, "solver_iterations": 0, "max_penetration": 0.0, "pruned_contacts": 0}
-        self.last = [0, 0.0, 0, 0.0, 0.0]   # this accepted step: most closed contacts, penetration,
-                                            # solver iterations, residual; impulse work
+        self.last = list(LAST_STEP)         # this accepted step: most closed contacts, penetration,
+                                            # solver iterations, residual; impulse work; with a
+                                            # trace (mbs.step_work) most contacts transmitting a
+                                            # force, load work, damping loss
 
     def problem(self, nu, m):
         """Views (W (nu, m) C order, M̂⁻¹W (nu, m) Fortran order, G (m, m), Λ, γ⁺, ξ_free,

@@ -54,6 +54,7 @@ class SpringDamper(ForceElement):
     """
 
     has_tangents = True
+    applied = False             # the spring's force is −∂V/∂q, the damper's dissipates
 
     def __init__(self, frame1: Frame, frame2: Frame, stiffness, damping=0.0, *, free_length):
         if frame1.body is None and frame2.body is None:
@@ -106,6 +107,15 @@ class SpringDamper(ForceElement):
     def potential_energy(self, t, q) -> float:
         """V = ½ k (l − l0)² [J]."""
         return 0.5 * self.stiffness * (self.length(t, q) - self.free_length) ** 2
+
+    @property
+    def dissipative(self) -> bool:
+        return self.damping > 0.0
+
+    def dissipation(self, t, q, u) -> float:
+        """The damper's power c l̇² [W] (l̇ = eᵀ ḋ)."""
+        e = self._geometry(t, q)[2]
+        return self.damping * float(e @ self._rate(t, q, u)) ** 2
 
     def add_tangents(self, t, q, u, K, D):
         """K += J_relᵀ K_d J_rel and D += J_relᵀ (c e eᵀ) J_rel with the exact derivative

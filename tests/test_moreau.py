@@ -99,7 +99,8 @@ def test_adaptive_steps_shrink_at_the_impact_and_bound_penetration_and_timing_by
     t1 = v1 / G
     res = bouncing_ball(e, 0.8, 1e-2, integrator="moreau-adaptive", atol=atol, t_out=[0.4, 0.8], trace=True)
     tr = res.trace
-    assert set(tr) == {"t", "dt", "closed", "penetration", "iterations", "residual", "impulse_work", "energy"}
+    assert set(tr) == {"t", "dt", "closed", "penetration", "iterations", "residual", "impulse_work", "energy",
+                       "pressed", "load_work", "damping_loss", "contact_springs"}
     assert len(tr["t"]) == res.stats["steps"] and np.isclose(tr["dt"].sum(), 0.8, rtol=1e-12)
     near = np.abs(tr["t"] - t1) < 1e-3
     assert tr["dt"][near].min() < 100 * atol / v1 and tr["dt"][tr["t"] < 0.4].min() == pytest.approx(1e-2)

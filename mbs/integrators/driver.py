@@ -267,6 +267,8 @@ class Integrator:
         modal = plan.solve_modal(sys, times, q, u, dt) if plan is not None else {}
         self.compile(plan)
         res.plan = "" if plan is None else str(plan)
+        if self.model.idle:
+            res.stats["solved_apart"] = [b.name for b in self.model.idle]     # the plan's modal bodies
         res.stats["modal_cpu_s"] = time.process_time() - cpu0
         state = RunState(times, sorted(set(times.tolist()) | set(breaks)), breaks,
                          {name: probe(spec) for name, spec in outputs.items()}, res, modal, energies, contacts,

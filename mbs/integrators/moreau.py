@@ -52,7 +52,13 @@ short of the surface, from where it falls again in small hops), ``solver`` (a Pr
 or its method name), ``tol``, ``trace`` (True: per-step records in ``Result.trace``:
 t, dt [s], closed contacts, largest penetration [m], solver iterations and residual
 [m/s], the work of the impulses Λᵀ (γ⁺ + γ⁻)/2 [J] (contacts and joints; the energy the
-impact laws take out), total energy [J]), ``penetration_bound`` [m] (default None: no
+impact laws take out; with residual flexibility the work on the bodies, of which the
+contacts' springs hold a part while closed), total energy E = T + V [J] (gravity and
+the compliant contacts' springs in V; the springs' ½ Fᵀδ also on their own as
+``contact_springs``), the contacts that transmitted a force (non-zero Λ; "closed"
+counts those touching too), the applied loads' work and the damping's loss [J]
+(:mod:`mbs.step_work`); the energy at the start, E(0) of the integrated bodies, is
+``Result.stats["initial_energy"]``), ``penetration_bound`` [m] (default None: no
 bound; a penetration max(0, −g_N) at q_θ beyond it, in an accepted step, stops the run). Non-convergence of
 the contact problem stops the run with a SimulationError naming the residual.
 
@@ -92,13 +98,16 @@ from contact.solver import ProxSolver
 from ffrmbs.errors import ModelError
 
 from .. import stages, state_arrays
-from ..model import CARRIED
+from ..model import CARRIED, LAST_STEP
+from ..step_work import StepWork
 from .driver import Integrator, StepFailure, non_finite
 
-TRACE_KEYS = ("t", "dt", "closed", "penetration", "iterations", "residual", "impulse_work", "energy")
+TRACE_KEYS = ("t", "dt", "closed", "penetration", "iterations", "residual", "impulse_work", "pressed", "load_work",
+              "damping_loss", "energy", "contact_springs")      # t, dt, Data.last, energies
 TRACE_UNITS = {"t": "s", "dt": "s", "closed": "1", "penetration": "m", "iterations": "1", "residual": "m/s",
-               "impulse_work": "J", "energy": "J"}
-TRACE_DTYPES = {"closed": np.int64, "iterations": np.int64}     # the others float64
+               "impulse_work": "J", "energy": "J", "pressed": "1", "load_work": "J", "damping_loss": "J",
+               "contact_springs": "J"}
+TRACE_DTYPES = {"closed": np.int64, "iterations": np.int64, "pressed": np.int64}     # the others float64
 
 
 class MoreauTimeStepping(Integrator):
@@ -117,6 +126,7 @@ class MoreauTimeStepping(Integrator):
         self.theta = float(theta)
         self.solver = solver if isinstance(solver, ProxSolver) else ProxSolver(solver, tol=tol, max_iter=max_iter)
         self._trace = {key: [] for key in TRACE_KEYS} if trace else None
+        self._work = None           # the StepWork of the run's Model (trace only)
 
     def options(self):
         return {"theta": self.theta, "solver": self.solver.method}
@@ -131,6 +141,22 @@ class MoreauTimeStepping(Integrator):
 
     def start(self, t, q, u):
         self.t, self.q, self.u = t, q, u
+        if self._trace is not None and "initial_energy" not in self.data.stats:     # a fresh run's first start
+            self.data.stats["initial_energy"] = self.energy()
+
+    def energy(self) -> float:
+        """E = T + V [J] of the run's Data: the integrated bodies' kinetic energy, the
+        elastic, gravity and spring energies and the compliant contacts' springs
+        (:meth:`spring_energy`); a body the plan solves apart stands still in Data."""
+        return self._bodies_energy() + self.spring_energy()
+
+    def _bodies_energy(self) -> float:
+        data = self.data
+        energy = self.model.body_stage.energy(data.q, data.u)
+        if energy is None:
+            sys = self.system
+            energy = sys.kinetic_energy(data.t, data.q, data.u) + sys.potential_energy(data.t, data.q)
+        return energy
 
     def accepted(self, h):
         last = self.data.last
@@ -139,17 +165,18 @@ class MoreauTimeStepping(Integrator):
                               "(a contact tunnelled, or a penalty stiffness is too soft for the load)")
         super().accepted(h)
         if self._trace is not None:
-            data = self.data
-            energy = self.model.body_stage.energy(data.q, data.u)
-            if energy is None:
-                sys = self.system
-                energy = sys.kinetic_energy(data.t, data.q, data.u) + sys.potential_energy(data.t, data.q)
-            energy += self.spring_energy()                   # compliant contacts' springs (contact.compliance)
+            springs = self.spring_energy()
+            energy = self._bodies_energy() + springs
             if not math.isfinite(energy):
                 raise non_finite(self.t, self.steps, "energy")
-            for key, value in zip(TRACE_KEYS, (self.t, h, *last, energy)):
+            for key, value in zip(TRACE_KEYS, (self.t, h, *last, energy, springs)):
                 self._trace[key].append(value)
-        last[:] = 0, 0.0, 0, 0.0, 0.0
+        last[:] = LAST_STEP
+
+    def _step_work(self) -> StepWork:
+        if self._work is None or self._work.model is not self.model:
+            self._work = StepWork(self.model)
+        return self._work
 
     trace_units = TRACE_UNITS
 
@@ -195,6 +222,12 @@ class MoreauTimeStepping(Integrator):
 
     def step(self, dt):
         stages.step(self.model, self.data, dt)
+        if self._trace is not None:                 # the step's energy terms (mbs.step_work)
+            data, work = self.data, self._step_work()
+            last = data.last
+            last[5] = max(last[5], work.pressed(data))
+            last[6] += work.load_work(data, dt)
+            last[7] += work.damping_loss(data, dt)
 
 
 class AdaptiveMoreauTimeStepping(MoreauTimeStepping):
@@ -269,7 +302,7 @@ class AdaptiveMoreauTimeStepping(MoreauTimeStepping):
 
     def _restore(self):
         self._saved.restore()
-        self.data.last[:] = 0, 0.0, 0, 0.0, 0.0
+        self.data.last[:] = LAST_STEP
 
     def advance(self, end, dt):
         """Controlled steps of at most ``dt`` from ``self.t`` to exactly ``end``."""

@@ -73,7 +73,7 @@ def _errors(res, ref):
 
 def _extras(scene, res):
     tr = res.trace
-    e = energy_balance(scene.system, tr)
+    e = energy_balance(tr, res.stats["initial_energy"])
     return {"energy_residual": e["residual"] / e["initial"] if scene.contact.set_valued else None,
             "contact_intervals": len(contact_intervals(tr["t"], tr["dt"], tr["closed"])),
             "max_penetration": float(res.stats["max_penetration"]), "steps": int(res.stats["steps"])}
