@@ -132,7 +132,7 @@ def assemble(model, data, dt) -> int:
 
 
 def store(model, data) -> None:
-    """The spring state of the compliant rows back into the contacts' slots."""
+    """The spring state of the compliant rows and their Λ₀ back into the contacts' slots."""
     r = 0
     for j in range(data.n_closed):
         i = data.closed_idx[j]
@@ -142,6 +142,7 @@ def store(model, data) -> None:
                 data.comp_force[at + x] = data.comp_F[r]
                 data.comp_delta[at + x] = data.comp_d[r]
                 data.comp_delta_dot[at + x] = data.comp_dd[r]
+                data.comp_impulse0[at + x] = data.comp_lam0[r]
                 r += 1
 
 

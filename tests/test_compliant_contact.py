@@ -242,3 +242,21 @@ def test_the_plan_says_which_contacts_use_the_correction(beam_data):
     off = scene(beam_data, 5, UnilateralNewtonImpact(0.0), (0.05, TOP, 0.01), residual=False)[0].plan(0.01)
     assert "residual flexibility: 5 of its FE model's" in str(on)
     assert "residual flexibility" not in str(off)
+
+
+@pytest.mark.parametrize("theta", [0.5, 1.0])
+@pytest.mark.parametrize("residual", [True, False])
+def test_recorded_contact_force_carries_the_whole_impulse(theta, residual, beam_data):
+    """The recorded force (the last step's impulse / Δt, sampled every step) summed over
+    the run is the point mass's momentum change m (v_end − v₀), the only force on it being
+    the contact's: with the correction the impulse is Λ₀ + Λ' (S2), not Λ' = θΔt F_{k+1}."""
+    m, v0, dt = 0.05, 0.2, 4e-6
+    system, beam, point, top, contact = scene(beam_data, 10, UnilateralNewtonImpact(0.0), (0.085, TOP + 1e-5, 0.01),
+                                              (0.0, -v0, 0.0), residual=residual, mass=m)
+    res = system.simulate(2e-3, dt, integrator="moreau", theta=theta, contacts=True, plan=False,
+                          solver=ProxSolver("gauss-seidel", tol=1e-13, max_iter=5000))
+    force = res.contacts["c"]["force"]
+    assert res.contacts["c"]["active"].sum() > 20                  # the contact acted over many steps
+    impulse = force[1:].sum(axis=0) * dt
+    momentum = m * (res.u[-1, point.u_slice] - res.u[0, point.u_slice])
+    assert np.abs(impulse - momentum).max() < 1e-9 * m * v0, (impulse, momentum)
