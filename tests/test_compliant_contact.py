@@ -260,3 +260,37 @@ def test_recorded_contact_force_carries_the_whole_impulse(theta, residual, beam_
     impulse = force[1:].sum(axis=0) * dt
     momentum = m * (res.u[-1, point.u_slice] - res.u[0, point.u_slice])
     assert np.abs(impulse - momentum).max() < 1e-9 * m * v0, (impulse, momentum)
+
+
+@pytest.mark.parametrize("residual", [True, False])
+def test_recorded_gap_follows_a_mass_far_from_the_surface(residual, beam_data):
+    """A mass rising from 1 mm above the resting beam's flat top to 0.3 m: the recorded gap
+    is y − TOP at every sample, t = 0 included, however far the plan prunes the contact
+    or the broad phase separates it."""
+    y0, v = TOP + 1e-3, 1.0
+    system = scene(beam_data, 10, UnilateralNewtonImpact(0.0), (0.085, y0, 0.01), (0.0, v, 0.0),
+                   residual=residual)[0]
+    res = system.simulate(0.3, 1e-3, integrator="moreau", contacts=True, t_out=np.linspace(0.0, 0.3, 31))
+    gap = res.contacts["c"]["gap"]
+    assert np.abs(gap - (y0 + v * res.t - TOP)).max() < 1e-12
+    assert not res.contacts["c"]["active"].any() and not res.contacts["c"]["deflection"].any()
+
+
+def test_recorded_gap_of_a_compliant_contact_is_the_effective_gap(beam_data):
+    """The mass on the beam's whole static compliance (no modes, so the surface the search
+    sees does not move): while closed the spring's deflection is the mass's depth below
+    the top, TOP − y (to the O(v₀Δt) of the midpoint), and the recorded gap, the gap of the
+    deflected surface g_N + δ, is zero to the solver's tolerance; open, it is y − TOP."""
+    x, z, v0, m, dt = 0.085, 0.01, 0.2, 0.05, 2e-6
+    system, beam, point, top, contact = scene(beam_data, 0, UnilateralNewtonImpact(0.0), (x, TOP + 1e-5, z),
+                                              (0.0, -v0, 0.0), mass=m)
+    res = system.simulate(2e-3, dt, integrator="moreau", contacts=True, plan=False,
+                          solver=ProxSolver("gauss-seidel", tol=1e-13, max_iter=5000))
+    rec, y = res.contacts["c"], res.q[:, point.q_slice][:, 1]
+    closed = rec["active"].astype(bool)
+    depth = (TOP - y).max()
+    assert closed.sum() > 100 and depth > 1e-5
+    assert np.abs(rec["deflection"][closed] - (TOP - y[closed])).max() < v0 * dt
+    assert np.abs(rec["gap"][closed]).max() < 1e-3 * depth
+    assert np.abs(rec["gap"][~closed] - (y[~closed] - TOP)).max() < 1e-12
+    assert not rec["deflection"][~closed].any()
