@@ -253,6 +253,7 @@ class Data:
         self.comp_force, self.comp_delta, self.comp_delta_dot = np.zeros((3, n_rows))
         self.comp_impulse0 = np.zeros(n_rows)
         self.comp_rows, self.comp_normal = np.zeros(m, dtype=np.int64), np.zeros(m, dtype=np.int64)
+        self.comp_fresh = np.zeros(m, dtype=np.bool_)      # the row's contact was open last step
         self.comp_C = np.zeros((m, m))
         self.comp_F, self.comp_d, self.comp_dd, self.comp_lam0 = np.zeros((4, m))
         self.comp_c, self.comp_work = np.zeros((3, 3)), np.zeros((2, 3, 3))     # c(a, b), its frame work
