@@ -255,11 +255,14 @@ class Data:
         self.u_prev = np.zeros(nu)          # u_k while u_{k+1} is formed
         self.solver_work = np.zeros((4, m))
         # compliant contacts (mbs.residual_contact, contact.compliance): spring state per
-        # contact row (end force [N], deflection [m], its rate [m/s]) and this step's
+        # contact row (end force [N], deflection [m], its rate [m/s]), the last step's
+        # Λ₀ = (1 − θ)Δt F_k per contact row [N s] (its impulse is Λ₀ + lam_prev), and this step's
         # compliant rows, their normal rows, compliance (r, r) [m/N], state and Λ₀ [N s]
         n_rows = sum(model.dims)
         self.comp_force, self.comp_delta, self.comp_delta_dot = np.zeros((3, n_rows))
+        self.comp_impulse0 = np.zeros(n_rows)
         self.comp_rows, self.comp_normal = np.zeros(m, dtype=np.int64), np.zeros(m, dtype=np.int64)
+        self.comp_fresh = np.zeros(m, dtype=np.bool_)      # the row's contact was open last step
         self.comp_C = np.zeros((m, m))
         self.comp_F, self.comp_d, self.comp_dd, self.comp_lam0 = np.zeros((4, m))
         self.comp_c, self.comp_work = np.zeros((3, 3)), np.zeros((2, 3, 3))     # c(a, b), its frame work

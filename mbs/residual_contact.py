@@ -89,7 +89,8 @@ class ResidualContacts:
 def assemble(model, data, dt) -> int:
     """The compliant rows of this step's contact problem, their compliance and spring
     state (module docstring) into Data's workspaces; the state of a contact that was open
-    last step is zeroed first. Returns r, the number of compliant rows. Allocates no
+    last step is zeroed first and its rows marked fresh (:func:`contact.compliance.compliant_problem`
+    gives them the deflection of the other contacts' forces). Returns r, the number of compliant rows. Allocates no
     numpy array when the contours are neutral ones (:mod:`contours._residual_kernels`)."""
     rc = model.residual
     r = 0
@@ -106,6 +107,7 @@ def assemble(model, data, dt) -> int:
                 if fresh:
                     data.comp_force[at + x] = data.comp_delta[at + x] = data.comp_delta_dot[at + x] = 0.0
                 data.comp_rows[r + x] = row + x
+                data.comp_fresh[r + x] = fresh
                 data.comp_normal[r + x] = r
                 data.comp_F[r + x] = data.comp_force[at + x]
                 data.comp_d[r + x] = data.comp_delta[at + x]
@@ -132,7 +134,7 @@ def assemble(model, data, dt) -> int:
 
 
 def store(model, data) -> None:
-    """The spring state of the compliant rows back into the contacts' slots."""
+    """The spring state of the compliant rows and their Λ₀ back into the contacts' slots."""
     r = 0
     for j in range(data.n_closed):
         i = data.closed_idx[j]
@@ -142,6 +144,7 @@ def store(model, data) -> None:
                 data.comp_force[at + x] = data.comp_F[r]
                 data.comp_delta[at + x] = data.comp_d[r]
                 data.comp_delta_dot[at + x] = data.comp_dd[r]
+                data.comp_impulse0[at + x] = data.comp_lam0[r]
                 r += 1
 
 

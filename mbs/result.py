@@ -17,8 +17,10 @@ class Result:
     {name: (steps,)} of integrators asked for them (Moreau's ``trace=True``), else {};
     plan: the printed scene plan of a planned run (:mod:`mbs.plan`), else "";
     contacts: {contact name: {"active" (n,) int8, "gap" (n,) [m], "point" (n, 3) [m],
-    "normal" (n, 3), "force" (n, 3) [N]}} when asked for (``simulate(contacts=True)``):
-    each contact at the last step's midpoint, the force on its first contour's body.
+    "normal" (n, 3), "deflection" (n,) [m], "force" (n, 3) [N]}} when asked for
+    (``simulate(contacts=True)``; what each is: :mod:`mbs.contact_record`): a closed
+    contact at the last step's midpoint, an open one's geometry at the sample time, the
+    force on its first contour's body.
     """
 
     t: np.ndarray

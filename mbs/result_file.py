@@ -29,11 +29,16 @@ goes)::
     /energy/kinetic, /energy/potential      (n,) [J]          (when recorded)
     /outputs/<name>           (n, ...) the requested outputs (node positions [m], ...);
                               attrs: units, label (what it is, when the scene says)
-    /contacts/<contact>/      attrs: law (class name), set_valued (bool)
+    /contacts/<contact>/      attrs: law (class name), set_valued (bool); each dataset
+                              says what it is in its ``description`` attribute
+                              (:mod:`mbs.contact_record`)
         active (n,) int8      closed at the last step's midpoint
-        gap (n,) [m]          normal gap g_N (NaN while no contact point is located)
+        gap (n,) [m]          normal gap of the contact geometry: while closed at the
+                              last step's midpoint, g_N + deflection; while open at the
+                              sample time (NaN where no contact point exists)
         point (n, 3) [m]      contact point on the second contour (world)
         normal (n, 3)         contact normal (world)
+        deflection (n,) [m]   spring deflection of residual flexibility (0 without)
         force (n, 3) [N]      contact force on the first contour's body (world): the
                               impulse of the last step / Δt for set-valued laws
     /trace/<key>              (steps,) per-step records of integrators that keep them
@@ -91,6 +96,8 @@ from preprocess.inputfiles import regular_file
 
 from .body import Frame
 from .checkpoint import read_checkpoint, write_checkpoint
+from .contact_record import DESCRIPTIONS as CONTACT_DESCRIPTIONS
+from .contact_record import FIELDS as CONTACT_FIELDS
 from .result import Result
 
 FORMAT, FORMAT_VERSION = "ffrmbs-result", 1
@@ -330,6 +337,7 @@ class ResultRecorder:
         for name in st.result.contacts:
             for key, (shape, dtype, unit) in CONTACT_FIELDS.items():
                 _create(f, f"contacts/{name}/{key}", shape, dtype, unit)
+                f[f"contacts/{name}/{key}"].attrs["description"] = CONTACT_DESCRIPTIONS[key]
         for key, rows in integ.trace().items():
             _create(f, f"trace/{key}", rows.shape[1:], rows.dtype, integ.trace_units.get(key, "SI"))
 
@@ -392,10 +400,6 @@ def ensure_space(directory, nbytes):
     if free < nbytes + SPACE_RESERVE:
         raise OSError(errno.ENOSPC, f"{os.strerror(errno.ENOSPC)} ({free / 1e6:.2f} MB free, "
                                     f"{(nbytes + SPACE_RESERVE) / 1e6:.2f} MB needed with the reserve)")
-
-
-CONTACT_FIELDS = {"active": ((), np.int8, "1"), "gap": ((), float, "m"), "point": ((3,), float, "m"),
-                  "normal": ((3,), float, "1"), "force": ((3,), float, "N")}
 
 
 def coordinate_units(body, q_f_units="SI") -> tuple[str, str]:

@@ -166,7 +166,8 @@ def constraints(model, data, dt):
     if model.residual is not None and residual_contact.assemble(model, data, dt):
         r = data.comp_r
         compliant_problem(G, xi_free, gamma_pre, data.comp_rows[:r], data.comp_C[:r, :r], data.comp_F[:r],
-                          data.comp_d[:r], data.comp_dd[:r], dt, model.theta, data.comp_lam0[:r])
+                          data.comp_d[:r], data.comp_dd[:r], data.comp_fresh[:r], dt, model.theta,
+                          data.comp_lam0[:r])
 
 
 def impulses(model, data, dt):

@@ -25,6 +25,7 @@ from ffrmbs.errors import ModelError, RunInterrupted, SimulationError
 
 from .. import state_arrays
 from .._kernels import finite_sum
+from ..contact_record import ContactRecorder, empty_records
 from ..model import Data, compile_model
 from ..probes import FramePosition, probe
 from ..residual_contact import spring_energy
@@ -116,6 +117,7 @@ class Integrator:
         self.state = None       # the RunState of the current run
         self.model = None       # the compiled Model of the current run
         self.data = None        # its Data
+        self.contact_recorder = None    # samples Result.contacts (mbs.contact_record) when asked for
 
     @property
     def t(self) -> float:
@@ -256,9 +258,7 @@ class Integrator:
         res = Result(np.full(n, np.nan), np.full((n, sys.nq), np.nan), np.full((n, sys.nu), np.nan))
         res.stats = {"integrator": self.name, "dt": dt, **self.options()}
         if contacts:
-            res.contacts = {c.name: {"active": np.zeros(n, dtype=np.int8), "gap": np.full(n, np.nan),
-                                     "point": np.full((n, 3), np.nan), "normal": np.full((n, 3), np.nan),
-                                     "force": np.zeros((n, 3))} for c in sys.contacts}
+            res.contacts = empty_records(sys.contacts, n)
             if len(res.contacts) < len(sys.contacts):
                 raise ModelError("contacts need distinct names to be recorded")
         q, u = np.array(q0, dtype=float), np.array(u0, dtype=float)
@@ -266,6 +266,7 @@ class Integrator:
         cpu0 = time.process_time()
         modal = plan.solve_modal(sys, times, q, u, dt) if plan is not None else {}
         self.compile(plan)
+        self.contact_recorder = ContactRecorder(self.model) if contacts else None
         res.plan = "" if plan is None else str(plan)
         if self.model.idle:
             res.stats["solved_apart"] = [b.name for b in self.model.idle]     # the plan's modal bodies
@@ -379,12 +380,7 @@ class Integrator:
         if st.energies and not math.isfinite(res.energy["kinetic"][i] + res.energy["potential"][i]):
             raise non_finite(self.t, self.steps, "energy")
         if st.contacts:
+            self.contact_recorder.record(self.data, res.contacts, i, self.t, q, u)
             for j, c in enumerate(self.model.contacts):
-                rec, k = res.contacts[c.name], c.kinematics
-                rec["active"][i] = self.data.closed[j]
-                if k.active:
-                    rec["gap"][i] = k.g_N
-                    rec["point"][i] = k.point2.r
-                    rec["normal"][i] = k.n
-                self.contact_force(j, rec["force"][i])
+                self.contact_force(j, res.contacts[c.name]["force"][i])
 

@@ -204,7 +204,9 @@ class MoreauTimeStepping(Integrator):
         return bool(self.data.closed[i])
 
     def contact_force(self, i, out):
-        """Set-valued: (n Λ_N + T Λ_T) / Δt of the last step (the mean force over it) [N];
+        """Set-valued: (n Λ_N + T Λ_T) / Δt of the last step (the mean force over it) [N],
+        Λ = Λ₀ + Λ' for a contact through residual flexibility (:mod:`contact.compliance`,
+        S2: the warm start Λ' = θΔt F_{k+1} is only the part of the end force);
         single-valued: the law's normal force."""
         model, data = self.model, self.data
         if not (model.set_valued[i] and data.closed[i] and data.warm[i]):
@@ -212,6 +214,8 @@ class MoreauTimeStepping(Integrator):
             return
         at, dim = model.lam_at[i], model.dims[i]
         lam = data.lam_prev[at:at + dim]
+        if model.residual is not None and model.residual.compliant[i]:
+            lam = lam + data.comp_impulse0[at:at + dim]
         k = model.contacts[i].kinematics
         out[:] = k.n * lam[0]
         if dim == 3:
