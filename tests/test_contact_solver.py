@@ -9,7 +9,7 @@ from scipy.optimize import nnls
 
 from contact import _kernels as kern
 from contact.laws import Bilateral, UnilateralCoulombContact, UnilateralNewtonImpact
-from contact.solver import ContactSet, ProxSolver
+from contact.solver import SUBSPACE_EVERY, WORK_ROWS, ContactSet, ProxSolver
 from ffrmbs.errors import ModelError
 
 
@@ -163,18 +163,22 @@ def stack(masses, dt=1e-3, grav=9.81):
     return G, W.T @ u_free, lam_exact
 
 
-def test_newton_converges_on_mass_ratio_1e6_where_pgs_crawls():
+def test_newton_and_subspace_steps_converge_on_mass_ratio_1e6_where_pgs_crawls():
     masses = [1.0, 1e6, 1.0, 1e6, 1.0]
     G, xi_free, lam_exact = stack(masses)
     laws = [UnilateralNewtonImpact()] * len(masses)
     newton = ProxSolver("newton", tol=1e-12).solve(laws, G, xi_free, np.zeros(5))
-    pgs = ProxSolver("gauss-seidel", tol=1e-12, max_iter=20_000).solve(laws, G, xi_free, np.zeros(5))
+    pgs = ProxSolver("gauss-seidel", tol=1e-12, max_iter=20_000, subspace_every=0).solve(
+        laws, G, xi_free, np.zeros(5))
+    pgs_sm = ProxSolver("gauss-seidel", tol=1e-12).solve(laws, G, xi_free, np.zeros(5))
     print(f"\nstack, mass ratio 1e6: Newton {newton.iterations} steps (residual "
           f"{newton.residual:.1e} m/s), PGS {pgs.iterations} sweeps (residual {pgs.residual:.1e} m/s, "
-          f"converged {pgs.converged})")
+          f"converged {pgs.converged}), with subspace steps {pgs_sm.iterations}")
     assert newton.converged and newton.iterations < 30
     np.testing.assert_allclose(newton.lam, lam_exact, rtol=1e-9)
     assert pgs.iterations > 20 * newton.iterations
+    assert pgs_sm.converged and pgs_sm.iterations < 50
+    np.testing.assert_allclose(pgs_sm.lam, lam_exact, rtol=1e-9)
 
 
 def test_newton_agrees_with_pgs_on_random_frictionless_problems():
@@ -321,7 +325,8 @@ def reference_gauss_seidel_solve(cs, G, xi_free, gamma_pre, lam, alpha=1.0, tol=
         r[t:t + 2] = alpha / max(np.linalg.eigvalsh(GT).max(), d[t], d[t + 1])
     m = len(c)
     it, residual, converged = kern.prox_iterate(G, c, r, cs.kinds, cs.entry_offsets, cs.mu, lam, np.empty(m),
-                                                np.empty(m), False, tol, max_iter)
+                                                np.empty(m), False, tol, max_iter, SUBSPACE_EVERY, np.empty(m),
+                                                np.empty(m))
     return it, residual, converged, xi_free + G @ lam
 
 
@@ -340,7 +345,7 @@ def test_gauss_seidel_solve_kernel_equals_the_numpy_steps(seed):
     it_ref, res_ref, conv_ref, gp_ref = reference_gauss_seidel_solve(cs, G, xi_free, gamma_pre, lam_ref)
     lam, gamma_plus = lam0.copy(), np.empty(m)
     it, res, conv = ProxSolver("gauss-seidel").solve_into(cs, G, xi_free, gamma_pre, lam, gamma_plus,
-                                                          np.empty((4, m)))
+                                                          np.empty((WORK_ROWS, m)))
     assert (it, conv) == (it_ref, conv_ref)
     scale = max(1.0, np.abs(lam_ref).max())
     assert np.abs(lam - lam_ref).max() <= 1e-12 * scale
