@@ -351,3 +351,64 @@ def test_gauss_seidel_solve_kernel_equals_the_numpy_steps(seed):
     assert np.abs(lam - lam_ref).max() <= 1e-12 * scale
     assert np.abs(gamma_plus - gp_ref).max() <= 1e-12 * max(1.0, np.abs(gp_ref).max())
     assert abs(res - res_ref) <= 1e-12 * max(1.0, abs(res_ref))
+
+
+def reference_subspace_step(cs, G, c, r, lam, accuracy, max_steps):
+    """Numpy reference of kern.subspace_step: preconditioned conjugate gradients on
+    ½ ΛᵀGΛ + cᵀΛ over the active rows (bilateral, Λ > 0), a step cut where a unilateral
+    Λ_i reaches 0, then a restart; returns the steps."""
+    bilateral = cs.kinds == kern.BILATERAL
+    steps = 0
+    while steps < max_steps:
+        active = bilateral | (lam > 0.0)
+        rho = np.where(active, -(c + G @ lam), 0.0)
+        p = r * rho
+        rz, hit = rho @ p, None
+        while np.abs(rho).max() > accuracy and steps < max_steps:
+            steps += 1
+            q = np.where(active, G @ p, 0.0)
+            pq = p @ q
+            if not pq > 0.0:
+                return steps
+            a = rz / pq
+            blocking = active & ~bilateral & (p < 0.0)
+            cuts = np.where(blocking, -lam / np.where(blocking, p, -1.0), np.inf)
+            if cuts.min() < a:
+                a, hit = cuts.min(), int(np.argmin(cuts))
+            lam[active] += a * p[active]
+            lam[active & ~bilateral] = np.maximum(lam[active & ~bilateral], 0.0)
+            if hit is not None:
+                lam[hit] = 0.0
+                break
+            rho[active] -= a * q[active]
+            rz_new = rho @ (r * rho)
+            p = np.where(active, r * rho + rz_new / rz * p, 0.0)
+            rz = rz_new
+        if hit is None:
+            return steps
+    return steps
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_subspace_step_kernel_equals_the_numpy_reference(seed):
+    """The conjugate-gradient subspace step on random frictionless problems (unilateral and
+    bilateral rows, some impulses at 0), singular G included: the same steps and Λ."""
+    rng = np.random.default_rng(seed)
+    laws = [UnilateralNewtonImpact() if rng.uniform() < 0.7 else Bilateral(1) for _ in range(12)]
+    cs = ContactSet(laws)
+    W = rng.normal(size=(8 if seed % 2 else 14, 12))
+    G = W.T @ W
+    c = rng.normal(size=12)
+    lam0 = np.where(rng.uniform(size=12) < 0.3, 0.0, rng.uniform(0.1, 1.0, size=12))
+    r = 1.0 / np.diag(G)
+    lam_ref = lam0.copy()
+    steps_ref = reference_subspace_step(cs, G, c, r, lam_ref, 1e-12, 40)
+    lam = lam0.copy()
+    steps = kern.subspace_step(G, c, r, cs.kinds, cs.entry_offsets, lam, np.empty(12), np.empty(12),
+                               np.empty(12), 1e-12, 40)
+    assert steps == steps_ref
+    np.testing.assert_allclose(lam, lam_ref, atol=1e-10 * max(1.0, np.abs(lam_ref).max()))
+    f = lambda x: 0.5 * x @ G @ x + c @ x     # noqa: E731  the objective never increases
+    assert f(lam) <= f(lam0) + 1e-12 * abs(f(lam0))
+    unilateral = cs.kinds == kern.UNILATERAL
+    assert np.all(lam[unilateral] >= 0.0)
