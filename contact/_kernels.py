@@ -259,8 +259,10 @@ def prox_iterate(G, c, r, kinds, offsets, mu, lam, xi, r_work, jacobi, tol, max_
     subspace = subspace_every > 0 and halvings_left == 0
     window_change = math.inf
     it = 0
+    sweeps = 0
     while it < max_iter:
         it += 1
+        sweeps += 1
         if jacobi:
             v_terms = velocities(G, c, lam, xi)
             change = prox_step(xi, r_work, kinds, offsets, mu, lam, True)
@@ -281,9 +283,9 @@ def prox_iterate(G, c, r, kinds, offsets, mu, lam, xi, r_work, jacobi, tol, max_
             residual = prox_step(xi, r, kinds, offsets, mu, lam, False)
             if residual <= threshold(tol, c_ref, m, v_terms):
                 return it, residual, True
-        elif subspace and it % subspace_every == 0 and it < max_iter:
-            it = min(max_iter, it + subspace_step(G, c, r, kinds, offsets, lam, xi, p, q,
-                                                  threshold(tol, c_ref, m, v_terms), max_iter - it))
+        elif subspace and sweeps % subspace_every == 0 and it < max_iter:
+            it += subspace_step(G, c, r, kinds, offsets, lam, xi, p, q, threshold(tol, c_ref, m, v_terms),
+                                max_iter - it)
     v_terms = velocities(G, c, lam, xi)
     residual = prox_step(xi, r, kinds, offsets, mu, lam, False)
     return max_iter, residual, residual <= threshold(tol, c_ref, m, v_terms)
