@@ -61,7 +61,7 @@ from . import _detection_kernels as K
 from ._detection_kernels import SINGULAR as _SINGULAR
 
 
-EDGE_TOL = 1e-6     # default edge_tol: a point 1e-6 length scales beyond the boundary projects onto it
+EDGE_TOL = 3e-7     # default edge_tol: a point 3e-7 length scales beyond the boundary projects onto it
 NEWTON_SOLVES, NEWTON_ITERATIONS, LAST_ITERATIONS, COARSE_SEARCHES = range(4)   # entries of _Search.counts
 
 
