@@ -67,19 +67,43 @@ def _gap(r_point, D, g):
 
 
 @njit(cache=True)
-def _newton_2s_direction(r_point, D, g, tol2):
+def side(t, a, b, closed):
+    """+1 when t is on the upper bound b of an open direction, −1 on its lower bound a,
+    else 0."""
+    if closed:
+        return 0
+    if t >= b:
+        return 1
+    if t <= a:
+        return -1
+    return 0
+
+
+@njit(cache=True)
+def stationary(f, a, tol2, edge2, at):
+    """Whether the tangent projection f = tᵀ g [m²] (a = tᵀ t) of an iterate is solved:
+    f² ≤ tol2 · a, or the iterate is on a bound (``at`` = ±1, :func:`side`) and the point
+    lies beyond it (f has the sign of ``at``) by at most √edge2 [m] (f² ≤ edge2 · a): the
+    closest point of the domain is on its boundary, and a point on the boundary is on
+    the contour (the projection clamped to the domain, with the tolerance √edge2)."""
+    return f * f <= tol2 * a or (at * f > 0.0 and f * f <= edge2 * a)
+
+
+@njit(cache=True)
+def _newton_2s_direction(r_point, D, g, tol2, edge2, at_e, at_x):
     """One Newton iteration's test and step on eq. 3.31–3.32 from the fields D (6, 3) at
-    the iterate (g = r_P − r into g): returns (|g|² [m²], converged, minimum, Δη, Δξ,
-    degenerate). ``minimum``: H negative definite (a distance minimum); the step is
-    Newton's there, else Gauss–Newton's; ``degenerate``: the Gauss–Newton matrix is
-    singular (no step, Δη = Δξ = 0)."""
+    the iterate (g = r_P − r into g; ``at_e``, ``at_x``: the iterate's bounds, :func:`side`):
+    returns (|g|² [m²], converged (:func:`stationary`), minimum, Δη, Δξ, degenerate).
+    ``minimum``: H negative definite (a distance minimum); the step is Newton's there,
+    else Gauss–Newton's; ``degenerate``: the Gauss–Newton matrix is singular (no step,
+    Δη = Δξ = 0)."""
     gg = _gap(r_point, D, g)
     f0, f1 = _dot(D[1], g), _dot(D[2], g)
     a, b, c = _dot(D[1], D[1]), _dot(D[1], D[2]), _dot(D[2], D[2])
     h11, h12, h22 = _dot(D[3], g) - a, _dot(D[4], g) - b, _dot(D[5], g) - c
     det = h11 * h22 - h12 * h12
     minimum = h11 < 0.0 and det > SINGULAR * a * c
-    converged = f0 * f0 <= tol2 * a and f1 * f1 <= tol2 * c
+    converged = stationary(f0, a, tol2, edge2, at_e) and stationary(f1, c, tol2, edge2, at_x)
     if not minimum:  # Gauss–Newton: a descent direction of |g|²
         h11, h12, h22, det = -a, -b, -c, a * c - b * b
         if det <= SINGULAR * a * c:
@@ -89,13 +113,14 @@ def _newton_2s_direction(r_point, D, g, tol2):
 
 @njit(cache=True)
 def newton_2s(r_point, eta, xi, knots_e, knots_x, ints, floats, ctrl0, phi, state, span, max_step_e, max_step_x,
-              tol2, max_iter, B, local, D, g):
+              tol2, edge2, max_iter, B, local, D, g):
     """Newton on g_η = t_ηᵀ g = 0, g_ξ = t_ξᵀ g = 0 (thesis eq. 3.31–3.32), g = r_P − r(η, ξ),
     from (η, ξ) on a neutral 2s contour (the algorithm of
     :meth:`contact.search.Contact2sSearch._newton_reference`, see :mod:`contact.search`).
 
-    ``max_step_*`` cap a step per coordinate, ``tol2`` = (tol · length scale)² [m²];
-    B, local, D (6, 3), g (3,) are work arrays. Returns (found, η, ξ, |g|² [m²],
+    ``max_step_*`` cap a step per coordinate, ``tol2`` = (tol · length scale)² [m²],
+    ``edge2`` [m²] the square of how far beyond a bound a point may lie and still project
+    onto it (:func:`stationary`); B, local, D (6, 3), g (3,) are work arrays. Returns (found, η, ξ, |g|² [m²],
     iterations of the converged start, Newton steps taken); found is False when Newton
     failed or stopped at a maximum or saddle of the distance.
     """
@@ -107,7 +132,8 @@ def newton_2s(r_point, eta, xi, knots_e, knots_x, ints, floats, ctrl0, phi, stat
     steps = 0
     for k in range(max_iter + 1):
         fields_2s(eta, xi, knots_e, knots_x, ints, floats, ctrl0, phi, state, span, B, local, D)
-        gg, converged, minimum, d_eta, d_xi, degenerate = _newton_2s_direction(r_point, D, g, tol2)
+        gg, converged, minimum, d_eta, d_xi, degenerate = _newton_2s_direction(
+            r_point, D, g, tol2, edge2, side(eta, ae, be, ce), side(xi, ax, bx, cx))
         if converged:
             return minimum, eta, xi, gg, k, steps
         if k == max_iter:
@@ -125,7 +151,7 @@ def newton_2s(r_point, eta, xi, knots_e, knots_x, ints, floats, ctrl0, phi, stat
 
 @njit(cache=True)
 def newton_offset(r_point, eta, xi, knots, ints, floats, ctrl0, phi, state, span, n0, law, size, ax, bx, cx,
-                  max_step_e, max_step_x, tol2, max_iter, B, local, rows, frame, D, g):
+                  max_step_e, max_step_x, tol2, edge2, max_iter, B, local, rows, frame, D, g):
     """:func:`newton_2s` on an offset contour (band, cylinder: :mod:`contours.derived`):
     the fields from :func:`~contours._offset_kernels.offset_fields` over the neutral
     curve's ``kernel_data`` (knots … span) and body-frame reference normal n0, the offsets
@@ -141,7 +167,8 @@ def newton_offset(r_point, eta, xi, knots, ints, floats, ctrl0, phi, state, span
         al, bt, al1, bt1, al2, bt2 = offsets(law, size, xi)
         offset_fields(eta, knots, ints, floats, ctrl0, phi, state, span, n0, al, bt, al1, bt1, al2, bt2, B, local,
                       rows, frame, D)
-        gg, converged, minimum, d_eta, d_xi, degenerate = _newton_2s_direction(r_point, D, g, tol2)
+        gg, converged, minimum, d_eta, d_xi, degenerate = _newton_2s_direction(
+            r_point, D, g, tol2, edge2, side(eta, ae, be, ce), side(xi, ax, bx, cx))
         if converged:
             return minimum, eta, xi, gg, k, steps
         if k == max_iter:
@@ -158,8 +185,8 @@ def newton_offset(r_point, eta, xi, knots, ints, floats, ctrl0, phi, state, span
 
 
 @njit(cache=True)
-def newton_1s(r_point, eta, knots, ints, floats, ctrl0, phi, state, span, max_step, tol2, max_iter, B, local, D,
-              g):
+def newton_1s(r_point, eta, knots, ints, floats, ctrl0, phi, state, span, max_step, tol2, edge2, max_iter, B,
+              local, D, g):
     """Newton on g_η = t_ηᵀ (r_P − r(η)) = 0 (eq. 3.6 on a curve) from η on a neutral 1s
     contour (the algorithm of :meth:`contact.search.Contact1sSearch._newton_reference`).
     Arguments as for :func:`newton_2s`; returns (found, η, |g|² [m²], iterations of the
@@ -174,7 +201,7 @@ def newton_1s(r_point, eta, knots, ints, floats, ctrl0, phi, state, span, max_st
         f, a = _dot(D[1], g), _dot(D[1], D[1])
         h = _dot(D[3], g) - a
         minimum = h < -SINGULAR * a
-        if f * f <= tol2 * a:
+        if stationary(f, a, tol2, edge2, side(eta, a_, b_, closed)):
             return minimum, eta, gg, k, steps
         if k == max_iter or a == 0.0:
             break

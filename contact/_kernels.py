@@ -130,7 +130,101 @@ def threshold(tol, c_ref, m, v_terms):
 
 
 @njit(cache=True)
-def prox_iterate(G, c, r, kinds, offsets, mu, lam, xi, r_work, jacobi, tol, max_iter):
+def _active(kind, lam_o):
+    """Whether a frictionless entry is free in the subspace step: bilateral, or Λ > 0."""
+    return kind == BILATERAL or lam_o > 0.0
+
+
+@njit(cache=True)
+def subspace_step(G, c, r, kinds, offsets, lam, rho, p, q, accuracy, max_steps):
+    """Conjugate gradients on the rows the sweeps left active, in place, for a problem
+    without friction (every entry one row).
+
+    Λ ≥ 0 on the unilateral rows with ξ = c + G Λ is the minimum of the convex quadratic
+    f(Λ) = ½ Λᵀ G Λ + cᵀ Λ (∇f = ξ) on that box; a sweep is a projected coordinate
+    descent of f. With the active set A (bilateral rows and Λ_i > 0) fixed and the other
+    rows at 0, f is minimized over Λ_A by conjugate gradients preconditioned with
+    ``r`` (∝ 1 / G_ii) from the current Λ (Hestenes & Stiefel 1952; the subspace
+    minimization of PGS-SM, Silcowitz, Niebe & Erleben 2010, and of GPCG, Moré & Toraldo
+    1991). A step that would make a unilateral Λ_i negative stops at Λ_i = 0 and ends the
+    step. Each step is an exact line minimization of f or shorter, so f never increases.
+    G_AA may be singular (more contacts than the bodies' velocities, e.g. a face of
+    point contacts on a plane); the system G_AA Λ_A = −c_A − … is then still consistent
+    (c lies in the range of Wᵀ) and conjugate gradients reach it in at most rank G_AA
+    steps in exact arithmetic. Stops when max_A |ξ_i| ≤ ``accuracy`` [m/s], after
+    ``max_steps`` or when pᵀ G p ≤ 0. ``rho``, ``p``, ``q`` (m,) are work arrays.
+    Returns the steps taken (one G p each).
+    """
+    steps = 0
+    while steps < max_steps:                 # a restart after each row that reached 0
+        velocities(G, c, lam, rho)
+        rz = 0.0
+        largest = 0.0
+        for k in range(kinds.shape[0]):
+            o = offsets[k]
+            rho[o] = -rho[o] if _active(kinds[k], lam[o]) else 0.0
+            p[o] = r[o] * rho[o]
+            rz += rho[o] * p[o]
+            largest = max(largest, abs(rho[o]))
+        hit = -1
+        while largest > accuracy and steps < max_steps:
+            steps += 1
+            hit = _conjugate_gradient_step(G, kinds, offsets, r, lam, rho, p, q, rz)
+            if hit != -1:
+                break
+            rz_new = 0.0
+            largest = 0.0
+            for k in range(kinds.shape[0]):
+                o = offsets[k]
+                if _active(kinds[k], lam[o]):
+                    rz_new += r[o] * rho[o] * rho[o]
+                    largest = max(largest, abs(rho[o]))
+            beta = rz_new / rz
+            rz = rz_new
+            for k in range(kinds.shape[0]):
+                o = offsets[k]
+                p[o] = r[o] * rho[o] + beta * p[o] if _active(kinds[k], lam[o]) else 0.0
+        if hit < 0:
+            break
+    return steps
+
+
+@njit(cache=True)
+def _conjugate_gradient_step(G, kinds, offsets, r, lam, rho, p, q, rz):
+    """Λ_A += a p, ρ −= a G p with a = ρᵀ z / pᵀ G p (``rz`` = ρᵀ z) or shorter, where a
+    unilateral Λ_i reaches 0 (that row is then set to 0). Returns −1 after a full step,
+    the row that reached 0, or −2 when pᵀ G p ≤ 0 (nothing done)."""
+    pq = 0.0
+    for k in range(kinds.shape[0]):
+        o = offsets[k]
+        q[o] = 0.0
+        if _active(kinds[k], lam[o]):
+            s = 0.0
+            for j in range(lam.shape[0]):
+                s += G[o, j] * p[j]
+            q[o] = s
+            pq += p[o] * s
+    if not pq > 0.0:
+        return -2
+    a = rz / pq
+    hit = -1
+    for k in range(kinds.shape[0]):
+        o = offsets[k]
+        if kinds[k] != BILATERAL and lam[o] > 0.0 and p[o] < 0.0 and -lam[o] / p[o] < a:
+            a = -lam[o] / p[o]
+            hit = o
+    for k in range(kinds.shape[0]):
+        o = offsets[k]
+        if _active(kinds[k], lam[o]):
+            lam[o] = lam[o] + a * p[o] if kinds[k] == BILATERAL else max(lam[o] + a * p[o], 0.0)
+            rho[o] -= a * q[o]
+    if hit >= 0:
+        lam[hit] = 0.0
+    return hit
+
+
+@njit(cache=True)
+def prox_iterate(G, c, r, kinds, offsets, mu, lam, xi, r_work, jacobi, tol, max_iter, subspace_every, p, q):
     """Sweep until the scaled change and then the natural residual are <= the threshold
 
         tol · max_i |c_i| + ROUNDING · (m + 1) · max_i (|c_i| + Σ_j |G_ij Λ_j|)   [m/s],
@@ -146,6 +240,10 @@ def prox_iterate(G, c, r, kinds, offsets, mu, lam, xi, r_work, jacobi, tol, max_
     times; the r-factor reduction of MBSim, after M. Förg, dissertation TU München
     2007, p. 80 ff.). Frictionless problems converge without it (projected SOR) and keep
     their r. The residual is always measured with ``r``. ``xi`` (m,) is a work array.
+    Without friction, every ``subspace_every`` sweeps (0: never) a subspace step
+    (:func:`subspace_step`) minimizes the problem's quadratic on the rows the sweeps found
+    active; its conjugate-gradient iterations count as sweeps (one G p each) and it
+    works in ``p``, ``q`` (m,).
     Returns (sweeps, residual [m/s], converged); the residual is the natural-map
     residual of the returned Λ (one extra G Λ per check).
     """
@@ -158,8 +256,13 @@ def prox_iterate(G, c, r, kinds, offsets, mu, lam, xi, r_work, jacobi, tol, max_
     for k in range(kinds.shape[0]):
         if kinds[k] == COULOMB:
             halvings_left = MAX_HALVINGS
+    subspace = subspace_every > 0 and halvings_left == 0
     window_change = math.inf
-    for it in range(1, max_iter + 1):
+    it = 0
+    sweeps = 0
+    while it < max_iter:
+        it += 1
+        sweeps += 1
         if jacobi:
             v_terms = velocities(G, c, lam, xi)
             change = prox_step(xi, r_work, kinds, offsets, mu, lam, True)
@@ -180,6 +283,9 @@ def prox_iterate(G, c, r, kinds, offsets, mu, lam, xi, r_work, jacobi, tol, max_
             residual = prox_step(xi, r, kinds, offsets, mu, lam, False)
             if residual <= threshold(tol, c_ref, m, v_terms):
                 return it, residual, True
+        elif subspace and sweeps % subspace_every == 0 and it < max_iter:
+            it += subspace_step(G, c, r, kinds, offsets, lam, xi, p, q, threshold(tol, c_ref, m, v_terms),
+                                max_iter - it)
     v_terms = velocities(G, c, lam, xi)
     residual = prox_step(xi, r, kinds, offsets, mu, lam, False)
     return max_iter, residual, residual <= threshold(tol, c_ref, m, v_terms)
@@ -205,13 +311,13 @@ def diagonal_floor(G, tiny, d):
 
 @njit(cache=True)
 def gauss_seidel_solve(G, xi_free, gamma_pre, restitution, kinds, offsets, mu, tangent_at, alpha, tiny, tol,
-                       max_iter, lam, gamma_plus, work):
+                       max_iter, subspace_every, lam, gamma_plus, work):
     """The projected Gauss–Seidel solve of :meth:`contact.solver.ProxSolver.solve_into`
     with automatic r, whole: c = ξ_free + ε γ⁻ (Λ = 0 when c = 0); r_i = α / G_ii
     (:func:`diagonal_floor`), a Coulomb contact's tangential rows α / max(λ_max(G_TT),
     G_T1T1, G_T2T2); :func:`prox_iterate` from the warm start in ``lam``; γ⁺ = ξ_free + G Λ.
-    ``tangent_at``: the first tangential row of every Coulomb contact; ``work`` (4, m)
-    scratch (c, r, ξ, the sweeps' r). Returns (sweeps, residual [m/s], converged).
+    ``tangent_at``: the first tangential row of every Coulomb contact; ``work`` (6, m)
+    scratch (c, r, ξ, the sweeps' r, the subspace step's p and q). Returns (sweeps, residual [m/s], converged).
     Numpy reference: the same steps with ``np.multiply``, ``np.add``, ``np.matmul``
     (``tests/test_contact_solver.py``)."""
     m = G.shape[0]
@@ -240,7 +346,8 @@ def gauss_seidel_solve(G, xi_free, gamma_pre, restitution, kinds, offsets, mu, t
         e = G[t + 1, t + 1]
         lam_max = 0.5 * (a + e) + math.hypot(0.5 * (a - e), b)
         r[t] = r[t + 1] = alpha / max(lam_max, r_work[t], r_work[t + 1])
-    it, residual, converged = prox_iterate(G, c, r, kinds, offsets, mu, lam, xi, r_work, False, tol, max_iter)
+    it, residual, converged = prox_iterate(G, c, r, kinds, offsets, mu, lam, xi, r_work, False, tol, max_iter,
+                                           subspace_every, work[4], work[5])
     for i in range(m):
         s = 0.0
         for j in range(m):

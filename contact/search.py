@@ -27,8 +27,15 @@ capped at one grid cell per coordinate. Newton has converged when the tangential
 components of g, |g_η|/|t_η| and |g_ξ|/|t_ξ| [m], are below ``tol`` × the contour's length
 scale; the root counts only if it is a local minimum of |g| (a maximum or saddle of eq. 3.6
 — e.g. the far side of a cylinder — is no contact point). Closed directions wrap the
-parameter; on an open direction an iterate is clipped to the domain, and a second clip in
-a row rejects the start (the root lies outside the contour: no contact point there).
+parameter; on an open direction an iterate is clipped to the domain. A point whose closest
+point of the domain is on its boundary projects onto the boundary: an iterate on a bound
+has converged in that coordinate when the point lies beyond the bound by at most
+``edge_tol`` × the length scale (the projection clamped to [η0, η1] × [ξ0, ξ1], so that a
+point exactly on the boundary — a node of the face's edge — is on the contour whatever
+the rounding; :func:`._detection_kernels.stationary`). A second clip in a row rejects the
+start (the root lies outside the contour: no contact point there). The coarse level
+counts a cell as a candidate when g_η, g_ξ change sign or are within the same tolerance
+of zero at its corners.
 On a trimmed surface (``contour.trim``, a face with holes: :mod:`contours.fitting.trim`)
 a root inside a hole is rejected likewise; it is kept (``hole``) as the next warm start,
 and a warm start that converges into a hole again ends the solve without the coarse level
@@ -58,6 +65,7 @@ from . import _detection_kernels as K
 from ._detection_kernels import SINGULAR as _SINGULAR
 
 
+EDGE_TOL = 3e-7     # default edge_tol: a point 3e-7 length scales beyond the boundary projects onto it
 NEWTON_SOLVES, NEWTON_ITERATIONS, LAST_ITERATIONS, COARSE_SEARCHES = range(4)   # entries of _Search.counts
 
 
@@ -101,6 +109,11 @@ class _Axis:
         cell), wrapped or clipped by :meth:`wrap`."""
         return self.wrap(t + min(max(dt, -self.max_step), self.max_step))
 
+    def side(self, t):
+        """+1 on the upper bound of an open direction, −1 on the lower, else 0
+        (:func:`._detection_kernels.side`)."""
+        return K.side(t, self.a, self.b, self.closed)
+
     def wrap(self, t):
         """(t in the domain, True if an open direction had to clip t)."""
         if self.closed:
@@ -131,6 +144,9 @@ class _Search:
     ----------
     tol : float
         Newton tolerance relative to ``length_scale``.
+    edge_tol : float
+        How far beyond the domain's boundary a point may lie and still project onto it,
+        relative to ``length_scale`` (module docstring).
     max_iter : int
         Newton iterations per start.
     length_scale : float [m]
@@ -156,13 +172,14 @@ class _Search:
     #: what a solve changes (:mod:`mbs.state_arrays`); ``_G``: the coarse grid's workspace
     run_state = ("_length_scale", "counts", "_point", "_g", "_G", "hole")
 
-    def __init__(self, contour, tol, max_iter, length_scale, compiled):
+    def __init__(self, contour, tol, max_iter, length_scale, compiled, edge_tol=EDGE_TOL):
         if contour.dim != self.dim:
             raise ModelError(f"{type(self).__name__} needs a {self.dim}s contour, got {contour!r}")
         self.contour = contour
         self._point = contour.new_point()
         self._g = np.zeros(3)
         self.tol = float(tol)
+        self.edge_tol = float(edge_tol)
         self.max_iter = int(max_iter)
         self._length_scale = None if length_scale is None else float(length_scale)
         self.compiled = (bool(compiled) and isinstance(contour, (NeutralContour, OffsetContour))
@@ -192,13 +209,22 @@ class _Search:
     def _tol2(self):
         return (self.tol * self.length_scale) ** 2
 
+    def _edge2(self):
+        """(edge_tol · length scale)² [m²]."""
+        return (self.edge_tol * self.length_scale) ** 2
+
+    def _zero(self):
+        """|g_η|, |g_ξ| [m] that count as zero at the coarse grid's nodes."""
+        return np.sqrt(max(self._tol2(), self._edge2()))
+
     def newton_settings(self):
         """(largest step per surface coordinate (tuple), (tol · length scale)² [m²],
-        iterations) of Newton, as the kernels take them; None while the length scale
-        is not known (it is fixed at the first search, module docstring)."""
+        (edge_tol · length scale)² [m²], iterations) of Newton, as the kernels take them;
+        None while the length scale is not known (it is fixed at the first search, module
+        docstring)."""
         if self._length_scale is None:
             return None
-        return tuple(ax.max_step for ax in self.axes), self._tol2(), self.max_iter
+        return tuple(ax.max_step for ax in self.axes), self._tol2(), self._edge2(), self.max_iter
 
     def _grid_positions(self):
         """Positions of the grid nodes (k, 3) [m] at the contour's current state."""
@@ -219,7 +245,7 @@ class Contact2sSearch(_Search):
         4 × 3); ignored when ``nodes`` is given.
     nodes : (eta_nodes, xi_nodes) or None
         Coarse-grid node coordinates (e.g. the FE node parameters).
-    tol, max_iter, length_scale : see :class:`_Search`.
+    tol, max_iter, length_scale, edge_tol : see :class:`_Search`.
     compiled : bool
         Newton in the numba kernel on a compiled neutral contour (default), else the
         Python reference.
@@ -228,8 +254,8 @@ class Contact2sSearch(_Search):
     dim = 2
 
     def __init__(self, contour, n_eta=8, n_xi=8, nodes=None, tol=1e-10, max_iter=20, length_scale=None,
-                 compiled=True):
-        super().__init__(contour, tol, max_iter, length_scale, compiled)
+                 compiled=True, edge_tol=None):
+        super().__init__(contour, tol, max_iter, length_scale, compiled, EDGE_TOL if edge_tol is None else edge_tol)
         self.axes = (_Axis(contour.domain[0], contour.closed[0]), _Axis(contour.domain[1], contour.closed[1]))
         if nodes is None:
             self.set_equal_spacing(n_eta, n_xi)
@@ -282,7 +308,7 @@ class Contact2sSearch(_Search):
                 G[1, i, j] = _unit_projection(D[D_XI], g)
         I0, I1, J0, J1 = ax_e.lo[:, None], ax_e.hi[:, None], ax_x.lo[None, :], ax_x.hi[None, :]
         corners = np.stack([G[:, I0, J0], G[:, I1, J0], G[:, I0, J1], G[:, I1, J1]])
-        candidates = _sign_change(corners, np.sqrt(self._tol2())).all(axis=0)
+        candidates = _sign_change(corners, self._zero()).all(axis=0)
         best = None
         for i, j in zip(*np.nonzero(candidates)):
             root = self._newton(r_point, ax_e.centres[i], ax_x.centres[j])
@@ -304,11 +330,11 @@ class Contact2sSearch(_Search):
             found, eta, xi, gg, k, steps = K.newton_offset(
                 r_point, float(eta), float(xi), *contour.neutral.kernel_data, contour.neutral.normal_ref,
                 *contour.offset_law, ax_x.a, ax_x.b, ax_x.closed, ax_e.max_step, ax_x.max_step, self._tol2(),
-                self.max_iter, *self._work)
+                self._edge2(), self.max_iter, *self._work)
         else:
             found, eta, xi, gg, k, steps = K.newton_2s(r_point, float(eta), float(xi), *contour.kernel_data,
-                                                       ax_e.max_step, ax_x.max_step, self._tol2(), self.max_iter,
-                                                       *self._work)
+                                                       ax_e.max_step, ax_x.max_step, self._tol2(), self._edge2(),
+                                                       self.max_iter, *self._work)
         self.newton_iterations += steps
         if not found or not self._on_material(eta, xi):
             return None
@@ -330,7 +356,7 @@ class Contact2sSearch(_Search):
         ax_e, ax_x = self.axes
         eta, _ = ax_e.wrap(float(eta))
         xi, _ = ax_x.wrap(float(xi))
-        p, D, tol2, clipped = self._point, self._point.derivs, self._tol2(), 0
+        p, D, tol2, edge2, clipped = self._point, self._point.derivs, self._tol2(), self._edge2(), 0
         for k in range(self.max_iter + 1):
             self.contour.evaluate(p, eta, xi)
             g = np.subtract(r_point, D[VALUE], out=self._g)
@@ -340,7 +366,8 @@ class Contact2sSearch(_Search):
             h11, h12, h22 = D[D_ETA_ETA] @ g - a, D[D_ETA_XI] @ g - b, D[D_XI_XI] @ g - c
             det = h11 * h22 - h12 * h12
             minimum = h11 < 0.0 and det > _SINGULAR * a * c
-            if f0 * f0 <= tol2 * a and f1 * f1 <= tol2 * c:
+            if (K.stationary(f0, a, tol2, edge2, ax_e.side(eta))
+                    and K.stationary(f1, c, tol2, edge2, ax_x.side(xi))):
                 if not minimum or not self._on_material(eta, xi):
                     return None  # a maximum or saddle of the distance, or a hole: not the contact point
                 self.last_iterations = k
@@ -371,13 +398,14 @@ class Contact1sSearch(_Search):
         Cells of the equally spaced coarse grid; ignored when ``nodes`` is given.
     nodes : (k,) or None
         Coarse-grid node coordinates.
-    tol, max_iter, length_scale, compiled : see :class:`Contact2sSearch`.
+    tol, max_iter, length_scale, compiled, edge_tol : see :class:`Contact2sSearch`.
     """
 
     dim = 1
 
-    def __init__(self, contour, n=16, nodes=None, tol=1e-10, max_iter=20, length_scale=None, compiled=True):
-        super().__init__(contour, tol, max_iter, length_scale, compiled)
+    def __init__(self, contour, n=16, nodes=None, tol=1e-10, max_iter=20, length_scale=None, compiled=True,
+                 edge_tol=None):
+        super().__init__(contour, tol, max_iter, length_scale, compiled, EDGE_TOL if edge_tol is None else edge_tol)
         self.axes = (_Axis(contour.domain, contour.closed[0]),)
         if nodes is None:
             self.set_equal_spacing(n)
@@ -412,7 +440,7 @@ class Contact1sSearch(_Search):
         for i, eta in enumerate(ax.nodes):
             self.contour.evaluate(p, eta)
             G[i] = _unit_projection(D[D_ETA], np.subtract(r_point, D[VALUE], out=self._g))
-        candidates = _sign_change(np.stack([G[ax.lo], G[ax.hi]]), np.sqrt(self._tol2()))
+        candidates = _sign_change(np.stack([G[ax.lo], G[ax.hi]]), self._zero())
         best = None
         for i in np.nonzero(candidates)[0]:
             root = self._newton(r_point, ax.centres[i])
@@ -428,7 +456,7 @@ class Contact1sSearch(_Search):
             return self._newton_reference(r_point, eta)
         self.newton_solves += 1
         found, eta, gg, k, steps = K.newton_1s(r_point, float(eta), *self.contour.kernel_data, self.axes[0].max_step,
-                                               self._tol2(), self.max_iter, *self._work)
+                                               self._tol2(), self._edge2(), self.max_iter, *self._work)
         self.newton_iterations += steps
         if not found:
             return None
@@ -440,7 +468,7 @@ class Contact1sSearch(_Search):
         self.newton_solves += 1
         ax = self.axes[0]
         eta, _ = ax.wrap(float(eta))
-        p, D, tol2, clipped = self._point, self._point.derivs, self._tol2(), 0
+        p, D, tol2, edge2, clipped = self._point, self._point.derivs, self._tol2(), self._edge2(), 0
         for k in range(self.max_iter + 1):
             self.contour.evaluate(p, eta)
             g = np.subtract(r_point, D[VALUE], out=self._g)
@@ -448,7 +476,7 @@ class Contact1sSearch(_Search):
             f, a = te @ g, te @ te
             h = D[D_ETA_ETA] @ g - a
             minimum = h < -_SINGULAR * a
-            if f * f <= tol2 * a:
+            if K.stationary(f, a, tol2, edge2, ax.side(eta)):
                 if not minimum:
                     return None  # a maximum of the distance: not the contact point
                 self.last_iterations = k

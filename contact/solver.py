@@ -30,9 +30,21 @@ Methods (:class:`ProxSolver`):
   H falls back to least squares and then to the gradient; De Luca, Facchinei & Kanzow
   1996; Acary & Brogliato 2008, ch. 12). Local convergence is quadratic and does
   not degrade with the conditioning of G (large mass ratios), where the prox iterations
-  slow down. It covers :class:`~contact.laws.UnilateralNewtonImpact` and
-  :class:`~contact.laws.Bilateral` contacts; a problem with friction raises ModelError
-  (use a prox method).
+  slow down. When the line search finds no descent (a singular H: more contacts than
+  the bodies have velocities), a subspace step (below) from Λ clipped to Λ ≥ 0 takes the
+  Newton step's place (counted as one), and Newton goes on from there. It covers
+  :class:`~contact.laws.UnilateralNewtonImpact` and :class:`~contact.laws.Bilateral`
+  contacts; a problem with friction raises ModelError (use a prox method).
+
+Subspace steps (problems without friction, ``subspace_every`` > 0): the sweeps fix the
+active set (the rows with Λ_i > 0) within a few iterations but crawl towards the
+impulses on it when G is ill-conditioned or singular — a face of point contacts on a
+plane has far more contacts than the velocities it moves (rank G = 9 for 81 contacts of a
+rod with 6 modes) and eigenvalues from the rigid motion down to the stiff modes. Every
+``subspace_every`` sweeps, preconditioned conjugate gradients minimize ½ ΛᵀGΛ + cᵀΛ on
+the active rows (:func:`contact._kernels.subspace_step`; PGS-SM, Silcowitz, Niebe &
+Erleben 2010); the objective never increases, so the sweeps' convergence is kept. Each
+conjugate-gradient step counts as one iteration.
 
 Convergence: an iteration stops when the scaled change max_i |ΔΛ_i| / r_i (prox
 methods) and the natural-map residual max_i |Λ_i − prox(Λ − r ξ)_i| / r_i [m/s] (zero
@@ -57,8 +69,11 @@ from .laws import Bilateral, UnilateralCoulombContact, UnilateralNewtonImpact
 
 METHODS = ("gauss-seidel", "jacobi", "newton")
 ARMIJO_SIGMA = 1e-4          # sufficient decrease of the merit ½|Φ|²
+LM_MU = 1e-3
 ARMIJO_MIN_STEP = 1e-12      # smallest line-search step before giving up
 TINY_DIAGONAL = 1e-14        # G_ii below this times max G_jj: row touches no mass
+SUBSPACE_EVERY = 10          # sweeps between the subspace steps of the prox methods
+WORK_ROWS = 6                # rows of the scratch array of ProxSolver.solve_into
 
 
 class ContactSet:
@@ -162,10 +177,13 @@ class ProxSolver:
         Relative tolerance of the velocities [-] (times max|ξ_free + ε γ⁻|, module docstring).
     max_iter : int >= 1 or None
         Most sweeps or Newton steps; None: 10000 sweeps, 100 Newton steps.
+    subspace_every : int >= 0
+        Prox methods without friction: a conjugate-gradient subspace step on the active
+        rows every this many sweeps (module docstring); 0 never.
     """
 
     def __init__(self, method="gauss-seidel", r="auto", relaxation=1.0, tol=1e-10,
-                 max_iter=None):
+                 max_iter=None, subspace_every=SUBSPACE_EVERY):
         if method not in METHODS:
             raise ModelError(f"ProxSolver: method must be one of {METHODS}, got {method!r}")
         if not (isinstance(r, str) and r == "auto"):
@@ -182,6 +200,9 @@ class ProxSolver:
             max_iter = 100 if method == "newton" else 10_000
         if int(max_iter) != max_iter or max_iter < 1:
             raise ModelError(f"ProxSolver: max_iter must be an integer >= 1, got {max_iter!r}")
+        if int(subspace_every) != subspace_every or subspace_every < 0:
+            raise ModelError(f"ProxSolver: subspace_every must be an integer >= 0, got {subspace_every!r}")
+        self.subspace_every = int(subspace_every)
         self.method, self.r, self.relaxation = method, r, relaxation
         self.tol, self.max_iter = tol, int(max_iter)
 
@@ -211,13 +232,13 @@ class ProxSolver:
             lam = lam0
         gamma_plus = np.empty(cs.m)
         it, residual, converged = self.solve_into(cs, G, xi_free, gamma_pre, lam, gamma_plus,
-                                                  np.empty((4, cs.m)))
+                                                  np.empty((WORK_ROWS, cs.m)))
         return ContactSolution(lam, gamma_plus, it, residual, converged)
 
     def solve_into(self, cs, G, xi_free, gamma_pre, lam, gamma_plus, work):
         """:meth:`solve` on consistent float arrays without validation: Λ in place in
         ``lam`` (its warm start on entry), γ⁺ = ξ_free + G Λ into ``gamma_plus``,
-        ``work`` (4, m) scratch; returns (iterations, residual [m/s], converged). The
+        ``work`` (WORK_ROWS, m) scratch; returns (iterations, residual [m/s], converged). The
         Gauss–Seidel method with automatic r is one kernel call
         (:func:`contact._kernels.gauss_seidel_solve`) and allocates nothing."""
         if self.method == "newton" and cs.frictional:
@@ -226,7 +247,7 @@ class ProxSolver:
         if self.method == "gauss-seidel" and self.r == "auto":
             it, residual, converged = kern.gauss_seidel_solve(
                 G, xi_free, gamma_pre, cs.restitution, cs.kinds, cs.entry_offsets, cs.mu, cs.tangent_at,
-                self.relaxation, TINY_DIAGONAL, self.tol, self.max_iter, lam, gamma_plus, work)
+                self.relaxation, TINY_DIAGONAL, self.tol, self.max_iter, self.subspace_every, lam, gamma_plus, work)
             return int(it), float(residual), bool(converged)
         c, r, xi, r_work = work[0], work[1], work[2], work[3]
         np.multiply(cs.restitution, gamma_pre, out=c)
@@ -236,12 +257,12 @@ class ProxSolver:
             gamma_plus[:] = xi_free
             return 0, 0.0, True
         if self.method == "newton":
-            it, residual, converged = self._newton(cs, G, c, _diagonal(G) ** -1.0, lam)
+            it, residual, converged = self._newton(cs, G, c, _diagonal(G) ** -1.0, lam, work[4:6])
         else:
             self._prox_factors(cs, G, r)
             it, residual, converged = kern.prox_iterate(
                 G, c, r, cs.kinds, cs.entry_offsets, cs.mu, lam, xi, r_work, self.method == "jacobi",
-                self.tol, self.max_iter)
+                self.tol, self.max_iter, self.subspace_every, work[4], work[5])
         np.matmul(G, lam, out=gamma_plus)
         np.add(xi_free, gamma_plus, out=gamma_plus)
         return int(it), float(residual), bool(converged)
@@ -266,8 +287,9 @@ class ProxSolver:
         else:
             np.divide(alpha, r, out=r)
 
-    def _newton(self, cs, G, c, r, lam):
-        """Fischer–Burmeister semismooth Newton (module docstring); Λ in place."""
+    def _newton(self, cs, G, c, r, lam, work):
+        """Fischer–Burmeister semismooth Newton (module docstring); Λ in place; ``work``
+        (2, m) scratch of the subspace step."""
         unilateral = np.zeros(cs.m, dtype=bool)
         unilateral[cs.entry_offsets[cs.kinds == kern.UNILATERAL]] = True
         np.maximum(lam, 0.0, out=lam, where=unilateral)
@@ -302,18 +324,30 @@ class ProxSolver:
                 d = np.linalg.lstsq(H, -phi, rcond=None)[0]
             if not (np.all(np.isfinite(d)) and grad @ d < 0.0):   # lstsq gave no descent
                 d = -grad
-            psi, slope, step = 0.5 * phi @ phi, grad @ d, 1.0
-            while True:
-                trial = lam + step * d
-                phi_t, b_t, norm_t, v_t = merit(trial)
-                if 0.5 * phi_t @ phi_t <= psi + ARMIJO_SIGMA * step * slope:
-                    break
-                step *= 0.5
-                if step < ARMIJO_MIN_STEP:                # no descent left: solved if within the tolerance
-                    return it, residual, accepted
+            trial = self._armijo(merit, lam, d, 0.5 * phi @ phi, grad @ d)
+            if trial is None:                             # no descent left along d
+                np.maximum(lam, 0.0, out=lam, where=unilateral)
+                if not (self.subspace_every and kern.subspace_step(
+                        G, c, r, cs.kinds, cs.entry_offsets, lam, xi, work[0], work[1],
+                        kern.threshold(self.tol, c_ref, cs.m, v_terms), cs.m)):
+                    return it, residual, accepted         # solved if within the tolerance
+                trial = lam
             lam[:] = trial
-            phi, b, norm, v_terms = phi_t, b_t, norm_t, v_t
+            phi, b, norm, v_terms = merit(lam)
         return self.max_iter, residual, False
+
+    @staticmethod
+    def _armijo(merit, lam, d, psi, slope):
+        """Λ + s d with the largest s = 2^-k whose merit ½|Φ|² decreases by at least
+        ARMIJO_SIGMA s |slope|, or None below ARMIJO_MIN_STEP."""
+        step = 1.0
+        while step >= ARMIJO_MIN_STEP:
+            trial = lam + step * d
+            phi_t = merit(trial)[0]
+            if 0.5 * phi_t @ phi_t <= psi + ARMIJO_SIGMA * step * slope:
+                return trial
+            step *= 0.5
+        return None
 
 
 def _diagonal(G):

@@ -42,11 +42,12 @@ QP, UP, QF, UF, NF, NU1, NU2, VELOCITY, BOX, MAX_ITER = range(10)
 GEOM_AT, KNOTS_E_N, KNOTS_X_N, KIN_AT = 10, 16, 17, 18
 ITAB_SIZE = KIN_AT + 8
 # ftab: margin [m], tol2 [m²] (NaN until the search knows its length scale), the largest
-# Newton steps in η and ξ, the normal's sign, the point frame's offset ū0 (3) [m], the
+# Newton steps in η and ξ, the normal's sign, edge2 [m²] (contact.search: how far beyond
+# the domain's boundary a point still projects onto it, squared), the point frame's offset ū0 (3) [m], the
 # domain (4), then the knots in η and ξ, the undeformed control points' box (lo (3),
 # hi (3)) [m] and the bound of P_Φ (3, n_f) [m] (contours.neutral._kernels.bounding_box)
-MARGIN, TOL2, MAX_STEP_E, MAX_STEP_X, SIGN = range(5)
-OFFSET_AT, FLOATS_AT, KNOTS_AT = 5, 8, 12
+MARGIN, TOL2, MAX_STEP_E, MAX_STEP_X, SIGN, EDGE2 = range(6)
+OFFSET_AT, FLOATS_AT, KNOTS_AT = 6, 9, 13
 
 
 MAX_DEGREE = 7
@@ -139,7 +140,8 @@ def point_on_neutral_2s(q, u, itab, ftab, ctrl0, phi, state, span, frame1, point
     knots_x = ftab[KNOTS_AT + itab[KNOTS_E_N]:o]
     found, eta, xi, gg, k, steps = newton_2s(centre, start[0], start[1], knots_e, knots_x, ints,
                                              ftab[FLOATS_AT:FLOATS_AT + 4], ctrl0, phi, state, span, ftab[MAX_STEP_E],
-                                             ftab[MAX_STEP_X], ftab[TOL2], itab[MAX_ITER], B, local, D, g)
+                                             ftab[MAX_STEP_X], ftab[TOL2], ftab[EDGE2], itab[MAX_ITER], B, local,
+                                             D, g)
     if not found:
         return FALLBACK, nan, nan, nan, nan
     counts[NEWTON_SOLVES] += 1

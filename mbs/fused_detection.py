@@ -114,7 +114,8 @@ class PointOnNeutral2s:
         if settings is None:
             self._ftab[K.TOL2] = np.nan
             return
-        (self._ftab[K.MAX_STEP_E], self._ftab[K.MAX_STEP_X]), self._ftab[K.TOL2], self._itab[K.MAX_ITER] = settings
+        steps, self._ftab[K.TOL2], self._ftab[K.EDGE2], self._itab[K.MAX_ITER] = settings
+        self._ftab[K.MAX_STEP_E], self._ftab[K.MAX_STEP_X] = steps
 
     def locate(self, q, u, t) -> bool:
         """Both contours updated at the global (q, u, t) and the contact located, as

@@ -33,6 +33,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from contact.solver import WORK_ROWS
+
 from . import state_arrays
 from .body_stage import BodyStage
 from .bounding_spheres import SphereTable
@@ -253,7 +255,7 @@ class Data:
         self.closing_buf, self.offset_buf = np.zeros(m), np.zeros(m)
         self.work_u = np.zeros(nu)          # M̂⁻¹ W Λ, then (1 − 2θ)Δt u_k
         self.u_prev = np.zeros(nu)          # u_k while u_{k+1} is formed
-        self.solver_work = np.zeros((4, m))
+        self.solver_work = np.zeros((WORK_ROWS, m))
         # compliant contacts (mbs.residual_contact, contact.compliance): spring state per
         # contact row (end force [N], deflection [m], its rate [m/s]), the last step's
         # Λ₀ = (1 − θ)Δt F_k per contact row [N s] (its impulse is Λ₀ + lam_prev), and this step's

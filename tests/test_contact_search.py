@@ -96,6 +96,30 @@ def test_point_outside_an_open_contour_has_no_contact_point(beam, contours):
     assert np.allclose(axis.position(inside), [0.1, H / 2, W / 2], atol=1e-12)
 
 
+@pytest.mark.parametrize("compiled", [True, False])
+def test_a_point_on_the_boundary_projects_onto_it(beam, contours, compiled):
+    """The undeformed top face y = H spans x in [0, L], z in [0, W]: points above its edge
+    x = L and its corner (L, W), on them or beyond them by up to edge_tol × the length
+    scale, project onto the boundary (η = 1); 1e-5 m beyond is off the contour. Cold
+    (coarse level) and warm-started from the boundary, kernel and Python reference."""
+    top, axis = contours["top"], contours["axis"]
+    top.update(beam.q_init)
+    axis.update(beam.q_init)
+    search = Contact2sSearch(top, compiled=compiled)
+    edge = search.edge_tol * search.length_scale
+    for d in (0.0, 1e-3 * edge, 0.5 * edge):
+        for z, xi in ((W / 2, 0.5), (W + d, 1.0)):
+            r = np.array([L + d, H + 0.01, z])
+            for start in (None, (1.0, xi), (0.9, 0.5)):
+                found = search.solve(r, start)
+                assert found is not None, (d, z, start)
+                np.testing.assert_allclose(found, (1.0, xi), atol=1e-9)
+        assert Contact1sSearch(axis, compiled=compiled).solve(np.array([L + d, 0.1, W / 2])) == pytest.approx(1.0)
+    for start in (None, (1.0, 0.5)):
+        assert search.solve(np.array([L + 1e-5, H + 0.01, W / 2]), start) is None
+    assert Contact1sSearch(axis, compiled=compiled).solve(np.array([L + 1e-5, 0.1, W / 2])) is None
+
+
 def test_bad_warm_start_falls_back_to_the_coarse_level(beam, contours):
     """A start on the far side of the cylinder converges to a root of eq. 3.6 that is a
     distance maximum: rejected; the coarse level finds the near side."""

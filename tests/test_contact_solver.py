@@ -9,7 +9,7 @@ from scipy.optimize import nnls
 
 from contact import _kernels as kern
 from contact.laws import Bilateral, UnilateralCoulombContact, UnilateralNewtonImpact
-from contact.solver import ContactSet, ProxSolver
+from contact.solver import SUBSPACE_EVERY, WORK_ROWS, ContactSet, ProxSolver
 from ffrmbs.errors import ModelError
 
 
@@ -163,18 +163,22 @@ def stack(masses, dt=1e-3, grav=9.81):
     return G, W.T @ u_free, lam_exact
 
 
-def test_newton_converges_on_mass_ratio_1e6_where_pgs_crawls():
+def test_newton_and_subspace_steps_converge_on_mass_ratio_1e6_where_pgs_crawls():
     masses = [1.0, 1e6, 1.0, 1e6, 1.0]
     G, xi_free, lam_exact = stack(masses)
     laws = [UnilateralNewtonImpact()] * len(masses)
     newton = ProxSolver("newton", tol=1e-12).solve(laws, G, xi_free, np.zeros(5))
-    pgs = ProxSolver("gauss-seidel", tol=1e-12, max_iter=20_000).solve(laws, G, xi_free, np.zeros(5))
+    pgs = ProxSolver("gauss-seidel", tol=1e-12, max_iter=20_000, subspace_every=0).solve(
+        laws, G, xi_free, np.zeros(5))
+    pgs_sm = ProxSolver("gauss-seidel", tol=1e-12).solve(laws, G, xi_free, np.zeros(5))
     print(f"\nstack, mass ratio 1e6: Newton {newton.iterations} steps (residual "
           f"{newton.residual:.1e} m/s), PGS {pgs.iterations} sweeps (residual {pgs.residual:.1e} m/s, "
-          f"converged {pgs.converged})")
+          f"converged {pgs.converged}), with subspace steps {pgs_sm.iterations}")
     assert newton.converged and newton.iterations < 30
     np.testing.assert_allclose(newton.lam, lam_exact, rtol=1e-9)
     assert pgs.iterations > 20 * newton.iterations
+    assert pgs_sm.converged and pgs_sm.iterations < 50
+    np.testing.assert_allclose(pgs_sm.lam, lam_exact, rtol=1e-9)
 
 
 def test_newton_agrees_with_pgs_on_random_frictionless_problems():
@@ -321,7 +325,8 @@ def reference_gauss_seidel_solve(cs, G, xi_free, gamma_pre, lam, alpha=1.0, tol=
         r[t:t + 2] = alpha / max(np.linalg.eigvalsh(GT).max(), d[t], d[t + 1])
     m = len(c)
     it, residual, converged = kern.prox_iterate(G, c, r, cs.kinds, cs.entry_offsets, cs.mu, lam, np.empty(m),
-                                                np.empty(m), False, tol, max_iter)
+                                                np.empty(m), False, tol, max_iter, SUBSPACE_EVERY, np.empty(m),
+                                                np.empty(m))
     return it, residual, converged, xi_free + G @ lam
 
 
@@ -340,9 +345,70 @@ def test_gauss_seidel_solve_kernel_equals_the_numpy_steps(seed):
     it_ref, res_ref, conv_ref, gp_ref = reference_gauss_seidel_solve(cs, G, xi_free, gamma_pre, lam_ref)
     lam, gamma_plus = lam0.copy(), np.empty(m)
     it, res, conv = ProxSolver("gauss-seidel").solve_into(cs, G, xi_free, gamma_pre, lam, gamma_plus,
-                                                          np.empty((4, m)))
+                                                          np.empty((WORK_ROWS, m)))
     assert (it, conv) == (it_ref, conv_ref)
     scale = max(1.0, np.abs(lam_ref).max())
     assert np.abs(lam - lam_ref).max() <= 1e-12 * scale
     assert np.abs(gamma_plus - gp_ref).max() <= 1e-12 * max(1.0, np.abs(gp_ref).max())
     assert abs(res - res_ref) <= 1e-12 * max(1.0, abs(res_ref))
+
+
+def reference_subspace_step(cs, G, c, r, lam, accuracy, max_steps):
+    """Numpy reference of kern.subspace_step: preconditioned conjugate gradients on
+    ½ ΛᵀGΛ + cᵀΛ over the active rows (bilateral, Λ > 0), a step cut where a unilateral
+    Λ_i reaches 0, then a restart; returns the steps."""
+    bilateral = cs.kinds == kern.BILATERAL
+    steps = 0
+    while steps < max_steps:
+        active = bilateral | (lam > 0.0)
+        rho = np.where(active, -(c + G @ lam), 0.0)
+        p = r * rho
+        rz, hit = rho @ p, None
+        while np.abs(rho).max() > accuracy and steps < max_steps:
+            steps += 1
+            q = np.where(active, G @ p, 0.0)
+            pq = p @ q
+            if not pq > 0.0:
+                return steps
+            a = rz / pq
+            blocking = active & ~bilateral & (p < 0.0)
+            cuts = np.where(blocking, -lam / np.where(blocking, p, -1.0), np.inf)
+            if cuts.min() < a:
+                a, hit = cuts.min(), int(np.argmin(cuts))
+            lam[active] += a * p[active]
+            lam[active & ~bilateral] = np.maximum(lam[active & ~bilateral], 0.0)
+            if hit is not None:
+                lam[hit] = 0.0
+                break
+            rho[active] -= a * q[active]
+            rz_new = rho @ (r * rho)
+            p = np.where(active, r * rho + rz_new / rz * p, 0.0)
+            rz = rz_new
+        if hit is None:
+            return steps
+    return steps
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_subspace_step_kernel_equals_the_numpy_reference(seed):
+    """The conjugate-gradient subspace step on random frictionless problems (unilateral and
+    bilateral rows, some impulses at 0), singular G included: the same steps and Λ."""
+    rng = np.random.default_rng(seed)
+    laws = [UnilateralNewtonImpact() if rng.uniform() < 0.7 else Bilateral(1) for _ in range(12)]
+    cs = ContactSet(laws)
+    W = rng.normal(size=(8 if seed % 2 else 14, 12))
+    G = W.T @ W
+    c = rng.normal(size=12)
+    lam0 = np.where(rng.uniform(size=12) < 0.3, 0.0, rng.uniform(0.1, 1.0, size=12))
+    r = 1.0 / np.diag(G)
+    lam_ref = lam0.copy()
+    steps_ref = reference_subspace_step(cs, G, c, r, lam_ref, 1e-12, 40)
+    lam = lam0.copy()
+    steps = kern.subspace_step(G, c, r, cs.kinds, cs.entry_offsets, lam, np.empty(12), np.empty(12),
+                               np.empty(12), 1e-12, 40)
+    assert steps == steps_ref
+    np.testing.assert_allclose(lam, lam_ref, atol=1e-10 * max(1.0, np.abs(lam_ref).max()))
+    f = lambda x: 0.5 * x @ G @ x + c @ x     # noqa: E731  the objective never increases
+    assert f(lam) <= f(lam0) + 1e-12 * abs(f(lam0))
+    unilateral = cs.kinds == kern.UNILATERAL
+    assert np.all(lam[unilateral] >= 0.0)

@@ -1,0 +1,152 @@
+"""A flat face of point contacts, the most ordinary contact there is: a free steel rod
+(20 × 20 × 100 mm, 20 modes) standing on its end face z = 0 under gravity.
+
+* Face on a plane: a point contact at each of the face's 25 (5 × 5) or 81 (9 × 9) nodes
+  against the ground plane. The Delassus matrix's rank (translation, two tilts, the
+  modes' normal motions) is far below the number of contacts, and its eigenvalues span
+  from the rigid motion to the stiff modes (1e-6 … 1e2 1/kg). Both solvers converge at
+  their default tolerance; oracles: the impulses balance the rod's momentum,
+  Σ Λ = m g T + ΔP_z, their mean per step is m g Δt, and the face does not sink into
+  the plane.
+* Points on a compliant face: ground points under the 25 face nodes against the rod's
+  face contour with residual flexibility (6 modes). The 16 on the face's edges project onto the
+  contour's boundary (within rounding and the face's nanometre deformation); they stay
+  closed as long as the same points moved 0.1 mm inward.
+* The subspace step of the prox solvers against scipy's NNLS on a random face-like problem.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.optimize import nnls
+
+from contact import (Contact, ContactKinematicsPointContour2s, ContactKinematicsPointPlane,
+                     UnilateralNewtonImpact)
+from contact.laws import UnilateralNewtonImpact as Impact
+from contact.solver import ProxSolver
+from contours import Contour2sNeutralFFR, PlaneContour, PointContour
+from mbs import FlexibleBodyFFR, System, ground_frame, stages
+from mbs.model import Data, compile_model
+from preprocess import Material, build_body
+from preprocess.geometry import box
+
+STEEL = Material(7850.0, 2.1e11, 0.3)
+SIDE, LENGTH, GRAVITY, DT, MODES = 0.02, 0.1, 9.81, 1e-4, 20
+
+
+def rod_data(cells, modes=MODES):
+    """The rod meshed with ``cells`` × ``cells`` tet4 cells across (face: (cells + 1)² nodes)."""
+    return build_body(box(SIDE, SIDE, LENGTH, None, order=1, divisions=(cells, cells, 6)), STEEL, n_modes=modes)
+
+
+@pytest.fixture(scope="module")
+def rod25():
+    return rod_data(4)
+
+
+@pytest.fixture(scope="module")
+def rod25_stiff():
+    """The 25-node face on 6 modes: the face rests without opening a contact."""
+    return rod_data(4, 6)
+
+
+@pytest.fixture(scope="module")
+def rod81():
+    return rod_data(8)
+
+
+def moreau(system, method):
+    """Model and Data with the Moreau integrator's default solver settings (tol 1e-10, 2000 iterations)."""
+    model = compile_model(system, None, theta=0.5, solver=ProxSolver(method, tol=1e-10, max_iter=2000))
+    data = Data(model)
+    data.q[:], data.u[:] = system.initial_state()
+    return model, data
+
+
+def face_on_plane(data):
+    system = System(gravity=(0.0, 0.0, -GRAVITY))
+    rod = system.add(FlexibleBodyFFR(data, modes=MODES, name="rod"))
+    plane = PlaneContour(ground_frame())
+    for j in rod.node_group("z0"):
+        system.add(Contact(ContactKinematicsPointPlane(PointContour(rod.node(int(j))), plane),
+                           UnilateralNewtonImpact(0.0), name=f"node {j}"))
+    return system, rod
+
+
+@pytest.mark.parametrize("method", ["gauss-seidel", "newton"])
+@pytest.mark.parametrize("n_contacts", [25, pytest.param(81, marks=pytest.mark.slow)])
+def test_a_face_resting_on_a_plane_is_solved_and_balances_the_weight(n_contacts, method, request):
+    data = request.getfixturevalue(f"rod{n_contacts}")
+    system, rod = face_on_plane(data)
+    model, d = moreau(system, method)
+    assert len(model.contacts) == n_contacts
+    P0 = system.linear_momentum(0.0, d.q, d.u)[2]
+    sums, iterations = [], []
+    for _ in range(100):
+        before = d.stats["solver_iterations"]
+        stages.step(model, d, DT)                     # raises StepFailure when not solved
+        sums.append(d.lam_buf[:d.m].sum())
+        iterations.append(d.stats["solver_iterations"] - before)
+    weight = rod.mass * GRAVITY * DT
+    dP = system.linear_momentum(d.t, d.q, d.u)[2] - P0
+    print(f"\n{n_contacts} contacts, {method}: iterations per step median {np.median(iterations):.0f}, "
+          f"max {max(iterations)}; mean Σ Λ / (m g Δt) = {np.mean(sums) / weight:.5f}; "
+          f"deepest penetration {d.stats['max_penetration']:.2e} m")
+    assert sum(sums) == pytest.approx(100 * weight + dP, rel=1e-6)      # momentum balance
+    assert np.mean(sums) == pytest.approx(weight, rel=1e-2)             # at rest: the weight
+    assert d.stats["max_penetration"] < 1e-8                            # g Δt² = 1e-7 m
+
+
+def ground_points_under_the_face(data, inset):
+    """Ground points under the face's nodes, moved ``inset`` [m] inward from the edges,
+    against the rod's face z = 0 with residual flexibility."""
+    system = System(gravity=(0.0, 0.0, -GRAVITY))
+    rod = system.add(FlexibleBodyFFR(data, name="rod"))
+    face = Contour2sNeutralFFR(rod, "z0", residual_flexibility=True)
+    for k, (x, y, _) in enumerate(data.u0[rod.node_group("z0")]):
+        x, y = (min(max(c, inset), SIDE - inset) for c in (x, y))
+        system.add(Contact(ContactKinematicsPointContour2s(PointContour(ground_frame((x, y, 0.0))), face),
+                           UnilateralNewtonImpact(0.0), name=f"point {k}"))
+    return system
+
+
+def closed_steps(system, steps=35):
+    model, d = moreau(system, "newton")
+    closed = np.zeros(len(model.contacts), dtype=int)
+    for _ in range(steps):
+        stages.step(model, d, DT)
+        closed += d.closed
+    return closed
+
+
+def test_points_on_the_boundary_of_a_face_stay_closed(rod25_stiff):
+    on_edges = closed_steps(ground_points_under_the_face(rod25_stiff, 0.0))
+    inset = closed_steps(ground_points_under_the_face(rod25_stiff, 1e-4))
+    print(f"\nclosed steps of 35 per point: on the edges {on_edges.tolist()}, inset {inset.tolist()}")
+    assert inset.tolist() == [35] * 25
+    assert on_edges.tolist() == inset.tolist()
+
+
+def test_subspace_steps_solve_a_face_like_problem_where_sweeps_crawl():
+    """G = Wᵀ W of 40 contacts on 9 velocities (rank 9) with stiff directions (singular
+    values 1e-3 … 1): the velocities γ⁺ = Wᵀ (u + W Λ) are unique and equal scipy's
+    NNLS solution of min_{Λ ≥ 0} |W Λ + u|."""
+    rng = np.random.default_rng(3)
+    Q1, _ = np.linalg.qr(rng.normal(size=(9, 9)))
+    W = Q1 @ np.diag(np.logspace(-3, 0, 9)) @ rng.normal(size=(9, 40))
+    u = Q1 @ rng.normal(size=9)
+    u -= 2.0 * np.abs(u).max() * (W @ np.ones(40)) / np.linalg.norm(W @ np.ones(40))   # pressed on
+    G, xi_free = W.T @ W, W.T @ u
+    lam_ref = nnls(W, -u, maxiter=10_000)[0]
+    gamma_ref = W.T @ (u + W @ lam_ref)
+    laws = [Impact(0.0)] * 40
+    plain = ProxSolver("gauss-seidel", tol=1e-10, max_iter=2000, subspace_every=0).solve(laws, G, xi_free,
+                                                                                         np.zeros(40))
+    for method in ("gauss-seidel", "jacobi", "newton"):
+        sol = ProxSolver(method, tol=1e-10, max_iter=2000).solve(laws, G, xi_free, np.zeros(40))
+        print(f"\n{method}: {sol.iterations} iterations, residual {sol.residual:.1e} m/s")
+        assert sol.converged
+        assert np.all(sol.lam >= -1e-12 * sol.lam.max())
+        np.testing.assert_allclose(sol.gamma_plus, gamma_ref, atol=1e-9 * np.abs(xi_free).max())
+    assert not plain.converged
