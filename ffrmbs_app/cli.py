@@ -275,7 +275,7 @@ def build_parser():
                           "file is converted from the length unit it states to m (si) or mm (si-mm)")
     pre.add_argument("--density", type=float, required=True, help="kg/m^3 (t/mm^3 for si-mm)")
     pre.add_argument("--young", type=float, required=True, help="Pa (N/mm^2 for si-mm)")
-    pre.add_argument("--poisson", type=float, required=True)
+    pre.add_argument("--poisson", type=float, required=True, help="Poisson's ratio, in (-1, 0.5)")
     pre.add_argument("--order", type=int, choices=(1, 2),
                      help="tet4 (1) or tet10 (2) elements for a built-in geometry, a .geo, STEP or IGES file "
                           "(default 2); a .msh or .inp mesh keeps its own order")

@@ -30,8 +30,6 @@ def test_every_argument_is_described():
     parser = cli.build_parser()
     commands = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction)).choices
     for name, sub in commands.items():
-        if name == "preprocess":        # its options are another change's (issue 30, items 17-18)
-            continue
         for action in sub._actions:
             if not isinstance(action, argparse._HelpAction):
                 assert action.help, f"ffrmbs {name}: {action.dest} has no help text"
