@@ -266,8 +266,7 @@ class ResultRecorder:
                 self._flush(integ)
                 f = self.file
                 f.attrs["status"] = status
-                f.attrs["stats"] = json.dumps(integ.diagnostics() | {"steps": integ.steps,
-                                                                     "checkpoints": self.checkpoints}, default=float)
+                json_attribute(f, "stats", integ.diagnostics() | {"steps": integ.steps, "checkpoints": self.checkpoints})
                 f.close()
                 self.file = None
         finally:                             # an unexpected error: the file is closed all the same
@@ -279,7 +278,7 @@ class ResultRecorder:
         """Add the job's summary (JSON) to the closed file."""
         with self._writing(self.path, "result file"):
             with h5py.File(self.path, "r+") as f:
-                f.attrs["summary"] = json.dumps(summary, default=float)
+                json_attribute(f, "summary", summary)
 
     # --- internals ----------------------------------------------------------------------------
     def _clocks(self):
@@ -497,6 +496,15 @@ def per_sample(name) -> bool:
     """Whether the dataset ``name`` holds one row per output sample (not the per-step
     trace, not a body's fixed surface mesh)."""
     return not name.startswith("trace/") and "/surface/" not in name
+
+
+def json_attribute(obj, name, value) -> None:
+    """Write ``value`` as JSON into the attribute ``name`` of ``obj``, a fixed-length UTF-8
+    string (read back as bytes, which ``json.loads`` takes). Fixed length keeps the text in
+    the attribute itself: a variable-length string lives in the file's global heap, and
+    libhdf5 can hang for good reading a damaged global heap."""
+    text = json.dumps(value, default=float).encode("utf-8")
+    obj.attrs.create(name, np.bytes_(text), dtype=h5py.string_dtype("utf-8", max(len(text), 1)))
 
 
 def attribute(obj, name, default=None):
