@@ -37,6 +37,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as sla
+from threadpoolctl import threadpool_limits
 
 from ffrmbs.errors import ModelError
 
@@ -103,13 +104,19 @@ CHUNK = 64
 
 def projected_flexibility(flexibility: StaticFlexibility, transfer) -> np.ndarray:
     """Tᵀ G T (m, m) [m/N] of load patterns ``transfer`` T (3N, m) (dense or sparse),
-    solved ``CHUNK`` columns at a time; symmetrized."""
+    solved ``CHUNK`` columns at a time; symmetrized.
+
+    The triangular solves run on one BLAS thread: SuperLU's supernode blocks are small,
+    so more threads add no speed, and on a busy machine their spin-waiting costs many
+    times the work (the default beam's 1107 columns: 47 CPU s with two threads on two
+    loaded cores, 5.5 CPU s with one)."""
     T = sp.csc_matrix(transfer)
     m = T.shape[1]
     out = np.empty((m, m))
-    for a in range(0, m, CHUNK):
-        b = min(a + CHUNK, m)
-        out[:, a:b] = T.T @ flexibility.solve(T[:, a:b].toarray())
+    with threadpool_limits(limits=1, user_api="blas"):
+        for a in range(0, m, CHUNK):
+            b = min(a + CHUNK, m)
+            out[:, a:b] = T.T @ flexibility.solve(T[:, a:b].toarray())
     return 0.5 * (out + out.T)
 
 

@@ -342,3 +342,18 @@ def test_a_body_with_no_modes_selected_moves_its_contour_rigidly(beam_data):
     point = contour.evaluate(contour.new_point(), 0.5, 0.5, velocity=True, jacobians=True)
     assert np.allclose(point.r, [L / 2, H, W / 2], atol=1e-14)
     assert np.allclose(point.v, u[:3] + np.cross(u[3:], point.r), atol=1e-14)
+
+
+def test_kernels_see_the_knots_as_plain_writable_arrays(beam, top):
+    """numba types a read-only array apart from a writable one, so frozen knots handed to
+    the kernels compile every kernel taking them a second time (once from the contour's
+    own calls, once inside the fused detection): the arrays a space hands the kernels
+    have the type of a plain float array, while the interpolation keeps its knots frozen."""
+    import numba
+
+    axis = Contour1sNeutralFFR.along_line(beam, (0, H / 2, W / 2), (1, 0, 0), normal=(0, 1, 0))
+    plain = numba.typeof(np.zeros(3))
+    for space in (top.space, axis.space):
+        knots = [a for a in space.geometry if a.dtype == float][:-1]
+        assert knots and all(numba.typeof(k) == plain for k in knots)
+    assert not top.space.eta.interp.knots.flags.writeable

@@ -249,3 +249,31 @@ def test_surface_control_points_linear_with_trailing_shape():
     # the tensor product equals interpolating along ξ first, then η
     R = np.moveaxis(surf.xi.control_points(np.moveaxis(X, 1, 0)), 0, 1)
     np.testing.assert_allclose(surf.control_points(X), surf.eta.control_points(R), atol=tol)
+
+
+def test_basis_kernels_get_writable_knots(monkeypatch):
+    """numba compiles a read-only array apart from a writable one: the interpolation and
+    the fit keep their knots frozen but hand the basis kernels writable copies, so
+    find_span and ders_basis are compiled once for a scene, not once per array kind."""
+    import numba
+
+    from contours.fitting import bspline_fit
+    from contours.nurbs import _kernels, interpolation
+
+    seen = []
+
+    def recording(kernel):
+        def call(knots, *args):
+            seen.append(numba.typeof(knots))
+            return kernel(knots, *args)
+        return call
+
+    for module in (interpolation, bspline_fit):
+        monkeypatch.setattr(module, "find_span", recording(_kernels.find_span))
+        monkeypatch.setattr(module, "ders_basis", recording(_kernels.ders_basis))
+    interp = Interpolation1D(np.linspace(0.0, 1.0, 7), 3)
+    fit = bspline_fit.FitDirection(6, 3)
+    fit.basis(np.linspace(0.0, 1.0, 5))
+    assert len(seen) == 2 * (7 + 5)
+    assert set(seen) == {numba.typeof(np.zeros(3))}
+    assert not interp.knots.flags.writeable and not fit.knots.flags.writeable

@@ -80,10 +80,11 @@ class FitDirection:
         first = np.empty(t.size, dtype=np.int64)
         values = np.empty((nd + 1, t.size, p + 1))
         row = np.empty((nd + 1, p + 1))
+        knots = np.array(self.knots)      # writable: numba compiles a read-only array apart
         for i, ti in enumerate(t):
             ti = ti % 1.0 if self.closed else min(max(ti, 0.0), 1.0)
-            span = find_span(self.knots, p, self.n_ctrl, ti)
-            ders_basis(self.knots, p, span, ti, nd, row)
+            span = find_span(knots, p, self.n_ctrl, ti)
+            ders_basis(knots, p, span, ti, nd, row)
             first[i] = span - p
             values[:, i] = row
         return first, values

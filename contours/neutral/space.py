@@ -36,7 +36,8 @@ class _Direction:
 
     def __init__(self, interp: Interpolation1D):
         self.interp = interp
-        self.knots = np.ascontiguousarray(interp.knots, dtype=float)
+        self.knots = np.array(interp.knots, dtype=float)    # writable: numba types a read-only
+                                                            # array apart (each kernel compiled twice)
         self.p = interp.degree
         self.n_ctrl = interp.n_ctrl
         self.closed = bool(interp.closed)

@@ -69,9 +69,10 @@ class Interpolation1D:
         p, k = self.degree, self.n_points
         N = np.zeros((k, k))
         row = np.empty((1, p + 1))
+        knots = np.array(self.knots)      # writable: numba compiles a read-only array apart
         for r, t in enumerate(self.params):
-            span = find_span(self.knots, p, self.n_ctrl, t)
-            ders_basis(self.knots, p, span, t, 0, row)
+            span = find_span(knots, p, self.n_ctrl, t)
+            ders_basis(knots, p, span, t, 0, row)
             for j in range(p + 1):
                 N[r, (span - p + j) % k] += row[0, j]
         return N
