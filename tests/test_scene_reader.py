@@ -677,6 +677,12 @@ def test_band_on_an_unstructured_rim_catches_a_ball(rim_scene):
     ('contour2.width = 0.01', 'contour2.width = 0.01\ncontour2.closed = false',
      "contact 'on the rim': contour2 (band): 'closed = false' but node group 'rim1' is a closed loop of surface "
      "edges: omit 'closed'", "contour2.closed = false"),
+    ('kind = "sphere", body = "ball", radius = 0.005 }\ncontour2.kind = "band"\ncontour2.body = "cylinder"\n'
+     'contour2.nodes = "rim1"\ncontour2.normal = [0.0, 0.0, 1.0]\ncontour2.degree = 4\ncontour2.width = 0.01',
+     'kind = "point", body = "ball" }\ncontour2.kind = "edge"\ncontour2.body = "cylinder"\n'
+     'contour2.nodes = "rim1"\ncontour2.normal = [0.0, 0.0, 1.0]',
+     "contact 'on the rim': law 'impact' has no kinematics for contour1 kind 'point' and contour2 kind 'edge' "
+     "(contour1/contour2 kinds it takes:", 'law = "impact"'),     # a point never touches an edge: a sphere does
 ])
 def test_faults_of_an_edge_group_name_their_key(rim_scene, old, new, fragment, line):
     text, path, _ = rim_scene
