@@ -24,6 +24,7 @@ ROUNDING = 8.0 * 2.0 ** -52   # 8 x machine epsilon of float64
 ADAPT_WINDOW = 50             # sweeps between the checks for progress of prox_iterate
 MAX_HALVINGS = 20             # of the r-factors in one prox_iterate (r >= 1e-6 r0)
 NORMAL_PHASE_FACTOR = 4       # with friction: a normal phase every this many subspace intervals
+NORMAL_PHASE_WINDOW = 4       # normal phases between the checks for progress (friction)
 
 
 @njit(cache=True)
@@ -282,8 +283,9 @@ def prox_iterate(G, c, r, kinds, offsets, mu, lam, xi, r_work, jacobi, tol, max_
 
     The sweeps use the factors ``r_work`` (m,), initialized from ``r``. With friction
     the prox map can be expansive and the iteration cycle: when the change is no
-    smaller than a window of sweeps before (ADAPT_WINDOW sweeps; with normal phases the
-    sweeps between two of them, the change taken just before each), ``r_work`` is halved
+    smaller than a window of sweeps before (ADAPT_WINDOW sweeps; with normal phases
+    NORMAL_PHASE_WINDOW of their intervals, the change taken just before one: the sweeps
+    after a normal phase need not shrink the change at once), ``r_work`` is halved
     (at most MAX_HALVINGS times; the r-factor reduction of MBSim, after M. Förg,
     dissertation TU München 2007, p. 80 ff.). Frictionless problems converge without it
     (projected SOR) and keep their r. The residual is always measured with ``r``. ``xi``
@@ -307,7 +309,7 @@ def prox_iterate(G, c, r, kinds, offsets, mu, lam, xi, r_work, jacobi, tol, max_
             halvings_left = MAX_HALVINGS
     frictional = halvings_left > 0
     interval = subspace_every * (NORMAL_PHASE_FACTOR if frictional else 1)   # sweeps between subspace steps
-    window = interval if frictional and subspace_every > 0 else ADAPT_WINDOW    # sweeps between progress checks
+    window = NORMAL_PHASE_WINDOW * interval if frictional and subspace_every > 0 else ADAPT_WINDOW   # progress checks
     window_change = math.inf
     it = 0
     sweeps = 0

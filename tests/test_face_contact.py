@@ -99,19 +99,20 @@ def test_a_face_resting_on_a_plane_is_solved_and_balances_the_weight(n_contacts,
     assert d.stats["max_penetration"] < 1e-8                            # g Δt² = 1e-7 m
 
 
-def test_the_first_step_of_a_face_with_friction_is_solved_and_balances_momentum(rod25):
-    """The 25 face contacts with Coulomb friction (μ = 0.3) at the first step, from rest:
+@pytest.mark.parametrize("n_contacts", [25, pytest.param(81, marks=pytest.mark.slow)])
+def test_the_first_step_of_a_face_with_friction_is_solved_and_balances_momentum(n_contacts, request):
+    """The face contacts with Coulomb friction (μ = 0.3) at the first step, from rest:
     the coupled sweeps crawl while the closed set shrinks to the few contacts that carry the
     undeformed rod's first impulse; the normal phases find it. Oracles: Σ Λ_N = ΔP_z + m g Δt,
     |Σ Λ_T| = |ΔP_xy| (the plane's tangents are the same at every point), |Λ_T| <= μ Λ_N."""
     mu = 0.3
-    system, rod = face_on_plane(rod25, UnilateralCoulombContact(0.0, mu))
+    system, rod = face_on_plane(request.getfixturevalue(f"rod{n_contacts}"), UnilateralCoulombContact(0.0, mu))
     model, d = moreau(system, "gauss-seidel")
     P0 = system.linear_momentum(0.0, d.q, d.u)
     stages.step(model, d, DT)                         # raises StepFailure when not solved
     lam = d.lam_buf[:d.m].reshape(-1, 3)
     dP = system.linear_momentum(d.t, d.q, d.u) - P0
-    print(f"\nfirst step, 25 contacts with friction: {d.stats['solver_iterations']} iterations, "
+    print(f"\nfirst step, {n_contacts} contacts with friction: {d.stats['solver_iterations']} iterations, "
           f"{np.count_nonzero(lam[:, 0])} carry load")
     assert lam[:, 0].sum() == pytest.approx(dP[2] + rod.mass * GRAVITY * DT, rel=1e-6)
     assert np.hypot(*lam[:, 1:].sum(axis=0)) == pytest.approx(np.hypot(*dP[:2]), rel=1e-6, abs=1e-12)
