@@ -71,5 +71,5 @@ def test_a_preprocess_checks_its_mesh_options_once_before_meshing(tmp_path, caps
     rc = main(["preprocess", "box:1,0.2,0.2", "--clamp", "x0", "--modes", "2", "--density", "7800",
                "--young", "2e11", "--poisson", "0.3", "--mesh-size", "0.2", "--order", "1",
                "--out", str(tmp_path / "out")])
-    assert rc in (0, None) and calls == [("box:1,0.2,0.2", 1, 0.2, None)]
+    assert rc in (0, None) and calls == [("box:1,0.2,0.2", 1, 0.2, None, None)]     # spec, order, size, structured, groups
     assert "meshing box:1,0.2,0.2 ..." in capsys.readouterr().err
