@@ -23,6 +23,8 @@ COULOMB = 2
 ROUNDING = 8.0 * 2.0 ** -52   # 8 x machine epsilon of float64
 ADAPT_WINDOW = 50             # sweeps between the checks for progress of prox_iterate
 MAX_HALVINGS = 20             # of the r-factors in one prox_iterate (r >= 1e-6 r0)
+NORMAL_PHASE_FACTOR = 4       # with friction: a normal phase every this many subspace intervals
+NORMAL_PHASE_WINDOW = 4       # normal phases between the checks for progress (friction)
 
 
 @njit(cache=True)
@@ -138,7 +140,8 @@ def _active(kind, lam_o):
 @njit(cache=True)
 def subspace_step(G, c, r, kinds, offsets, lam, rho, p, q, accuracy, max_steps):
     """Conjugate gradients on the rows the sweeps left active, in place, for a problem
-    without friction (every entry one row).
+    without friction or with the tangential impulses held (:func:`normal_phase`); only
+    the entries' first rows (normal, bilateral) move.
 
     Λ ≥ 0 on the unilateral rows with ξ = c + G Λ is the minimum of the convex quadratic
     f(Λ) = ½ Λᵀ G Λ + cᵀ Λ (∇f = ξ) on that box; a sweep is a projected coordinate
@@ -158,6 +161,7 @@ def subspace_step(G, c, r, kinds, offsets, lam, rho, p, q, accuracy, max_steps):
     steps = 0
     while steps < max_steps:                 # a restart after each row that reached 0
         velocities(G, c, lam, rho)
+        p[:] = 0.0                           # the tangential rows of Coulomb entries stay
         rz = 0.0
         largest = 0.0
         for k in range(kinds.shape[0]):
@@ -224,6 +228,49 @@ def _conjugate_gradient_step(G, kinds, offsets, r, lam, rho, p, q, rz):
 
 
 @njit(cache=True)
+def normal_sweep(G, c, r, kinds, offsets, lam):
+    """One projected Gauss–Seidel sweep over the entries' first rows (normal, bilateral),
+    the tangential impulses of Coulomb entries held; returns the scaled change and the
+    scale as :func:`gauss_seidel_sweep`."""
+    change = 0.0
+    scale = 0.0
+    for k in range(kinds.shape[0]):
+        o = offsets[k]
+        xi, a = _row_velocity(G, c, lam, o)
+        scale = max(scale, a)
+        z = lam[o] - r[o] * xi
+        if kinds[k] != BILATERAL:
+            z = max(z, 0.0)
+        change = max(change, abs(z - lam[o]) / r[o])
+        lam[o] = z
+    return change, scale
+
+
+@njit(cache=True)
+def normal_phase(G, c, r, kinds, offsets, lam, xi, p, q, tol, c_ref, subspace_every, max_steps):
+    """The normal problem with the tangential impulses held, solved in place: ξ_N = c_N +
+    G_NN Λ_N + G_NT Λ_T is a frictionless problem in Λ_N, a box-constrained convex quadratic
+    program, whose sweeps (:func:`normal_sweep`) with a subspace step every
+    ``subspace_every`` of them find the closed set and the impulses on it where the
+    coupled sweeps crawl (the normal half of the staggered projections, Kaufman, Sueda,
+    James & Pai 2008). Stops when the scaled change is within the threshold of
+    :func:`prox_iterate` or after ``max_steps`` sweeps and conjugate-gradient steps;
+    returns their number."""
+    steps = 0
+    sweeps = 0
+    while steps < max_steps:
+        steps += 1
+        sweeps += 1
+        change, v_terms = normal_sweep(G, c, r, kinds, offsets, lam)
+        accuracy = threshold(tol, c_ref, c.shape[0], v_terms)
+        if change <= accuracy:
+            break
+        if sweeps % subspace_every == 0 and steps < max_steps:
+            steps += subspace_step(G, c, r, kinds, offsets, lam, xi, p, q, accuracy, max_steps - steps)
+    return steps
+
+
+@njit(cache=True)
 def prox_iterate(G, c, r, kinds, offsets, mu, lam, xi, r_work, jacobi, tol, max_iter, subspace_every, p, q):
     """Sweep until the scaled change and then the natural residual are <= the threshold
 
@@ -236,14 +283,18 @@ def prox_iterate(G, c, r, kinds, offsets, mu, lam, xi, r_work, jacobi, tol, max_
 
     The sweeps use the factors ``r_work`` (m,), initialized from ``r``. With friction
     the prox map can be expansive and the iteration cycle: when the change is no
-    smaller than ADAPT_WINDOW sweeps before, ``r_work`` is halved (at most MAX_HALVINGS
-    times; the r-factor reduction of MBSim, after M. Förg, dissertation TU München
-    2007, p. 80 ff.). Frictionless problems converge without it (projected SOR) and keep
-    their r. The residual is always measured with ``r``. ``xi`` (m,) is a work array.
-    Without friction, every ``subspace_every`` sweeps (0: never) a subspace step
-    (:func:`subspace_step`) minimizes the problem's quadratic on the rows the sweeps found
-    active; its conjugate-gradient iterations count as sweeps (one G p each) and it
-    works in ``p``, ``q`` (m,).
+    smaller than a window of sweeps before (ADAPT_WINDOW sweeps; with normal phases
+    NORMAL_PHASE_WINDOW of their intervals, the change taken just before one: the sweeps
+    after a normal phase need not shrink the change at once), ``r_work`` is halved
+    (at most MAX_HALVINGS times; the r-factor reduction of MBSim, after M. Förg,
+    dissertation TU München 2007, p. 80 ff.). Frictionless problems converge without it
+    (projected SOR) and keep their r. The residual is always measured with ``r``. ``xi``
+    (m,) is a work array. Without friction, every ``subspace_every`` sweeps (0: never) a
+    subspace step (:func:`subspace_step`) minimizes the problem's quadratic on the rows
+    the sweeps found active; with friction, every NORMAL_PHASE_FACTOR · ``subspace_every``
+    sweeps a normal phase (:func:`normal_phase`) solves the normal problem with the
+    tangential impulses held. Their sweeps and conjugate-gradient iterations count as
+    sweeps (one G p or one row pass each); they work in ``p``, ``q`` (m,).
     Returns (sweeps, residual [m/s], converged); the residual is the natural-map
     residual of the returned Λ (one extra G Λ per check).
     """
@@ -256,7 +307,9 @@ def prox_iterate(G, c, r, kinds, offsets, mu, lam, xi, r_work, jacobi, tol, max_
     for k in range(kinds.shape[0]):
         if kinds[k] == COULOMB:
             halvings_left = MAX_HALVINGS
-    subspace = subspace_every > 0 and halvings_left == 0
+    frictional = halvings_left > 0
+    interval = subspace_every * (NORMAL_PHASE_FACTOR if frictional else 1)   # sweeps between subspace steps
+    window = NORMAL_PHASE_WINDOW * interval if frictional and subspace_every > 0 else ADAPT_WINDOW   # progress checks
     window_change = math.inf
     it = 0
     sweeps = 0
@@ -270,7 +323,7 @@ def prox_iterate(G, c, r, kinds, offsets, mu, lam, xi, r_work, jacobi, tol, max_
             change, v_terms = gauss_seidel_sweep(G, c, r_work, kinds, offsets, mu, lam)
         if not _finite(lam):
             return it, math.inf, False
-        if halvings_left > 0 and it % ADAPT_WINDOW == 0:
+        if halvings_left > 0 and sweeps % window == 0:
             if change >= (1.0 - 1e-12) * window_change:   # no progress: cycling
                 for i in range(m):
                     r_work[i] *= 0.5
@@ -283,9 +336,12 @@ def prox_iterate(G, c, r, kinds, offsets, mu, lam, xi, r_work, jacobi, tol, max_
             residual = prox_step(xi, r, kinds, offsets, mu, lam, False)
             if residual <= threshold(tol, c_ref, m, v_terms):
                 return it, residual, True
-        elif subspace and sweeps % subspace_every == 0 and it < max_iter:
-            it += subspace_step(G, c, r, kinds, offsets, lam, xi, p, q, threshold(tol, c_ref, m, v_terms),
-                                max_iter - it)
+        elif subspace_every > 0 and sweeps % interval == 0 and it < max_iter:
+            if frictional:
+                it += normal_phase(G, c, r, kinds, offsets, lam, xi, p, q, tol, c_ref, subspace_every, max_iter - it)
+            else:
+                it += subspace_step(G, c, r, kinds, offsets, lam, xi, p, q, threshold(tol, c_ref, m, v_terms),
+                                    max_iter - it)
     v_terms = velocities(G, c, lam, xi)
     residual = prox_step(xi, r, kinds, offsets, mu, lam, False)
     return max_iter, residual, residual <= threshold(tol, c_ref, m, v_terms)

@@ -36,7 +36,7 @@ Methods (:class:`ProxSolver`):
   :class:`~contact.laws.UnilateralNewtonImpact` and :class:`~contact.laws.Bilateral`
   contacts; a problem with friction raises ModelError (use a prox method).
 
-Subspace steps (problems without friction, ``subspace_every`` > 0): the sweeps fix the
+Subspace steps (``subspace_every`` > 0): the sweeps fix the
 active set (the rows with Λ_i > 0) within a few iterations but crawl towards the
 impulses on it when G is ill-conditioned or singular — a face of point contacts on a
 plane has far more contacts than the velocities it moves (rank G = 9 for 81 contacts of a
@@ -44,7 +44,15 @@ rod with 6 modes) and eigenvalues from the rigid motion down to the stiff modes.
 ``subspace_every`` sweeps, preconditioned conjugate gradients minimize ½ ΛᵀGΛ + cᵀΛ on
 the active rows (:func:`contact._kernels.subspace_step`; PGS-SM, Silcowitz, Niebe &
 Erleben 2010); the objective never increases, so the sweeps' convergence is kept. Each
-conjugate-gradient step counts as one iteration.
+conjugate-gradient step counts as one iteration. With friction the problem is no
+minimization, and the coupled sweeps crawl while the closed set changes (a face of 25
+contacts with μ = 0.3 whose first impulse is carried by 5 of them): every
+``NORMAL_PHASE_FACTOR`` · ``subspace_every`` sweeps a normal phase solves the normal
+problem with the tangential impulses held, a frictionless problem, by sweeps over the
+normal rows and subspace steps (:func:`contact._kernels.normal_phase`; the normal half of
+the staggered projections of Kaufman, Sueda, James & Pai 2008); each of its row passes
+counts as one iteration. Convergence stays usual, not guaranteed: linear at a rate set by
+the normal–tangential coupling, slow for a few sliding contacts on a flexible body.
 
 Convergence: an iteration stops when the scaled change max_i |ΔΛ_i| / r_i (prox
 methods) and the natural-map residual max_i |Λ_i − prox(Λ − r ξ)_i| / r_i [m/s] (zero
@@ -178,8 +186,9 @@ class ProxSolver:
     max_iter : int >= 1 or None
         Most sweeps or Newton steps; None: 10000 sweeps, 100 Newton steps.
     subspace_every : int >= 0
-        Prox methods without friction: a conjugate-gradient subspace step on the active
-        rows every this many sweeps (module docstring); 0 never.
+        Prox methods: a conjugate-gradient subspace step on the active rows every this
+        many sweeps, with friction a normal phase every NORMAL_PHASE_FACTOR times as many
+        (module docstring); 0 never.
     """
 
     def __init__(self, method="gauss-seidel", r="auto", relaxation=1.0, tol=1e-10,

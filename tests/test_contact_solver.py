@@ -412,3 +412,27 @@ def test_subspace_step_kernel_equals_the_numpy_reference(seed):
     assert f(lam) <= f(lam0) + 1e-12 * abs(f(lam0))
     unilateral = cs.kinds == kern.UNILATERAL
     assert np.all(lam[unilateral] >= 0.0)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_normal_phase_solves_the_normal_problem_with_the_tangential_impulses_held(seed):
+    """kern.normal_phase on random problems with friction (some contacts pressed, some
+    pulled apart): Λ_T unchanged, and Λ_N equal to NNLS on the normal rows with the held
+    Λ_T in the free velocity, min_{Λ_N ≥ 0} |L_Nᵀ Λ_N + L_N⁻¹ c'_N| with G_NN = L_N L_Nᵀ."""
+    rng = np.random.default_rng(seed)
+    n = 6
+    cs = ContactSet([UnilateralCoulombContact(0.0, 0.4)] * n)
+    G = random_delassus(rng, 3 * n, eps=0.05)
+    c = rng.normal(size=3 * n)
+    lam = rng.uniform(0.0, 1.0, size=3 * n)
+    lam_T = np.delete(lam, cs.entry_offsets).copy()
+    N = cs.entry_offsets
+    c_N = c[N] + np.delete(G[N], N, axis=1) @ lam_T
+    L = np.linalg.cholesky(G[np.ix_(N, N)])
+    lam_N = nnls(L.T, -np.linalg.solve(L, c_N), maxiter=1000)[0]
+    m = 3 * n
+    steps = kern.normal_phase(G, c, 1.0 / np.diag(G), cs.kinds, cs.entry_offsets, lam, np.empty(m), np.empty(m),
+                              np.empty(m), 1e-13, np.abs(c).max(), SUBSPACE_EVERY, 10_000)
+    assert steps < 10_000
+    np.testing.assert_array_equal(np.delete(lam, N), lam_T)
+    np.testing.assert_allclose(lam[N], lam_N, atol=1e-9 * max(1.0, lam_N.max()))

@@ -22,7 +22,7 @@ import pytest
 from scipy.optimize import nnls
 
 from contact import (Contact, ContactKinematicsPointContour2s, ContactKinematicsPointPlane,
-                     UnilateralNewtonImpact)
+                     UnilateralCoulombContact, UnilateralNewtonImpact)
 from contact.laws import UnilateralNewtonImpact as Impact
 from contact.solver import ProxSolver
 from contours import Contour2sNeutralFFR, PlaneContour, PointContour
@@ -64,13 +64,14 @@ def moreau(system, method):
     return model, data
 
 
-def face_on_plane(data):
+def face_on_plane(data, law=UnilateralNewtonImpact(0.0)):
+    """The rod on its face z = 0, a point contact with ``law`` at each face node."""
     system = System(gravity=(0.0, 0.0, -GRAVITY))
     rod = system.add(FlexibleBodyFFR(data, modes=MODES, name="rod"))
     plane = PlaneContour(ground_frame())
     for j in rod.node_group("z0"):
         system.add(Contact(ContactKinematicsPointPlane(PointContour(rod.node(int(j))), plane),
-                           UnilateralNewtonImpact(0.0), name=f"node {j}"))
+                           law, name=f"node {j}"))
     return system, rod
 
 
@@ -96,6 +97,27 @@ def test_a_face_resting_on_a_plane_is_solved_and_balances_the_weight(n_contacts,
     assert sum(sums) == pytest.approx(100 * weight + dP, rel=1e-6)      # momentum balance
     assert np.mean(sums) == pytest.approx(weight, rel=1e-2)             # at rest: the weight
     assert d.stats["max_penetration"] < 1e-8                            # g Δt² = 1e-7 m
+
+
+@pytest.mark.parametrize("n_contacts", [25, pytest.param(81, marks=pytest.mark.slow)])
+def test_the_first_step_of_a_face_with_friction_is_solved_and_balances_momentum(n_contacts, request):
+    """The face contacts with Coulomb friction (μ = 0.3) at the first step, from rest:
+    the coupled sweeps crawl while the closed set shrinks to the few contacts that carry the
+    undeformed rod's first impulse; the normal phases find it. Oracles: Σ Λ_N = ΔP_z + m g Δt,
+    |Σ Λ_T| = |ΔP_xy| (the plane's tangents are the same at every point), |Λ_T| <= μ Λ_N."""
+    mu = 0.3
+    system, rod = face_on_plane(request.getfixturevalue(f"rod{n_contacts}"), UnilateralCoulombContact(0.0, mu))
+    model, d = moreau(system, "gauss-seidel")
+    P0 = system.linear_momentum(0.0, d.q, d.u)
+    stages.step(model, d, DT)                         # raises StepFailure when not solved
+    lam = d.lam_buf[:d.m].reshape(-1, 3)
+    dP = system.linear_momentum(d.t, d.q, d.u) - P0
+    print(f"\nfirst step, {n_contacts} contacts with friction: {d.stats['solver_iterations']} iterations, "
+          f"{np.count_nonzero(lam[:, 0])} carry load")
+    assert lam[:, 0].sum() == pytest.approx(dP[2] + rod.mass * GRAVITY * DT, rel=1e-6)
+    assert np.hypot(*lam[:, 1:].sum(axis=0)) == pytest.approx(np.hypot(*dP[:2]), rel=1e-6, abs=1e-12)
+    assert np.all(np.hypot(lam[:, 1], lam[:, 2]) <= mu * lam[:, 0] * (1 + 1e-12))
+    assert d.stats["max_penetration"] < 1e-8
 
 
 def ground_points_under_the_face(data, inset):
