@@ -63,6 +63,8 @@ class ContactRecorder:
     def __init__(self, model):
         self.model = model
         self.slices = {id(contour): (qs, us) for contour, owners, qs, us in model.contours}
+        self._kept = {}         # contact id -> StateCopy of its contours' and its own run state
+        self._saved = None
 
     def record(self, data, records, i, t, q, u) -> None:
         """Sample ``i`` of every contact (but the force) into ``records`` at the state
@@ -91,14 +93,16 @@ class ContactRecorder:
 
     def locate(self, contact, t, q, u) -> bool:
         """Locate ``contact`` at (t, q, u) without the broad phase, its contours updated
-        there; their and its run state kept for :meth:`put_back`. True if a contact point
-        exists (the kinematics then hold g_N, the point and the normal)."""
+        there; their and its run state kept for :meth:`put_back` (in buffers made on the
+        first sample). True if a contact point exists (the kinematics then hold g_N, the
+        point and the normal)."""
         k = contact.kinematics
-        self._saved = []
-        for obj in (k.contour1, k.contour2, k):
-            arrays, kinds = {}, {}
-            state_arrays.collect(obj, "", arrays, kinds)
-            self._saved.append((obj, {key: np.array(v) for key, v in arrays.items()}, kinds))
+        kept = self._kept.get(id(contact))
+        if kept is None:
+            kept = self._kept[id(contact)] = state_arrays.StateCopy([(k.contour1, None), (k.contour2, None),
+                                                                     (k, None)])
+        kept.save()
+        self._saved = kept
         for contour in (k.contour1, k.contour2):
             qs, us = self.slices[id(contour)]
             if qs is None:
@@ -109,6 +113,5 @@ class ContactRecorder:
 
     def put_back(self) -> None:
         """The run state :meth:`locate` kept, restored."""
-        for obj, arrays, kinds in reversed(self._saved):
-            state_arrays.restore(obj, "", arrays, kinds)
-        self._saved = []
+        self._saved.restore()
+        self._saved = None
