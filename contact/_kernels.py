@@ -318,7 +318,7 @@ def prox_iterate(G, c, r, kinds, offsets, mu, lam, xi, r_work, jacobi, tol, max_
         sweeps += 1
         if jacobi:
             v_terms = velocities(G, c, lam, xi)
-            change = prox_step(xi, r_work, kinds, offsets, mu, lam, True)
+            change = prox_step(xi, r_work, kinds, offsets, mu, lam, bool(True))
         else:
             change, v_terms = gauss_seidel_sweep(G, c, r_work, kinds, offsets, mu, lam)
         if not _finite(lam):
@@ -333,7 +333,7 @@ def prox_iterate(G, c, r, kinds, offsets, mu, lam, xi, r_work, jacobi, tol, max_
                 window_change = change
         if change <= threshold(tol, c_ref, m, v_terms):
             v_terms = velocities(G, c, lam, xi)
-            residual = prox_step(xi, r, kinds, offsets, mu, lam, False)
+            residual = prox_step(xi, r, kinds, offsets, mu, lam, bool(False))
             if residual <= threshold(tol, c_ref, m, v_terms):
                 return it, residual, True
         elif subspace_every > 0 and sweeps % interval == 0 and it < max_iter:
@@ -343,7 +343,7 @@ def prox_iterate(G, c, r, kinds, offsets, mu, lam, xi, r_work, jacobi, tol, max_
                 it += subspace_step(G, c, r, kinds, offsets, lam, xi, p, q, threshold(tol, c_ref, m, v_terms),
                                     max_iter - it)
     v_terms = velocities(G, c, lam, xi)
-    residual = prox_step(xi, r, kinds, offsets, mu, lam, False)
+    residual = prox_step(xi, r, kinds, offsets, mu, lam, bool(False))
     return max_iter, residual, residual <= threshold(tol, c_ref, m, v_terms)
 
 

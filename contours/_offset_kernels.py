@@ -86,7 +86,7 @@ def offset_fields(eta, knots, ints, floats, ctrl0, phi, state, span, n0, al, be,
     ξ-derivatives at the point; n0 the body-frame reference normal. Returns (span, |a|, |c|)."""
     p = ints[0]
     s = locate(knots, p, ints[1], ints[2] != 0, floats[0], floats[1], eta, B)
-    local_rows_1s(B, s, p, ctrl0, phi, state, span, 6, local)
+    local_rows_1s(B, s, p, ctrl0, phi, state, span, np.int64(6), local)
     la, lc = neutral_frame(local[1], n0, frame)
     t, n, t2 = frame[0], frame[1], frame[2]
     uee = local[3]
@@ -99,7 +99,7 @@ def offset_fields(eta, knots, ints, floats, ctrl0, phi, state, span, n0, al, be,
         rows[2, c] = al1 * n[c] + be1 * t2[c]
         rows[3, c] = uee[c]
         rows[5, c] = al2 * n[c] + be2 * t2[c]
-    inertial_rows(state, rows, 6, D)
+    inertial_rows(state, rows, np.int64(6), D)
     return s, la, lc
 
 
@@ -116,7 +116,7 @@ def evaluate_offset(eta, knots, ints, floats, ctrl0, phi, state, span, n0, al, b
     frame_2s(D, 1.0, F)
     if modal:
         n_f = phi.shape[1] // 3
-        contract_curve(B, s, ints[0], phi, 3, phi_rows)
+        contract_curve(B, s, ints[0], phi, np.int64(3), phi_rows)
         t, n = frame[0], frame[1]
         for k in range(n_f):
             g0, g1, g2 = _offset_derivative(t, n, n0, la, lc, al, be, phi_rows[1, k], phi_rows[1, n_f + k],

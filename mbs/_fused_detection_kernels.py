@@ -17,6 +17,10 @@ The kernel takes each object's arrays as the one vector their views share
 the frame contour's ``state``, the neutral contour's state and span cache), the
 constants of the pair as one int table ``itab`` and one float table ``ftab`` (layouts
 below, written by :class:`mbs.fused_detection.PointOnNeutral2s`) and a work vector.
+
+Constant arguments of nested kernel calls are passed as typed values (``np.int64(0)``,
+``np.bool_(True)``): numba compiles a callee apart for every literal argument, once more
+beside the runtime-typed version the other callers use (``tests/test_compile_once.py``).
 """
 
 from __future__ import annotations
@@ -159,11 +163,11 @@ def point_on_neutral_2s(q, u, itab, ftab, ctrl0, phi, state, span, frame1, point
     J2 = point2[J_AT:J_AT + 3 * nu2].reshape(3, nu2)
     frame_2s(D2, ftab[SIGN], F2)
     phi_rows = work[WORK_AT:WORK_AT + 18 * n_f].reshape(6, 3 * n_f)
-    contract_surface(B[0], int(span[1]), ints[0], B[1], int(span[2]), ints[3], phi, 1, phi_rows)
+    contract_surface(B[0], int(span[1]), ints[0], B[1], int(span[2]), ints[3], phi, np.int64(1), phi_rows)
     if velocity:
         point_velocity(state, local[0], phi_rows[0], v2)
     A = state[A_AT:A_AT + 9].reshape(3, 3)
-    point_jacobian_T(A, A, local[0], phi_rows[0].reshape(3, n_f), False, 0, J2)   # prescribed frame: A Φ
+    point_jacobian_T(A, A, local[0], phi_rows[0].reshape(3, n_f), np.bool_(False), np.int64(0), J2)   # prescribed frame: A Φ
     for k in range(3 * nu2):
         point2[J_AT + 3 * nu2 + k] = 0.0
 
@@ -174,7 +178,7 @@ def point_on_neutral_2s(q, u, itab, ftab, ctrl0, phi, state, span, frame1, point
     w_T1 = kin[itab[ko + 5]:itab[ko + 6]].reshape(nu1, 2)
     w_T2 = kin[itab[ko + 6]:itab[ko + 7]].reshape(nu2, 2)
     J1 = point1[J_AT:J_AT + 3 * nu1].reshape(3, nu1)
-    gd_N = frame_rates_jacobians(F2, point1[V_AT:J_AT], v2, J1, J2, velocity, True, kin[itab[ko]:itab[ko + 1]], T,
+    gd_N = frame_rates_jacobians(F2, point1[V_AT:J_AT], v2, J1, J2, velocity, np.bool_(True), kin[itab[ko]:itab[ko + 1]], T,
                                  kin[itab[ko + 2]:itab[ko + 3]], kin[itab[ko + 3]:itab[ko + 4]],
                                  kin[itab[ko + 4]:itab[ko + 5]], w_T1, w_T2)
     return LOCATED, g_N, gd_N if velocity else nan, eta, xi

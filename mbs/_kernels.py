@@ -189,7 +189,7 @@ def ffr_free_mass_and_h(q, u, mass, I1, S_bar, I_kl, I_bar, S_kl, M_ff, S_skew, 
     """M (nu, nu) and h = Q̄_v − (0, 0, K q_f + D q̇_f) (nu,) of a free FFR body with a
     quaternion frame at its own (q, u) (:mod:`mbs.floating_frame`, T = 1); ``A``
     (3, 3) and ``G`` (3, 3, n_f) scratch."""
-    quat_matrix_into(q, 3, A)
+    quat_matrix_into(q, np.int64(3), A)
     q_f = q[7:]
     qd_f = u[6:]
     ffr_mass_qv_into(A, u[3:6], q_f, qd_f, mass, I1, S_bar, I_kl, I_bar, S_kl, M_ff, S_skew, G, M, h)
@@ -224,7 +224,7 @@ def ffr_prescribed_mass_and_h(A, w, a_R, wd, q, u, mass, I1, S_bar, I_kl, I_bar,
 def rigid_free_mass_and_h(q, u, mass, com, I_O, A, M, h):
     """M̄ = [[m 1, −m A c̃], [m c̃ Aᵀ, Ī_O]] and Q̄_v = (−m A ω̃ ω̃ c̄, −ω̃ Ī_O ω̄) of a rigid
     body with a quaternion frame (:mod:`mbs.rigid_body`) at its own (q, u); ``A`` scratch."""
-    quat_matrix_into(q, 3, A)
+    quat_matrix_into(q, np.int64(3), A)
     c0 = com[0]
     c1 = com[1]
     c2 = com[2]
@@ -315,7 +315,7 @@ def add_free_point_force(q, u0, phi, times, values, t, body_axes, A, h):
     r = np.searchsorted(times, t, side="right") - 1
     if r < 0:
         return
-    quat_matrix_into(q, 3, A)
+    quat_matrix_into(q, np.int64(3), A)
     n = phi.shape[1]
     F0 = values[r, 0]
     F1 = values[r, 1]
@@ -524,4 +524,4 @@ def free_quat_advance(q, u, step, du, out):
     for i in range(u.shape[0]):
         du[i] = u[i] * step
     free_quat_increment(q, du, out)
-    normalize_quaternion(out, 3)
+    normalize_quaternion(out, np.int64(3))

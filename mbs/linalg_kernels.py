@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
 
 SHORT_ROW = 32          # rows (blocks) shorter than this: one running sum, dot-form sweeps
@@ -109,14 +110,14 @@ def cho_solve_long_rows(L, lo, hi, B, X, c):
 @njit(cache=True)
 def cho_solve_vector(L, b, x):
     """x = (L Lᵀ)⁻¹ b for b, x (n,); ``x`` may be ``b``."""
-    cho_solve_rows(L, 0, L.shape[0], b.reshape(-1, 1), x.reshape(-1, 1), 0)
+    cho_solve_rows(L, np.int64(0), L.shape[0], b.reshape(-1, 1), x.reshape(-1, 1), np.int64(0))
 
 
 @njit(cache=True)
 def cho_solve_matrix(L, B, X):
     """X = (L Lᵀ)⁻¹ B for B, X (n, m), column by column; ``X`` may be ``B``."""
     for c in range(B.shape[1]):
-        cho_solve_rows(L, 0, L.shape[0], B, X, c)
+        cho_solve_rows(L, np.int64(0), L.shape[0], B, X, c)
 
 
 def cho_solve_into(L, b, x):

@@ -19,6 +19,10 @@ stamp counting the updates at ``STAMP_AT``, then q_f (n_f,) and q̇_f (n_f,) fro
 and the domain [a, b]. ``span`` caches the ū control points of the span last used,
 P_ū0 + P_Φ q_f, after its key (stamp, s_η, s_ξ): evaluations in the same span at the
 same state (Newton iterations, then the contact point itself) skip the O(n_f) part.
+
+Constant arguments of nested kernel calls are passed as typed values (``np.int64(0)``,
+``np.bool_(True)``): numba compiles a callee apart for every literal argument, once more
+beside the runtime-typed version the other callers use (``tests/test_compile_once.py``).
 """
 
 import numba
@@ -199,7 +203,7 @@ def _span_ctrl_1s(s, p, ctrl0, phi, state, span):
     o = SPAN_KEY
     for a in range(p + 1):
         for c in range(3):
-            span[o] = ctrl0[s - p + a, c] + _modal(phi[s - p + a], c * n_f, state, Q_AT, n_f)
+            span[o] = ctrl0[s - p + a, c] + _modal(phi[s - p + a], c * n_f, state, np.int64(Q_AT), n_f)
             o += 1
     span[0], span[1], span[2] = state[STAMP_AT], s, 0.0
 
@@ -217,7 +221,7 @@ def _span_ctrl_2s(se, pe, sx, px, ctrl0, phi, state, span):
         for b in range(px + 1):
             row = phi[se - pe + a, sx - px + b]
             for c in range(3):
-                span[o] = ctrl0[se - pe + a, sx - px + b, c] + _modal(row, c * n_f, state, Q_AT, n_f)
+                span[o] = ctrl0[se - pe + a, sx - px + b, c] + _modal(row, c * n_f, state, np.int64(Q_AT), n_f)
                 o += 1
     span[0], span[1], span[2] = state[STAMP_AT], se, sx
 
@@ -294,7 +298,7 @@ def point_velocity(state, u_bar, phi_value, v):
     n_f = phi_value.shape[0] // 3
     w0, w1, w2 = state[W_AT], state[W_AT + 1], state[W_AT + 2]
     qd = Q_AT + n_f
-    rel0 = w1 * u_bar[2] - w2 * u_bar[1] + _modal(phi_value, 0, state, qd, n_f)
+    rel0 = w1 * u_bar[2] - w2 * u_bar[1] + _modal(phi_value, np.int64(0), state, qd, n_f)
     rel1 = w2 * u_bar[0] - w0 * u_bar[2] + _modal(phi_value, n_f, state, qd, n_f)
     rel2 = w0 * u_bar[1] - w1 * u_bar[0] + _modal(phi_value, 2 * n_f, state, qd, n_f)
     for c in range(3):
@@ -308,8 +312,8 @@ def fields_1s(eta, knots, ints, floats, ctrl0, phi, state, span, B, local, D):
     ū and ``D`` with those of r (rows 0, 1, 3; (6, 3) each) [m]; returns the span."""
     p = ints[0]
     s = locate(knots, p, ints[1], ints[2] != 0, floats[0], floats[1], eta, B)
-    local_rows_1s(B, s, p, ctrl0, phi, state, span, 6, local)
-    inertial_rows(state, local, 6, D)
+    local_rows_1s(B, s, p, ctrl0, phi, state, span, np.int64(6), local)
+    inertial_rows(state, local, np.int64(6), D)
     return s
 
 
@@ -321,8 +325,8 @@ def fields_2s(eta, xi, knots_e, knots_x, ints, floats, ctrl0, phi, state, span, 
     pe, px = ints[0], ints[3]
     se = locate(knots_e, pe, ints[1], ints[2] != 0, floats[0], floats[1], eta, B[0])
     sx = locate(knots_x, px, ints[4], ints[5] != 0, floats[2], floats[3], xi, B[1])
-    local_rows_2s(B[0], se, pe, B[1], sx, px, ctrl0, phi, state, span, 6, local)
-    inertial_rows(state, local, 6, D)
+    local_rows_2s(B[0], se, pe, B[1], sx, px, ctrl0, phi, state, span, np.int64(6), local)
+    inertial_rows(state, local, np.int64(6), D)
     return se, sx
 
 
@@ -335,7 +339,7 @@ def evaluate_1s(eta, knots, ints, floats, ctrl0, phi, state, span, n_ref, modal,
     s = fields_1s(eta, knots, ints, floats, ctrl0, phi, state, span, B, local, D)
     frame_1s(D, n_ref, F)
     if modal:
-        contract_curve(B, s, ints[0], phi, 1, phi_rows)
+        contract_curve(B, s, ints[0], phi, np.int64(1), phi_rows)
     if velocity:
         point_velocity(state, local[0], phi_rows[0], v)
 
@@ -350,7 +354,7 @@ def evaluate_2s(eta, xi, knots_e, knots_x, ints, floats, ctrl0, phi, state, span
     se, sx = fields_2s(eta, xi, knots_e, knots_x, ints, floats, ctrl0, phi, state, span, B, local, D)
     frame_2s(D, sign, F)
     if modal:
-        contract_surface(B[0], se, ints[0], B[1], sx, ints[3], phi, 1, phi_rows)
+        contract_surface(B[0], se, ints[0], B[1], sx, ints[3], phi, np.int64(1), phi_rows)
     if velocity:
         point_velocity(state, local[0], phi_rows[0], v)
 
@@ -373,9 +377,9 @@ def bounding_box(lo0, hi0, phi_bound, state, out):
     |(P_Φ q_f)_ic| <= e_c), then the box of its image under r = R + A ū (eq. 2.24):
     centre R + A m, half edges |A| h. Contains the contour (convex hull property);
     looser than the control points' own box when A rotates or q_f ≠ 0."""
-    m0, h0 = _grown(lo0, hi0, phi_bound, state, 0)
-    m1, h1 = _grown(lo0, hi0, phi_bound, state, 1)
-    m2, h2 = _grown(lo0, hi0, phi_bound, state, 2)
+    m0, h0 = _grown(lo0, hi0, phi_bound, state, np.int64(0))
+    m1, h1 = _grown(lo0, hi0, phi_bound, state, np.int64(1))
+    m2, h2 = _grown(lo0, hi0, phi_bound, state, np.int64(2))
     for c in range(3):
         o = A_AT + 3 * c
         m = state[R_AT + c] + state[o] * m0 + state[o + 1] * m1 + state[o + 2] * m2

@@ -352,7 +352,7 @@ def _integrate(q0, v0, n_el, d1, d2, w, mband, ea, ei, m, dt, n_steps, omega_s, 
     # consistent initial acceleration
     acc = np.zeros(ndof)
     acc[:4] = cdd
-    qg, band = _assemble(q, n_el, d1, d2, w, ea, ei, m, False)
+    qg, band = _assemble(q, n_el, d1, d2, w, ea, ei, m, np.bool_(False))
     rhs = -(_band_matvec(mband, acc)[4:] + qg[4:])
     acc[4:] = _band_solve(mff, rhs)
     out[0, :4] = q[-4], q[-3], v[-4], v[-3]
@@ -374,7 +374,7 @@ def _integrate(q0, v0, n_el, d1, d2, w, mband, ea, ei, m, dt, n_steps, omega_s, 
             a1[:4] = cdd1
             qbar = (1.0 - af) * qp + af * qn
             abar = (1.0 - am) * a1 + am * an
-            qg, band = _assemble(qbar, n_el, d1, d2, w, ea, ei, m, True)
+            qg, band = _assemble(qbar, n_el, d1, d2, w, ea, ei, m, np.bool_(True))
             res = _band_matvec(mband, abar)[4:] + qg[4:]
             jac = cm * mff + (1.0 - af) * band[4:]
             dq = _band_solve(jac, -res)
