@@ -402,7 +402,7 @@ def gauss_seidel_solve(G, xi_free, gamma_pre, restitution, kinds, offsets, mu, t
         e = G[t + 1, t + 1]
         lam_max = 0.5 * (a + e) + math.hypot(0.5 * (a - e), b)
         r[t] = r[t + 1] = alpha / max(lam_max, r_work[t], r_work[t + 1])
-    it, residual, converged = prox_iterate(G, c, r, kinds, offsets, mu, lam, xi, r_work, False, tol, max_iter,
+    it, residual, converged = prox_iterate(G, c, r, kinds, offsets, mu, lam, xi, r_work, bool(False), tol, max_iter,
                                            subspace_every, work[4], work[5])
     for i in range(m):
         s = 0.0

@@ -18,8 +18,6 @@ import pytest
 from numba.core.registry import CPUDispatcher
 
 ROOT = Path(__file__).resolve().parents[1]
-LEFT_TO_FRICTION_BRANCH = pytest.mark.xfail(strict=True, reason="gauss_seidel_solve calls prox_iterate(..., False, "
-                                            "...): left to the branch that edits contact/_kernels.py")
 
 
 def _kernel_modules():
@@ -28,7 +26,7 @@ def _kernel_modules():
         for path in sorted((ROOT / package).rglob("*.py")):
             if "njit" in path.read_text(encoding="utf-8"):
                 name = ".".join(path.relative_to(ROOT).with_suffix("").parts)
-                yield pytest.param(name, marks=LEFT_TO_FRICTION_BRANCH) if name == "contact._kernels" else name
+                yield name
 
 
 # Runs the default scene for 2 ms (200 steps) in a fresh process with an empty numba cache
