@@ -95,6 +95,19 @@ def prox_step(xi, r, kinds, offsets, mu, lam, update):
 
 
 @njit(cache=True)
+def _first_row(G, c, r, kind, o, lam):
+    """Project the first row ``o`` of an entry of ``kind`` (normal: onto Λ ≥ 0; bilateral:
+    free) with the newest Λ, in place; returns (|ΔΛ_o| / r_o, |c_o| + Σ_j |G_oj Λ_j|)."""
+    xi, a = _row_velocity(G, c, lam, o)
+    z = lam[o] - r[o] * xi
+    if kind != BILATERAL:
+        z = max(z, 0.0)
+    change = abs(z - lam[o]) / r[o]
+    lam[o] = z
+    return change, a
+
+
+@njit(cache=True)
 def gauss_seidel_sweep(G, c, r, kinds, offsets, mu, lam):
     """One projected Gauss–Seidel sweep over the entries, in place.
 
@@ -106,13 +119,9 @@ def gauss_seidel_sweep(G, c, r, kinds, offsets, mu, lam):
     scale = 0.0
     for k in range(kinds.shape[0]):
         o = offsets[k]
-        xi, a = _row_velocity(G, c, lam, o)
-        scale = max(scale, a)
-        z = lam[o] - r[o] * xi
-        if kinds[k] != BILATERAL:
-            z = max(z, 0.0)
-        change = max(change, abs(z - lam[o]) / r[o])
-        lam[o] = z
+        d, a = _first_row(G, c, r, kinds[k], o, lam)
+        change, scale = max(change, d), max(scale, a)
+        z = lam[o]
         if kinds[k] == COULOMB:
             xi1, a1 = _row_velocity(G, c, lam, o + 1)
             xi2, a2 = _row_velocity(G, c, lam, o + 2)
@@ -235,14 +244,8 @@ def normal_sweep(G, c, r, kinds, offsets, lam):
     change = 0.0
     scale = 0.0
     for k in range(kinds.shape[0]):
-        o = offsets[k]
-        xi, a = _row_velocity(G, c, lam, o)
-        scale = max(scale, a)
-        z = lam[o] - r[o] * xi
-        if kinds[k] != BILATERAL:
-            z = max(z, 0.0)
-        change = max(change, abs(z - lam[o]) / r[o])
-        lam[o] = z
+        d, a = _first_row(G, c, r, kinds[k], offsets[k], lam)
+        change, scale = max(change, d), max(scale, a)
     return change, scale
 
 
