@@ -10,7 +10,7 @@ evaluate it by :func:`~contours.neutral._kernels.fields_1s` /
 per iteration. Their reference
 is the Python Newton of :mod:`contact.search` (``compiled=False``) over
 ``contour.evaluate``; the others have their numpy formulas in the docstrings.
-``tests/test_compiled_contact.py`` compares them.
+``tests/unit/contact/test_compiled_contact.py`` compares them.
 """
 
 from __future__ import annotations

@@ -378,7 +378,7 @@ def gauss_seidel_solve(G, xi_free, gamma_pre, restitution, kinds, offsets, mu, t
     ``tangent_at``: the first tangential row of every Coulomb contact; ``work`` (6, m)
     scratch (c, r, ξ, the sweeps' r, the subspace step's p and q). Returns (sweeps, residual [m/s], converged).
     Numpy reference: the same steps with ``np.multiply``, ``np.add``, ``np.matmul``
-    (``tests/test_contact_solver.py``)."""
+    (``tests/unit/contact/test_contact_solver.py``)."""
     m = G.shape[0]
     c = work[0]
     r = work[1]

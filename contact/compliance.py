@@ -48,7 +48,7 @@ slope of the deflected surface would do on a sliding point, which a force along 
 contour's normal leaves out. A point sliding towards a stiffer place (C falling) gains
 energy, towards a softer one loses it; the change is bounded by ½ F_max² times the
 variation of C along the path (a 50 g mass on a small soft beam, e = 0: +1e-4 of its
-energy, tests/test_compliant_contact.py checks the bound; the default scene of
+energy, tests/unit/contact/test_compliant_contact.py checks the bound; the default scene of
 ``ffrmbs run``: +1.6e-3). Taking δ_k on the midpoint compliance ½(C_k + C_{k+1})F_k
 instead makes the term second order for a smooth force (it removes both gains) but pumps
 energy into a face of contacts whose forces jump from step to step (+11 % for two coarse

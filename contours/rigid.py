@@ -14,7 +14,7 @@ velocity, J_T, J_R), each of which returns a new array. A frame on a body that o
 translates (``body.translation_only``: a point mass) takes a shortcut that allocates
 nothing: r = q + ū0, ṙ = u, with the constant orientation A_rel, ω = 0, J_T = 1 and
 J_R = 0 set once (the same values the frame's methods give; compared in
-``tests/test_compiled_contact.py``).
+``tests/unit/contact/test_compiled_contact.py``).
 """
 
 from __future__ import annotations

@@ -5,7 +5,7 @@ read back as a FlexibleBodyFFR; a revolute joint about the inertial x axis holds
 node at the corner (0, 0, 0) of the z = 0 face, which deforms with the beam (a node frame,
 ``beam.node(j)``). Released with its axis horizontal (gravity along −y), it swings down
 and bends by micrometres at the tip, as beam theory predicts for a pinned beam under its
-weight less the inertia of the swing (the estimate is in tests/test_examples.py).
+weight less the inertia of the swing (the estimate is in tests/e2e/test_examples.py).
 Run:  python3 examples/flexible_pendulum.py
 """
 

@@ -10,7 +10,7 @@ Python path it replaces — ``contour.update`` of both contours, then
 :meth:`contact.Contact.locate` (bounding boxes, ``search.solve`` warm-started,
 ``contour.evaluate``, :func:`~contact._detection_kernels.normal_gap`,
 :func:`~contact._detection_kernels.frame_rates_jacobians`) — which
-``tests/test_fused_detection.py`` compares it against.
+``tests/unit/contact/test_fused_detection.py`` compares it against.
 
 The kernel takes each object's arrays as the one vector their views share
 (:attr:`contours.base.ContourPoint.buffer`, :attr:`contact.kinematics.ContactKinematics.buffer`,
@@ -20,7 +20,7 @@ below, written by :class:`mbs.fused_detection.PointOnNeutral2s`) and a work vect
 
 Constant arguments of nested kernel calls are passed as typed values (``np.int64(0)``,
 ``np.bool_(True)``): numba compiles a callee apart for every literal argument, once more
-beside the runtime-typed version the other callers use (``tests/test_compile_once.py``).
+beside the runtime-typed version the other callers use (``tests/qa/test_compile_once.py``).
 """
 
 from __future__ import annotations

@@ -361,7 +361,7 @@ def add_free_point_force(q, u0, phi, times, values, t, body_axes, A, h):
 def point_jacobian_T(A, T, u_bar, phi, free, f0, out):
     """J_T of a body point into out (3, nu) (thesis eq. 2.70): on a free frame
     [1, −A ũ T, A Φ] with the elastic columns from f0 = 6; on a prescribed frame only A Φ
-    (f0 = 0, T unused). Numpy reference: the formula, in ``tests/test_ffr_body.py``."""
+    (f0 = 0, T unused). Numpy reference: the formula, in ``tests/unit/mbs/test_ffr_body.py``."""
     n_f = phi.shape[1]
     if free:
         # B = −A ũ: column j of ũ is e_j × ū

@@ -14,7 +14,7 @@ Sphere kinds (``kind`` codes):
   kernel leaves them).
 
 Plain-numpy reference: the sphere callables of :mod:`mbs.bounding_spheres` and the
-test d·d > (r1 + r2 + margin)² of each pair; ``tests/test_bounding_spheres.py`` compares
+test d·d > (r1 + r2 + margin)² of each pair; ``tests/unit/contact/test_bounding_spheres.py`` compares
 them.
 """
 

@@ -3,7 +3,7 @@ the contour and detection stages visit, in one call each instead of a Python loo
 every contact (far-apart pairs cost nothing per step); the contact problem's products
 (G, ξ_free, γ⁻), the velocity update and the impulses' work, each one call.
 
-Plain-Python or numpy references in the docstrings; ``tests/test_stages.py`` compares them.
+Plain-Python or numpy references in the docstrings; ``tests/unit/mbs/test_stages.py`` compares them.
 """
 
 from __future__ import annotations
@@ -44,7 +44,7 @@ def live_contacts(live, out):
 def contact_problem_into(W, MW, u_free, u, offset, closing, G, xi_free, gamma_pre):
     """The contact problem of stage 5 from W (nu, m) and M̂⁻¹W (nu, m): G = Wᵀ M̂⁻¹ W
     (m, m) [1/kg], ξ_free = Wᵀ u_free + offset + closing, γ⁻ = Wᵀ u_k + offset (m,)
-    [m/s]. Numpy reference: ``W.T @ MW``, ``W.T @ u_free`` ... (``tests/test_stages.py``)."""
+    [m/s]. Numpy reference: ``W.T @ MW``, ``W.T @ u_free`` ... (``tests/unit/mbs/test_stages.py``)."""
     nu, m = W.shape
     for i in range(m):
         for j in range(m):

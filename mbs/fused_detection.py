@@ -20,7 +20,7 @@ Kinds with a fused detection:
   compiled ``Contact2sSearch``, any law of :class:`contact.Contact`.
 
 Every other contact keeps the Python path (which stays the reference of the fused ones,
-``tests/test_fused_detection.py``).
+``tests/unit/contact/test_fused_detection.py``).
 """
 
 from __future__ import annotations

@@ -1,6 +1,12 @@
-"""Shared fixtures: small meshes of the report's beam (built once per session)."""
+"""Shared fixtures: small meshes of the report's beam (built once per session), and the
+test helpers of ``tests/support`` on the import path of every test module."""
+
+import sys
+from pathlib import Path
 
 import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parent / "support"))
 
 from contours import Contour1sNeutralFFR
 from mbs import FlexibleBodyFFR

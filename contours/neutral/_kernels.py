@@ -4,11 +4,11 @@ span-local evaluation of a contour from its per-step state.
 
 Plain-numpy references: :func:`contours.nurbs.basis.curve_point` /
 :func:`~contours.nurbs.basis.surface_point` for the contractions and the formulas in
-the docstrings for the rest; ``tests/test_neutral_contours.py`` compares them. The
+the docstrings for the rest; ``tests/unit/contours/test_neutral_contours.py`` compares them. The
 span-local evaluation (:func:`evaluate_1s`, :func:`evaluate_2s`, :func:`local_rows_1s`,
 :func:`local_rows_2s`, :func:`bounding_box`) has the full control-point route of
 :mod:`.products` as its reference (``compiled=False`` on the contour),
-compared in ``tests/test_compiled_contact.py``.
+compared in ``tests/unit/contact/test_compiled_contact.py``.
 
 Per-step state of a neutral contour (``state``, written by :func:`store_state`): the
 frame origin R [m] at ``R_AT``, the orientation A (row-major) at ``A_AT``, the origin
@@ -22,7 +22,7 @@ same state (Newton iterations, then the contact point itself) skip the O(n_f) pa
 
 Constant arguments of nested kernel calls are passed as typed values (``np.int64(0)``,
 ``np.bool_(True)``): numba compiles a callee apart for every literal argument, once more
-beside the runtime-typed version the other callers use (``tests/test_compile_once.py``).
+beside the runtime-typed version the other callers use (``tests/qa/test_compile_once.py``).
 """
 
 import numba

@@ -1,7 +1,7 @@
 """numba kernels of the full-FE contact peer (:mod:`validation.peers.full_fe_contact`):
 the sparse internal force, the projection of a point on the faces, and blocks of explicit steps with
 the semi-implicit penalty contact. Allocation-free; plain-numpy references of each are
-written out in ``tests/test_full_fe_contact.py`` and compared there.
+written out in ``tests/integration/test_full_fe_contact.py`` and compared there.
 
 Notation (SI): N nodes, DOF ``3 j + d`` is node j, direction d (as :mod:`preprocess.fe`);
 ``X`` (N, 3) [m] reference positions, ``u`` (3N,) [m] displacements; ``inv_m3`` (3N,)

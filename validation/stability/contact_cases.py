@@ -162,7 +162,7 @@ contraction factor G12²/(G11 G22) = m_t/(m_t + m_b): light on heavy (m_t/m_b = 
 converges at once; heavy on light (1e6) needs ~1e7 plain sweeps, so the ``_gs`` row,
 plain projected Gauss–Seidel (``subspace_every=0``) with Moreau's 2000 iterations,
 expects a graceful stop naming the residual (the default Gauss–Seidel with its subspace
-steps solves the stack in ~20 iterations, ``tests/test_contact_solver.py``); the semismooth Newton solver is
+steps solves the stack in ~20 iterations, ``tests/unit/contact/test_contact_solver.py``); the semismooth Newton solver is
 insensitive to the ratio and is expected to hold the stack at rest: forces within 1e-6
 relative, no drift (1e-9 m), no contact opening, penetration not growing. (Its
 solution is exact only to cond(G) ε |c| ~ 1e-12 m/s in the relative velocity, with the

@@ -25,7 +25,9 @@ from ffrmbs.errors import InputFileError, ModelError
 from preprocess import Material, build_body, fe, limits, read_mesh
 from preprocess.geometry import box, stepped_beam
 
-REPO = Path(__file__).resolve().parent.parent
+import paths
+
+REPO = paths.REPO
 MATERIAL = ["--density", "7800", "--young", "2e11", "--poisson", "0.3"]
 ADDRESS_SPACE = 4 << 30            # bytes a child process may map
 

@@ -1,6 +1,6 @@
 """``python3 -m validation.bench`` / ``ffrmbs bench``: runs the chosen benchmarks in one process
 and writes well-formed JSON (no timing assertions). The peer benchmarks are checked here
-only for their "not installed" rows; tests/test_bench_peers.py runs them."""
+only for their "not installed" rows; tests/integration/test_bench_peers.py runs them."""
 
 import json
 import subprocess

@@ -7,7 +7,6 @@ channel while it moves along the channel at constant speed, and a ball sliding o
 trimmed face into its hole over the rim."""
 
 import shutil
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -15,7 +14,9 @@ import pytest
 from ffrmbs_app.cli import main
 from mbs.result_file import load_result
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+import paths
+
+EXAMPLES = paths.EXAMPLES
 G = 9.81
 
 

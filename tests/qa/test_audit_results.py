@@ -18,7 +18,6 @@ import signal
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import h5py
 import meshio
@@ -32,6 +31,8 @@ from mbs.integrators.moreau import TRACE_KEYS
 from mbs.result_file import ResultRecorder, load_result
 from preprocess import Material, build_body
 from preprocess.geometry import box
+
+import paths
 
 ENV = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
 
@@ -78,7 +79,7 @@ def test_export_writes_the_deformed_surface_of_tet4_and_tet10_bodies(tmp_path, o
 # --- the default scene, run once for findings 3 and 19 --------------------------------------------
 
 README_PLOT = ["y", "vy", "energy", "contact:impact"]      # README: ffrmbs plot OUT/point_mass_beam.h5 y vy ...
-EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "scenes" / "point_mass_beam.toml"
+EXAMPLE = paths.EXAMPLES / "scenes" / "point_mass_beam.toml"
 PNG = b"\x89PNG\r\n\x1a\n"
 
 

@@ -2,14 +2,15 @@
 
 import importlib.util
 import io
-from pathlib import Path
 
 import numpy as np
 import pytest
 
+import paths
+
 
 def load_example(name):
-    path = Path(__file__).resolve().parents[1] / "examples" / f"{name}.py"
+    path = paths.EXAMPLES / f"{name}.py"
     spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)

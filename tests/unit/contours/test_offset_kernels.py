@@ -76,7 +76,7 @@ def test_compiled_band_without_velocity_or_jacobians_and_out_of_domain(thesis_be
 def test_compiled_newton_on_offset_contours_follows_the_python_newton(thesis_beam, thesis_centre_line, kind):
     """Same roots from the same starts (cold: the coarse level; warm) for points off the
     contour; tolerance 1e-13 so that the two agree to rounding (see
-    tests/test_compiled_contact.py)."""
+    tests/unit/contact/test_compiled_contact.py)."""
     compiled, reference = contour_pair(kind, thesis_centre_line)
     searches = Contact2sSearch(compiled, tol=1e-13), Contact2sSearch(reference, tol=1e-13, compiled=False)
     assert searches[0].compiled and not searches[1].compiled

@@ -9,7 +9,6 @@ import csv
 import json
 import subprocess
 import sys
-from pathlib import Path
 
 import h5py
 import pytest
@@ -18,9 +17,11 @@ import ffrmbs
 from ffrmbs.errors import FfrmbsError
 from ffrmbs_app.sweep import override_sets, parse_set, run_key, split_values
 
+import paths
+
 pytest.importorskip("distributed")
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = paths.REPO
 
 # A 0.1 kg ball dropped from 50 mm onto the rigid plane z = 0 (Newton impact, e = 0.5).
 BOUNCE = """\

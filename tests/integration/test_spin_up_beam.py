@@ -5,7 +5,6 @@ passes the first bending frequency."""
 
 import importlib.util
 import io
-from pathlib import Path
 
 import h5py
 import numpy as np
@@ -14,7 +13,9 @@ import pytest
 from validation.cases import spin_up_beam as case
 from validation.peers import spin_up_beam as peer
 
-EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "spin_up.py"
+import paths
+
+EXAMPLE = paths.EXAMPLES / "spin_up.py"
 
 
 @pytest.fixture(scope="module")

@@ -19,7 +19,9 @@ from preprocess.textfiles import (parse_masses, parse_mode_shapes, parse_stiffne
                                   read_text_body, write_text_body)
 from preprocess.units import UNIT_SYSTEMS, unit_system
 
-LISTINGS = Path(__file__).parent / "fixtures" / "thesis_listings"
+import paths
+
+LISTINGS = paths.FIXTURES / "thesis_listings"
 
 
 def random_body(n_nodes=5, n_modes=3, seed=0, mass_normalized=True) -> BodyData:

@@ -12,12 +12,13 @@ import os
 import subprocess
 import sys
 import textwrap
-from pathlib import Path
 
 import pytest
 from numba.core.registry import CPUDispatcher
 
-ROOT = Path(__file__).resolve().parents[1]
+import paths
+
+ROOT = paths.REPO
 
 
 def _kernel_modules():

@@ -26,7 +26,9 @@ from preprocess.geometry import box
 from gmsh_parts import LENGTH, RADIUS, cylinder_mesh
 from scene_files import BODIES
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "scenes"
+import paths
+
+EXAMPLES = paths.EXAMPLES / "scenes"
 
 
 # --- the example scene against the Python-built one ---------------------------------------------------

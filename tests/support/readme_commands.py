@@ -1,4 +1,4 @@
-"""The README's commands and Python snippets as tests/test_readme.py reads them.
+"""The README's commands and Python snippets as tests/e2e/test_readme.py reads them.
 
 Rules (the README's shell text is read as a shell would, plus one convention):
 
@@ -204,7 +204,7 @@ def parse_problem(words: list[str], repo: Path) -> str | None:
     the extras named in setup.cfg."""
     prog, args = words[0], words[1:]
     if set(words) & _SHELL_OPERATORS:
-        return "a pipe or redirection, which tests/readme_commands.py does not read"
+        return "a pipe or redirection, which tests/support/readme_commands.py does not read"
     if prog == "ffrmbs":
         return _ffrmbs_problem(args)
     if prog in ("python3", "python") and args[:1] == ["-m"] and len(args) > 1:
@@ -220,7 +220,7 @@ def parse_problem(words: list[str], repo: Path) -> str | None:
         return None if (repo / args[0]).is_file() else f"no file {args[0]} in the repository"
     if prog == "pip":
         return _pip_problem(args, repo)
-    return f"unknown command {prog!r} (tests/readme_commands.py reads ffrmbs, python3 and pip)"
+    return f"unknown command {prog!r} (tests/support/readme_commands.py reads ffrmbs, python3 and pip)"
 
 
 # modules that run the CLI: ``python3 -m MODULE ARGS`` is ``ffrmbs PREFIX ARGS``

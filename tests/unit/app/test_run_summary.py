@@ -9,7 +9,6 @@ clamped tet4 beam written here (6 modes)."""
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -17,7 +16,9 @@ import pytest
 from ffrmbs_app.job import run_scene
 from ffrmbs_app.scene import load_scene
 
-SCENES = Path(__file__).parent / "fixtures" / "summary_scenes"
+import paths
+
+SCENES = paths.FIXTURES / "summary_scenes"
 
 CANTILEVER = """\
 # A clamped 250 x 50 x 50 mm beam (6 modes, 2 % modal damping) under a 20 N tip load from

@@ -29,7 +29,9 @@ from preprocess.geometry import box
 from preprocess.modes import clamped_modes
 from preprocess.textfiles import TEXT_FILES
 
-REPO = Path(__file__).resolve().parent.parent
+import paths
+
+REPO = paths.REPO
 
 
 @pytest.fixture(scope="module")

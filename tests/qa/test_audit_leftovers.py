@@ -23,7 +23,9 @@ import pytest
 
 from ffrmbs_app import cli
 
-REPO = str(Path(__file__).resolve().parents[1])
+import paths
+
+REPO = str(paths.REPO)
 
 
 def run_cli(*argv) -> tuple[int, str, str]:

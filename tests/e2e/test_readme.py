@@ -1,5 +1,5 @@
 """The README's commands and snippets work as written (the rules of reading them are in
-tests/readme_commands.py).
+tests/support/readme_commands.py).
 
 Every shell command the README shows must parse: ffrmbs arguments by the CLI's own
 parser, modules and example scripts must exist, pip extras must be in setup.cfg. The
@@ -14,13 +14,13 @@ import shutil
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import pytest
 
+import paths
 import readme_commands as rc
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = paths.REPO
 README = REPO / "README.md"
 TIMEOUT_S = 300          # per command or snippet; a README command slower than this belongs in NOT_RUN
 
@@ -30,13 +30,13 @@ NOT_RUN = {
     "python3 -m pytest": "the whole test suite, which holds this test",
     "ffrmbs run --out out/run --t-end 2 --no-check --resume": "continues a killed run: needs a kill after the "
                                                               "first checkpoint; kill -9 and resume are tested in "
-                                                              "tests/test_resume.py",
+                                                              "tests/e2e/test_resume.py",
     "ffrmbs validate": "minutes of validation cases, each with its own tests",
-    "python3 -m distributed.cli.dask_scheduler": "a server that runs until stopped; tests/test_sweep.py starts a "
+    "python3 -m distributed.cli.dask_scheduler": "a server that runs until stopped; tests/e2e/test_sweep.py starts a "
                                                  "scheduler with workers (LocalCluster)",
     "python3 -m distributed.cli.dask_worker": "a server that runs until stopped, and needs a scheduler at host",
     "ffrmbs sweep examples/scenes/point_mass_beam.toml --set body.beam.modes=10,20,40": "needs a scheduler at "
-        "host:8786; --scheduler is tested against a LocalCluster's in tests/test_sweep.py",
+        "host:8786; --scheduler is tested against a LocalCluster's in tests/e2e/test_sweep.py",
 }
 
 
@@ -79,7 +79,7 @@ output, not read
 
 
 def test_reader_rules_on_a_sample():
-    """The rules of tests/readme_commands.py on a README whose reading is known."""
+    """The rules of tests/support/readme_commands.py on a README whose reading is known."""
     items = rc.items(SAMPLE)
     commands = [(c.line, c.text, c.synopsis) for c in items if isinstance(c, rc.Command)]
     assert commands == [(5, "A=1 ffrmbs run --out o --dt 1e-4", False),

@@ -1,0 +1,2 @@
+"""Quality-assurance tools run by hand or by the tests: the fault audit, the kill audit and
+the assertion count of the test suite."""
