@@ -1,4 +1,4 @@
-"""The example model script runs and obeys the physics it shows."""
+"""The gallery's example scripts (examples/gallery/) run and obey the physics they show."""
 
 import importlib.util
 import io
@@ -9,7 +9,9 @@ import pytest
 
 
 def load_example(name):
-    path = Path(__file__).resolve().parents[1] / "examples" / f"{name}.py"
+    """The gallery script examples/gallery/plot_NN_<name>.py as a module (its checks and
+    plots, under ``__main__``, do not run)."""
+    (path,) = (Path(__file__).resolve().parents[1] / "examples" / "gallery").glob(f"plot_[0-9][0-9]_{name}.py")
     spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
