@@ -24,7 +24,11 @@ import numpy as np
 
 from mbs.result_file import load_result
 
-scene = Path(__file__).resolve().parents[1] / "scenes" / "bouncing_ball.toml"     # examples/scenes/
+try:
+    here = Path(__file__).resolve().parent
+except NameError:                  # sphinx-gallery runs the script in its own directory
+    here = Path.cwd()
+scene = here.parent / "scenes" / "bouncing_ball.toml"                                # examples/scenes/
 out = Path(tempfile.mkdtemp()) / "ball"
 env = {**os.environ, "FFRMBS_PROGRESS": "0"}
 

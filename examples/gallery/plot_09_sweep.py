@@ -23,7 +23,11 @@ import numpy as np
 
 import ffrmbs
 
-scene = Path(__file__).resolve().parents[1] / "scenes" / "bouncing_ball.toml"
+try:
+    here = Path(__file__).resolve().parent
+except NameError:                  # sphinx-gallery runs the script in its own directory
+    here = Path.cwd()
+scene = here.parent / "scenes" / "bouncing_ball.toml"                                # examples/scenes/
 g, h = 9.81, 0.1
 t1 = np.sqrt(2 * h / g)
 restitution = [0.3, 0.5, 0.8]
