@@ -4,6 +4,7 @@ import importlib.util
 import io
 from pathlib import Path
 
+import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 
@@ -85,6 +86,7 @@ def test_modal_impact_moves_the_centre_of_mass_by_the_impulse():
 def test_deformed_beam_contour_writes_a_png(tmp_path):
     out, path = io.StringIO(), tmp_path / "beam.png"
     info = load_example("deformed_beam_contour").main(["--out", str(path), "--tip", "0.02"], out=out)
+    plt.close("all")                     # the script leaves its figure open for the gallery to show
     assert path.is_file() and path.stat().st_size > 1000
     assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert info["max_distance"] < 1e-12
