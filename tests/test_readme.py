@@ -116,7 +116,7 @@ def test_reader_rules_on_a_sample():
     assert "no extra nope" in rc.parse_problem(["pip", "install", ".[test,nope]"], REPO)
     assert "no file" in rc.parse_problem(["python3", "examples/none.py"], REPO)
     assert "no module" in rc.parse_problem(["python3", "-m", "validation.none"], REPO)
-    assert "pipe" in rc.parse_problem(["python3", "examples/modal_impact.py", "|", "head"], REPO)
+    assert "pipe" in rc.parse_problem(["python3", "examples/gallery/plot_03_modal_impact.py", "|", "head"], REPO)
 
 
 def test_documents_have_commands_and_snippets():
