@@ -1,12 +1,15 @@
-"""The README's commands and snippets work as written (the rules of reading them are in
-tests/support/readme_commands.py).
+"""The commands and snippets of the README and of the docs' hand-written pages
+(docs/getting_started.md, docs/guide/*.md) work as written (the rules of reading them are
+in tests/support/readme_commands.py).
 
-Every shell command the README shows must parse: ffrmbs arguments by the CLI's own
-parser, modules and example scripts must exist, pip extras must be in setup.cfg. The
-fenced commands are then run as written, in README order, in a temporary directory laid
-out like a fresh clone (so that a plot finds the run before it), except usage synopses
-and the commands listed in NOT_RUN with the reason. Self-contained Python snippets run
-there too; the others must compile and their imports must exist.
+Every shell command they show must parse: ffrmbs arguments by the CLI's own parser,
+modules and example scripts must exist, pip extras must be in setup.cfg. The fenced
+commands of each document are then run as written, in its order, in a temporary
+directory laid out like a fresh clone (so that a plot finds the run before it), except
+usage synopses and the commands listed in NOT_RUN with the reason. Self-contained Python
+snippets run there too; the others must compile and their imports must exist. The runs
+use the caller's body cache ($FFRMBS_CACHE or ~/.cache/ffrmbs): the first-run path with an
+empty cache is another test's.
 """
 
 import os
@@ -22,16 +25,19 @@ import readme_commands as rc
 
 REPO = paths.REPO
 README = REPO / "README.md"
-TIMEOUT_S = 300          # per command or snippet; a README command slower than this belongs in NOT_RUN
+GETTING_STARTED = REPO / "docs" / "getting_started.md"
+DOCUMENTS = [README, GETTING_STARTED, *sorted((REPO / "docs" / "guide").glob("*.md"))]
+README_LINES = 150       # the README is short: what ffrmbs is, set-up, a tour, headline figures, the docs
+TIMEOUT_S = 300          # per command or snippet; a command slower than this belongs in NOT_RUN
 
 # command prefix -> why the test does not run it (it is still parsed)
 NOT_RUN = {
     "python3 -m pip install": "installs into the environment; the extras it names are checked against setup.cfg",
     "python3 -m pytest": "the whole test suite, which holds this test",
-    "ffrmbs run --out out/run --t-end 2 --no-check --resume": "continues a killed run: needs a kill after the "
-                                                              "first checkpoint; kill -9 and resume are tested in "
-                                                              "tests/e2e/test_resume.py",
-    "ffrmbs validate": "minutes of validation cases, each with its own tests",
+    "python3 -m sphinx": "the docs build, which .ci/run runs (warnings are errors, the gallery included)",
+    "ffrmbs run examples/scenes/bouncing_ball.toml --set scene.t_end=1 --checkpoint-every 1 --no-check "
+    "--out out/long --resume": "continues a killed run: needs a kill after the first checkpoint; kill -9 and "
+                               "resume are tested in tests/e2e/test_resume.py",
     "python3 -m distributed.cli.dask_scheduler": "a server that runs until stopped; tests/e2e/test_sweep.py starts a "
                                                  "scheduler with workers (LocalCluster)",
     "python3 -m distributed.cli.dask_worker": "a server that runs until stopped, and needs a scheduler at host",
@@ -40,21 +46,32 @@ NOT_RUN = {
 }
 
 
-def _readme():
-    return README.read_text(encoding="utf-8")
+def _text(document):
+    return document.read_text(encoding="utf-8")
+
+
+def _items(document):
+    """(document, item) of each fenced command and snippet of ``document``."""
+    return [(document, item) for item in rc.items(_text(document))]
+
+
+def _commands(documents=DOCUMENTS):
+    """(document, command) of every fenced command of ``documents``."""
+    return [(d, item) for document in documents for d, item in _items(document) if isinstance(item, rc.Command)]
 
 
 def _all_commands():
-    return [item for item in rc.items(_readme()) if isinstance(item, rc.Command)] + rc.inline_commands(_readme())
+    """(document, command) of every fenced and inline command of every document."""
+    return _commands() + [(d, c) for d in DOCUMENTS for c in rc.inline_commands(_text(d))]
 
 
 def _not_run_reason(command):
     return next((why for prefix, why in NOT_RUN.items() if command.text.startswith(prefix)), None)
 
 
-def _where(item):
+def _where(document, item):
     shown = item.text if isinstance(item, rc.Command) else item.source.splitlines()[0] + " ..."
-    return f"README.md, line {item.line}: `{shown}`"
+    return f"{document.relative_to(REPO)}, line {item.line}: `{shown}`"
 
 
 SAMPLE = """Try `ffrmbs run --help` or `OPENBLAS_NUM_THREADS=1 ffrmbs run SCENE.toml`; `ffrmbs plot` plots.
@@ -99,58 +116,66 @@ def test_reader_rules_on_a_sample():
     assert "no extra nope" in rc.parse_problem(["pip", "install", ".[test,nope]"], REPO)
     assert "no file" in rc.parse_problem(["python3", "examples/none.py"], REPO)
     assert "no module" in rc.parse_problem(["python3", "-m", "validation.none"], REPO)
-    assert "pipe" in rc.parse_problem(["python3", "examples/modal_impact.py", "|", "head"], REPO)
+    assert "pipe" in rc.parse_problem(["python3", "examples/gallery/plot_03_modal_impact.py", "|", "head"], REPO)
 
 
-def test_readme_has_commands_and_snippets():
-    """The reader finds what is there (a broken fence would make every other test vacuous)."""
-    readme = _readme()
-    fences = sum(1 for line in readme.splitlines() if line.strip().startswith("```"))
-    blocks = rc.fenced_blocks(readme)
-    assert 2 * len(blocks) == fences
-    shell = [b for b in blocks if b[0] in rc.SHELL_FENCES]
-    commands = [item for item in rc.items(readme) if isinstance(item, rc.Command)]
-    assert shell and len(commands) >= len(shell)
-    assert any(isinstance(item, rc.Snippet) for item in rc.items(readme))
+def test_documents_have_commands_and_snippets():
+    """The reader finds what is there (a broken fence would make every other test vacuous):
+    every fence of every document is closed, each document shows commands, the README a
+    snippet too; the guide has its pages."""
+    assert len(DOCUMENTS) > 8
+    for document in DOCUMENTS:
+        text = _text(document)
+        fences = sum(1 for line in text.splitlines() if line.strip().startswith("```"))
+        blocks = rc.fenced_blocks(text)
+        assert 2 * len(blocks) == fences, document
+        shell = [b for b in blocks if b[0] in rc.SHELL_FENCES]
+        assert len(_commands([document])) >= len(shell), document
+    assert _commands([README]) and any(isinstance(item, rc.Snippet) for item in rc.items(_text(README)))
 
 
-def test_every_readme_command_parses():
+def test_readme_is_short():
+    assert len(_text(README).splitlines()) <= README_LINES
+
+
+def test_every_command_parses():
     problems = []
-    for command in _all_commands():
+    for document, command in _all_commands():
         for _, words in command.forms():
             problem = rc.parse_problem(words, REPO)
             if problem:
-                problems.append(f"{_where(command)}: {problem}")
+                problems.append(f"{_where(document, command)}: {problem}")
     if problems:
         pytest.fail("\n".join(problems), pytrace=False)
 
 
-def test_every_readme_command_is_run_or_says_why_not():
+def test_every_command_is_run_or_says_why_not():
     """A fenced command is run unless it is a synopsis or NOT_RUN says why not; an entry
-    of NOT_RUN that no longer matches a README command is stale."""
-    commands = [item for item in rc.items(_readme()) if isinstance(item, rc.Command)]
-    unknown = [_where(c) for c in commands
+    of NOT_RUN that no longer matches a command of any document is stale."""
+    commands = _commands()
+    unknown = [_where(d, c) for d, c in commands
                if not c.synopsis and not _not_run_reason(c) and _argv(c.forms()[0][1]) is None]
-    stale = [prefix for prefix in NOT_RUN if not any(c.text.startswith(prefix) for c in commands)]
+    stale = [prefix for prefix in NOT_RUN if not any(c.text.startswith(prefix) for _, c in commands)]
     problems = [f"{where}: this test cannot run it; teach _argv to, or list it in NOT_RUN" for where in unknown]
-    problems += [f"NOT_RUN entry {prefix!r} matches no README command" for prefix in stale]
+    problems += [f"NOT_RUN entry {prefix!r} matches no command" for prefix in stale]
     if problems:
         pytest.fail("\n".join(problems), pytrace=False)
 
 
-def test_readme_python_snippets_compile_and_import():
+def test_python_snippets_compile_and_import():
     problems = []
-    for snippet in (item for item in rc.items(_readme()) if isinstance(item, rc.Snippet)):
+    for document, snippet in ((d, i) for doc in DOCUMENTS for d, i in _items(doc) if isinstance(i, rc.Snippet)):
         try:
             snippet.code()
         except SyntaxError as exc:
-            problems.append(f"{_where(snippet)}: {exc}")
+            problems.append(f"{_where(document, snippet)}: {exc}")
             continue
-        problems += [f"{_where(snippet)}: {p}" for p in
+        problems += [f"{_where(document, snippet)}: {p}" for p in
                      filter(None, (rc.import_problem(m, n) for m, n in snippet.imports()))]
         if snippet.free_names():
-            problems.append(f"{_where(snippet)}: a fragment (uses {', '.join(sorted(snippet.free_names()))} "
-                            "without defining them); every README snippet runs as written")
+            problems.append(f"{_where(document, snippet)}: a fragment (uses "
+                            f"{', '.join(sorted(snippet.free_names()))} without defining them); every snippet "
+                            "runs as written")
     if problems:
         pytest.fail("\n".join(problems), pytrace=False)
 
@@ -164,7 +189,7 @@ def _argv(words):
     return None
 
 
-WRITTEN_INTO = ("examples",)        # the README preprocesses example parts into examples/scenes/
+WRITTEN_INTO = ("examples",)        # the guide preprocesses example parts into examples/scenes/
 IGNORED = ("plate", "plate_hole", "channel", "__pycache__")     # bodies a user made there (.gitignore)
 
 
@@ -186,18 +211,30 @@ def _fresh_clone(tmp):
     return tmp
 
 
+def _to_run(document):
+    """The items of ``document`` this test runs: its snippets and its fenced commands but
+    synopses, NOT_RUN and — on the getting-started page — the README's own commands,
+    which the README's run covers."""
+    shown_in_readme = {c.text for _, c in _commands([README])} if document == GETTING_STARTED else set()
+    return [item for _, item in _items(document)
+            if isinstance(item, rc.Snippet)
+            or not (item.synopsis or _not_run_reason(item) or item.text in shown_in_readme)]
+
+
 @pytest.mark.slow
-def test_readme_commands_run_as_written(tmp_path):
-    """The fenced commands and self-contained snippets, in README order, each exits 0."""
+@pytest.mark.parametrize("document", DOCUMENTS, ids=lambda d: str(d.relative_to(REPO)))
+def test_commands_run_as_written(document, tmp_path):
+    """The document's fenced commands and self-contained snippets, in its order, each exits 0."""
+    items = _to_run(document)
+    if not items:
+        pytest.skip(f"{document.name} shows nothing this test runs")
     work = _fresh_clone(tmp_path / "clone")
-    env = {**os.environ, "FFRMBS_PROGRESS": "0", "FFRMBS_CACHE": str(tmp_path / "cache"),
+    env = {**os.environ, "FFRMBS_PROGRESS": "0",
            "PYTHONPATH": os.pathsep.join(filter(None, [str(REPO), os.environ.get("PYTHONPATH")]))}
-    failures, ran = [], 0
-    for item in rc.items(_readme()):
+    failures = []
+    for item in items:
         if isinstance(item, rc.Snippet):
             argv, extra = [sys.executable, "-c", item.source], {}
-        elif item.synopsis or _not_run_reason(item):
-            continue
         else:
             extra, words = item.forms()[0]
             argv = _argv(words)
@@ -206,12 +243,11 @@ def test_readme_commands_run_as_written(tmp_path):
             done = subprocess.run(argv, cwd=work, env={**env, **extra}, capture_output=True, text=True,
                                   timeout=TIMEOUT_S)
         except subprocess.TimeoutExpired:
-            failures.append(f"{_where(item)}: still running after {TIMEOUT_S} s (make it cheaper or list it in NOT_RUN)")
+            failures.append(f"{_where(document, item)}: still running after {TIMEOUT_S} s "
+                            "(make it cheaper or list it in NOT_RUN)")
             continue
-        ran += 1
         if done.returncode != 0:
-            failures.append(f"{_where(item)}: exit {done.returncode}\n{done.stderr.strip()[-2000:]}")
-        print(f"{done.returncode}  {time.perf_counter() - start:6.1f} s  {_where(item)}")
-    assert ran, "no README command ran"
+            failures.append(f"{_where(document, item)}: exit {done.returncode}\n{done.stderr.strip()[-2000:]}")
+        print(f"{done.returncode}  {time.perf_counter() - start:6.1f} s  {_where(document, item)}")
     if failures:
         pytest.fail("\n\n".join(failures), pytrace=False)
