@@ -10,6 +10,7 @@ from ffrmbs_app import cli
 from ffrmbs_app.job import header
 from ffrmbs_app.output_dirs import shown
 from ffrmbs_app.scene import Scene
+from qa.fixtures import fixture_text
 
 
 def help_text(capsys, *argv):
@@ -59,28 +60,7 @@ def test_paths_are_printed_one_way(tmp_path, monkeypatch):
     assert shown(tmp_path.parent / "elsewhere.h5") == str(tmp_path.parent / "elsewhere.h5")
 
 
-BALL = """\
-[scene]
-name = "ball"
-description = "a ball dropped on a floor, e = 0.5"
-t_end = 0.05
-dt = 1e-3
-gravity = [0.0, 0.0, -9.81]
-
-[[body]]
-name = "ball"
-kind = "point_mass"
-mass = 0.1
-position = [0.0, 0.0, 0.005]
-velocity = [0.0, 0.0, 0.0]
-
-[[contact]]
-name = "floor"
-contour1 = { kind = "point", body = "ball" }
-contour2 = { kind = "plane", point = [0.0, 0.0, 0.0], normal = [0.0, 0.0, 1.0] }
-law = "impact"
-e = 0.5
-"""
+BALL = fixture_text("scenes/ball_on_floor.toml")
 
 
 def test_the_job_says_what_its_warm_up_run_is(tmp_path):
@@ -97,7 +77,7 @@ def test_the_job_says_what_its_warm_up_run_is(tmp_path):
 
     lines = []
     run_scene(make, tmp_path / "out", check=False, export=False, plot=False, checkpoint_every=None, log=lines.append)
-    assert lines[0] == ("scene ball: a ball dropped on a floor, e = 0.5\n"
+    assert lines[0] == ("scene bounce: a ball dropped on a floor, e = 0.5\n"
                         "  (the file's description; overridden by --set contact.floor.e=0.8)")
     warm = next(line for line in lines if line.startswith("warm-up run"))
     assert "compiles the kernels" in warm and "0.01 s of simulated time at dt = 0.001 s" in warm

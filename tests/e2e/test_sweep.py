@@ -16,6 +16,7 @@ import pytest
 import ffrmbs
 from ffrmbs.errors import FfrmbsError
 from ffrmbs_app.sweep import override_sets, parse_set, run_key, split_values
+from qa.fixtures import fixture_text
 
 import paths
 
@@ -23,34 +24,7 @@ pytest.importorskip("distributed")
 
 ROOT = paths.REPO
 
-# A 0.1 kg ball dropped from 50 mm onto the rigid plane z = 0 (Newton impact, e = 0.5).
-BOUNCE = """\
-[scene]
-name = "bounce"
-t_end = 0.2                 # [s]
-dt = 1e-3                   # [s]
-integrator = "moreau"
-gravity = [0.0, 0.0, -9.81] # [m/s²]
-n_out = 21
-
-[[body]]
-name = "ball"
-kind = "point_mass"
-mass = 0.1                  # [kg]
-position = [0.0, 0.0, 0.05] # [m]
-velocity = [0.0, 0.0, 0.0]  # [m/s]
-
-[[contact]]
-name = "floor"
-contour1 = { kind = "point", body = "ball" }
-contour2 = { kind = "plane", point = [0.0, 0.0, 0.0], normal = [0.0, 0.0, 1.0] }
-law = "impact"
-e = 0.5
-
-[outputs]
-z = { body = "ball", quantity = "position", component = "z" }     # [m]
-vz = { body = "ball", quantity = "velocity", component = "z" }    # [m/s]
-"""
+BOUNCE = fixture_text("scenes/ball_on_floor.toml")     # a ball dropped from 50 mm, e = 0.5
 
 GRID = {"scene.dt": ["1e-3", "5e-4"], "contact.floor.e": ["0.5", "2"]}     # e = 2: not in [0, 1]
 

@@ -22,6 +22,7 @@ import h5py
 import pytest
 
 from ffrmbs_app import cli
+from qa.fixtures import edited, fixture_text
 
 import paths
 
@@ -157,36 +158,14 @@ def test_load_result_of_a_fifo_is_refused_without_opening_it(tmp_path):
 
 # --- outputs of another scene, of the run before, of an export killed (issue 30) --------------------
 
-DROP = """\
-[scene]
-name = "drop"
-t_end = {t_end}
-dt = 1e-4
-n_out = 11
-gravity = [0.0, 0.0, -9.81]
-{options}
-[[body]]
-name = "bob"
-kind = "point_mass"
-mass = {mass}
-position = [0.0, 0.0, 0.001]
-
-[[contact]]
-name = "floor"
-contour1 = {{ kind = "point", body = "bob" }}
-contour2 = {{ kind = "plane" }}
-law = "impact"
-
-[outputs]
-z = {{ body = "bob", quantity = "position", component = "z" }}
-"""
-
 
 def drop_scene(path, mass=1.0, t_end=0.05, options="") -> Path:
-    """A point mass of ``mass`` [kg] dropped 1 mm onto the ground plane, its result
-    named "drop" whatever the file's name."""
+    """scenes/drop.toml (a point mass dropped 1 mm onto the ground plane, its result named
+    "drop" whatever the file's name) with ``mass`` [kg], ``t_end`` [s] and the TOML text
+    ``options`` appended."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(DROP.format(mass=mass, t_end=t_end, options=options))
+    path.write_text(edited(fixture_text("scenes/drop.toml"), ("mass = 1.0", f"mass = {mass}"),
+                           ("t_end = 0.05", f"t_end = {t_end}")) + options)
     return path
 
 

@@ -24,6 +24,7 @@ from ffrmbs_app.cli import main
 from ffrmbs.errors import InputFileError, ModelError
 from preprocess import Material, build_body, fe, limits, read_mesh
 from preprocess.geometry import box, stepped_beam
+from qa.fixtures import fixture_text
 
 import paths
 
@@ -151,17 +152,7 @@ def test_physical_memory_is_the_machine_memory():
 
 # --- a mesh file over the limits: refused before assembly ------------------------------------------
 
-INP = """\
-*Node
-1, 0.0, 0.0, 0.0
-2, 1.0, 0.0, 0.0
-3, 0.0, 1.0, 0.0
-4, 0.0, 0.0, 1.0
-5, 1.0, 1.0, 1.0
-*Element, type=C3D4
-1, 1, 2, 3, 4
-2, 2, 3, 4, 5
-"""
+INP = fixture_text("meshes/two_tets.inp")
 
 
 def test_a_mesh_file_over_the_node_limit_is_refused_before_assembly(tmp_path, monkeypatch):

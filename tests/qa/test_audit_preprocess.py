@@ -28,6 +28,7 @@ from preprocess import Material, build_body, read_body, read_mesh, write_body
 from preprocess.geometry import box
 from preprocess.modes import clamped_modes
 from preprocess.textfiles import TEXT_FILES
+from qa.fixtures import fixture_text
 
 import paths
 
@@ -98,24 +99,7 @@ def test_a_scene_body_given_as_a_directory_keeps_its_node_groups(body_dir):
     from ffrmbs_app.scene_file import read_scene
 
     scene_file = body_dir.parent / "scene.toml"
-    scene_file.write_text(textwrap.dedent("""\
-        [scene]
-        t_end = 0.01
-        dt = 1e-3
-
-        [[body]]
-        name = "plate"
-        kind = "flexible"
-        source = "plate"
-        modes = 2
-        frame = "fixed"
-
-        [[load]]
-        kind = "distributed"
-        body = "plate"
-        nodes = "x1"
-        force = [0.0, 0.0, 1.0]
-        """))
+    scene_file.write_text(fixture_text("scenes/plate_distributed_load.toml"))
     scene = read_scene(scene_file)
     assert Path(scene.inputs["body 'plate'"]) == body_dir / "body.h5"
 
@@ -158,26 +142,7 @@ def test_preprocess_clamps_a_face_of_a_small_box(tmp_path, capsys):
 
 # --- 7. disconnected and unconstrained mesh parts ----------------------------------------------------
 
-INP = """\
-*Heading
-two tets sharing a face, and a third touching neither
-*Node
-1, 0.0, 0.0, 0.0
-2, 1.0, 0.0, 0.0
-3, 0.0, 1.0, 0.0
-4, 0.0, 0.0, 1.0
-5, 1.0, 1.0, 1.0
-6, 5.0, 0.0, 0.0
-7, 6.0, 0.0, 0.0
-8, 5.0, 1.0, 0.0
-9, 5.0, 0.0, 1.0
-*Element, type=C3D4
-1, 1, 2, 3, 4
-2, 2, 3, 4, 5
-3, 6, 7, 8, 9
-*Nset, nset=base
-1, 2, 3
-"""
+INP = fixture_text("meshes/two_tets_and_a_stray.inp")
 
 
 def write_inp(tmp_path, text=INP, name="part.inp"):
@@ -417,7 +382,6 @@ def test_a_foreign_file_as_a_body_file_is_quoted_in_short(small_body, tmp_path):
     message = str(info.value)
     assert not any(secret[i:i + 21] in message for i in range(len(secret) - 20)), message
     assert secret[:10] in message
-
 
 
 def test_a_foreign_file_as_a_force_file_is_quoted_in_short(tmp_path):

@@ -15,34 +15,21 @@ import h5py
 import pytest
 
 from mbs.checkpoint import read_checkpoint
+from qa.fixtures import edited, fixture_text
 
 ENV = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
 
-FALLING_MASS = """\
-[scene]
-name = "{name}"
-t_end = {t_end}
-dt = {dt}
-integrator = "rk4"
-n_out = {n_out}
-gravity = {gravity}
-
-[[body]]
-name = "ball"
-kind = "point_mass"
-mass = 1.0
-velocity = {velocity}
-
-[outputs]
-y = {{ body = "ball", quantity = "position", component = "y" }}
-"""
+FALLING_MASS = fixture_text("scenes/falling_mass.toml")
 
 
 def scene_file(tmp_path, name="fall", t_end=0.01, dt=1e-3, n_out=11, gravity="[0.0, -9.81, 0.0]",
                velocity="[0.0, 0.0, 0.0]", file="scene.toml") -> Path:
+    """scenes/falling_mass.toml with the given values, written to ``tmp_path / file``."""
     path = tmp_path / file
-    path.write_text(FALLING_MASS.format(name=name, t_end=t_end, dt=dt, n_out=n_out, gravity=gravity,
-                                        velocity=velocity))
+    path.write_text(edited(FALLING_MASS, ('name = "fall"', f'name = "{name}"'), ("t_end = 0.01", f"t_end = {t_end}"),
+                           ("dt = 1e-3", f"dt = {dt}"), ("n_out = 11", f"n_out = {n_out}"),
+                           ("gravity = [0.0, -9.81, 0.0]", f"gravity = {gravity}"),
+                           ("velocity = [0.0, 0.0, 0.0]", f"velocity = {velocity}")))
     return path
 
 

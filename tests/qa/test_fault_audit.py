@@ -1,5 +1,6 @@
-"""The fault audit (validation.fault_audit): its classifier on made-up process results, its
-case table, and a few real cases run end to end through the command line."""
+"""The fault audit (qa.fault_audit, its cases qa.fault_cases, its planted files
+qa.planted_files): its classifier on made-up process results, its case table, and a few
+real cases run end to end through the command line."""
 
 from __future__ import annotations
 
@@ -11,7 +12,9 @@ import pytest
 
 from ffrmbs.errors import InputFileError
 from mbs.checkpoint import read_checkpoint
-from validation import fault_audit as fa
+from qa import fault_audit as fa
+from qa import fault_cases as fc
+from qa import planted_files as pf
 
 LONG = "ffrmbs: error: x.toml: " + "y" * 300
 
@@ -29,7 +32,7 @@ LONG = "ffrmbs: error: x.toml: " + "y" * 300
     (2, LONG + "\n", ("x.toml",), False, False, "unclear"),          # too long
     (2, "ffrmbs: error: something is wrong\n", ("u0.dat",), False, False, "unclear"),   # names nothing
     (2, "error: u0.dat is bad\n", ("u0.dat",), False, False, "unclear"),                # not our prefix
-    (2, "ffrmbs: error: simulation stopped: the mode must be finite\n", fa.E_KEY, False, False, "unclear"),
+    (2, "ffrmbs: error: simulation stopped: the mode must be finite\n", fc.E_KEY, False, False, "unclear"),
     (1, "", ("x",), False, False, "unclear"),
     (-9, "", ("x",), False, False, "unclear"),                                           # killed by a signal
     (0, "", ("x",), False, False, "silent"),
@@ -46,22 +49,22 @@ def test_classify(returncode, stderr, expect, timed_out, executed, outcome):
 
 
 def test_the_case_table_covers_every_kind_with_at_least_102_cases():
-    cases = fa.all_cases()        # builds every scene text: each edit matched BASE_SCENE exactly once
+    cases = fc.all_cases()        # builds every scene text: each edit matched BASE_SCENE exactly once
     assert len(cases) >= 102
     assert len({c.name for c in cases}) == len(cases)
     kinds = Counter(c.kind for c in cases)
-    assert set(kinds) == set(fa.KINDS) and min(kinds.values()) >= 10
+    assert set(kinds) == set(fc.KINDS) and min(kinds.values()) >= 10
     assert all(c.expect for c in cases), "every bad input names what a clear message must mention"
     assert sum(c.marker is not None for c in cases) == 3      # the planted pickles: bare, old header, in an .npz
 
 
-@pytest.mark.parametrize("name, source, options, expect", fa.MESH_OPTIONS, ids=[c[0] for c in fa.MESH_OPTIONS])
+@pytest.mark.parametrize("name, source, options, expect", fc.MESH_OPTIONS, ids=[c[0] for c in fc.MESH_OPTIONS])
 def test_bad_preprocess_options_reach_the_command(name, source, options, expect):
     """The bad value of an option appended to a valid command is the one the parser keeps (a
     repeated option keeps its last value; nothing after it overrides it)."""
     from ffrmbs_app.cli import build_parser
 
-    argv = [a.format(case="/c", shared="/s") for a in fa.all_cases_by_name()[f"mesh_{name}"].argv]
+    argv = [a.format(case="/c", shared="/s") for a in fc.all_cases_by_name()[f"mesh_{name}"].argv]
     args = build_parser().parse_args(argv)
     for flag, value in zip(options[::2], options[1::2]):
         got = getattr(args, flag[2:].replace("-", "_"))
@@ -72,18 +75,18 @@ def test_bad_preprocess_options_reach_the_command(name, source, options, expect)
 def test_the_planted_pickle_runs_its_command_when_loaded(tmp_path):
     """The planted checkpoint is a real threat: unpickling it creates the marker."""
     ckpt = tmp_path / "x.h5.ckpt"
-    fa.planted_pickle(fa.PICKLED_HEADER, "EXECUTED")(ckpt, tmp_path)
+    pf.planted_pickle(pf.PICKLED_HEADER, "EXECUTED")(ckpt, tmp_path)
     data = ckpt.read_bytes()
-    assert data.startswith(fa.PICKLED_HEADER)
+    assert data.startswith(pf.PICKLED_HEADER)
     assert not (tmp_path / "EXECUTED").exists()
-    pickle.loads(data[len(fa.PICKLED_HEADER):])
+    pickle.loads(data[len(pf.PICKLED_HEADER):])
     assert (tmp_path / "EXECUTED").exists()
 
 
 def test_the_planted_object_array_runs_its_command_when_loaded_with_pickles_allowed(tmp_path):
     """The planted .npz is a real threat to a reader that allows pickles."""
     ckpt = tmp_path / "x.h5.ckpt"
-    fa.planted_object_array("EXECUTED")(ckpt, tmp_path)
+    pf.planted_object_array("EXECUTED")(ckpt, tmp_path)
     with np.load(ckpt, allow_pickle=True) as npz:
         npz["plant"]
     assert (tmp_path / "EXECUTED").exists()
@@ -98,7 +101,7 @@ def test_the_planted_object_array_runs_its_command_when_loaded_with_pickles_allo
 def test_the_planted_checkpoints_are_refused_unread(tmp_path, name, refusal):
     """Each planted or damaged checkpoint of the audit is refused by read_checkpoint, and
     nothing it holds runs."""
-    path, make = [f for f in _case(f"run_{name}").files if f[0] == fa.CKPT][0]
+    path, make = [f for f in _case(f"run_{name}").files if f[0] == fc.CKPT][0]
     ckpt = tmp_path / "x.h5.ckpt"
     make(ckpt, tmp_path)
     with pytest.raises(InputFileError) as err:
@@ -111,12 +114,12 @@ def test_the_planted_checkpoints_are_refused_unread(tmp_path, name, refusal):
 def audit_root(tmp_path_factory):
     root = tmp_path_factory.mktemp("audit")
     (root / "shared").mkdir()
-    fa.build_shared(root / "shared")
+    fc.build_shared(root / "shared")
     return root
 
 
 def _case(name):
-    return fa.all_cases_by_name()[name]
+    return fc.all_cases_by_name()[name]
 
 
 @pytest.mark.parametrize("name, fragment", [
@@ -133,10 +136,10 @@ def test_real_cases_with_clear_errors(audit_root, name, fragment):
 def test_a_valid_input_counts_as_silent_and_planted_code_as_executed(audit_root):
     """Exit status 0 on a (here valid) input is 'silent'; a marker present afterwards is flagged
     EXECUTED whatever the exit status."""
-    valid = fa.Case("valid_body", "body", ("info", "{shared}/body.h5"), ("body.h5",))
+    valid = fc.Case("valid_body", "body", ("info", "{shared}/body.h5"), ("body.h5",))
     assert fa.run_case(valid, audit_root).outcome == "silent"
-    marked = fa.Case("marked", "body", ("info", "{case}/missing.h5"), ("missing.h5",),
-                     files=(("EXECUTED", fa.text("")),), marker="EXECUTED")
+    marked = fc.Case("marked", "body", ("info", "{case}/missing.h5"), ("missing.h5",),
+                     files=(("EXECUTED", pf.text("")),), marker="EXECUTED")
     result = fa.run_case(marked, audit_root)
     assert result.outcome == "silent" and result.executed and result.message.startswith("EXECUTED")
     assert result.returncode == 2                    # the error was clear, yet code ran

@@ -20,6 +20,7 @@ import json
 import math
 import re
 import shutil
+import tomllib
 from pathlib import Path
 
 import h5py
@@ -34,8 +35,7 @@ from ffrmbs_app.scene_file import read_scene
 from preprocess import Material, bodyfiles, build_body, read_body, write_body
 from preprocess.bodyfiles import HDF5_FILE, TEXT_FILES
 from preprocess.geometry import box
-
-from scene_files import BODIES
+from qa.fixtures import fixture_text
 
 FUZZ = settings(deadline=None, derandomize=True, database=None,
                 suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
@@ -275,7 +275,7 @@ def test_hdf5_body_file_reads_or_fails_naming_the_file(originals, data):
 
 # --- TOML scene files ----------------------------------------------------------------------------------
 
-SCENE = """\
+FUZZ_TABLES = """\
 [scene]
 name = "fuzz"
 description = "the fuzzing base"
@@ -292,7 +292,6 @@ gravity = [0.0, -9.81, 0.0]
 theta = 0.5
 trace = false
 
-""" + BODIES + """
 [[spring]]
 frame1 = { body = "ground", point = [0.0, 0.3, 0.0] }
 frame2 = { body = "block" }
@@ -340,6 +339,13 @@ y = { body = "bob", quantity = "position", component = "y" }
 tip = { body = "beam", at = [0.25, 0.05, 0.05] }
 spin = { body = "block", quantity = "angular_velocity" }
 """
+
+
+def base_scene() -> dict:
+    """The fuzzing base, parsed: the three bodies of scenes/beam_block_bob.toml with every
+    key of [scene] and the links, loads, contacts and outputs of :data:`FUZZ_TABLES`."""
+    return tomllib.loads(fixture_text("scenes/beam_block_bob.toml")) | tomllib.loads(FUZZ_TABLES)
+
 
 BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
 
@@ -434,10 +440,8 @@ def scene_dir(originals):
 
 
 def test_the_fuzzing_base_scene_is_valid(scene_dir):
-    import tomllib
-
     path = scene_dir / "base.toml"
-    path.write_text(toml_document(tomllib.loads(SCENE)))
+    path.write_text(toml_document(base_scene()))
     scene = read_scene(path)
     assert [b.name for b in scene.system.bodies] == ["beam", "block", "bob"]
     assert len(scene.system.contacts) == 2 and len(scene.system.forces) == 3 and sorted(scene.outputs) == \
@@ -448,9 +452,7 @@ def test_the_fuzzing_base_scene_is_valid(scene_dir):
 @fuzz(400)
 @given(data=st.data())
 def test_scene_files_read_or_fail_naming_file_line_and_key(scene_dir, data):
-    import tomllib
-
-    doc = tomllib.loads(SCENE)
+    doc = base_scene()
     op = data.draw(st.sampled_from(["delete", "replace", "extra-key", "text"]))
     key = None
     if op == "delete":

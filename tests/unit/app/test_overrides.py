@@ -12,40 +12,9 @@ import pytest
 from ffrmbs.errors import InputFileError
 from ffrmbs_app.scene import load_scene
 from ffrmbs_app.scene_file.overrides import parse_value, split_override
+from qa.fixtures import fixture_text
 
-BALL = """\
-[scene]
-name = "ball"
-t_end = 0.02
-dt = 1e-3
-n_out = 3
-
-[scene.options]
-theta = 0.5
-
-[[body]]
-name = "ball one"
-kind = "point_mass"
-mass = 0.5
-position = [0.0, 0.1, 0.0]
-velocity = [0.0, -1.0, 0.0]
-
-[[body]]
-name = "bob"
-kind = "point_mass"
-mass = 0.2
-position = [1.0, 0.1, 0.0]
-
-[[contact]]
-name = "floor"
-contour1 = { kind = "point", body = "ball one" }
-contour2 = { kind = "plane", point = [0.0, 0.0, 0.0], normal = [0.0, 1.0, 0.0] }
-law = "impact"
-e = 0.5
-
-[outputs]
-y = { body = "ball one", quantity = "position", component = "y" }
-"""
+BALL = fixture_text("scenes/two_point_masses.toml")
 
 
 @pytest.fixture

@@ -21,6 +21,7 @@ from ffrmbs.errors import InputFileError, ModelError
 from ffrmbs.registry import Registry
 from ffrmbs_app.scene_file import read_scene
 from mbs import BODIES, INTEGRATORS, JOINTS, LOADS, ROTATIONS, PointMass, RigidBody, System, ground_frame
+from qa.fixtures import fixture_text
 
 
 # --- the Registry ------------------------------------------------------------------------------------
@@ -178,30 +179,11 @@ def hertz():
     LAWS.unregister("hertz")
 
 
-SCENE = """\
-[scene]
-t_end = 0.02
-dt = 1e-4
-n_out = 3
-
-[[body]]
-name = "bob"
-kind = "point_mass"
-mass = 0.1
-position = [0.0, 0.0, 0.001]
-velocity = [0.2, 0.0, -1.0]
-
-[[contact]]
-name = "floor"
-contour1 = { kind = "point", body = "bob" }
-contour2 = { kind = "plane" }
-law = "hertz"
-k = 1e6
-"""
+SCENE = fixture_text("scenes/bob_on_hertz_floor.toml")
 
 
 def python_scene(law, friction=None):
-    """The scene above written with the Python API and the law object ``law``."""
+    """The scene file bob_on_hertz_floor.toml written with the Python API and the law object ``law``."""
     system = System()
     bob = system.add(PointMass(0.1, position=(0.0, 0.0, 0.001), velocity=(0.2, 0.0, -1.0), name="bob"))
     system.add(Contact(contact.ContactKinematicsPointPlane(PointContour(bob.point),

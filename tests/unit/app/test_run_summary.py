@@ -3,8 +3,8 @@ without contacts, gravity, loads and damping — against hand calculations: the 
 balance E(t) − E(0) = W_loads − D_damping + W_impulses + residual (:mod:`mbs.step_work`)
 and the intervals in which a contact transmits a force.
 
-The scenes are small TOML files in ``fixtures/summary_scenes`` (point masses) and a
-clamped tet4 beam written here (6 modes)."""
+The scenes are small TOML files in ``fixtures/summary_scenes``: point masses, and a
+clamped tet4 beam (6 modes) whose body file is written here beside its scenes."""
 
 from __future__ import annotations
 
@@ -20,31 +20,7 @@ import paths
 
 SCENES = paths.FIXTURES / "summary_scenes"
 
-CANTILEVER = """\
-# A clamped 250 x 50 x 50 mm beam (6 modes, 2 % modal damping) under a 20 N tip load from
-# t = 0: no contact, no gravity.
-[scene]
-name = "cantilever"
-t_end = 0.02                # [s]
-dt = 1e-4                   # [s]
-
-[[body]]
-name = "beam"
-kind = "flexible"
-source = "body/body.h5"
-frame = "fixed"
-modes = 6
-modal_damping = 0.02
-
-[[load]]
-kind = "force"
-body = "beam"
-at = [0.25, 0.05, 0.05]
-force = [0.0, -20.0, 0.0]   # [N]
-
-[outputs]
-tip = { body = "beam", at = [0.25, 0.05, 0.05], quantity = "displacement" }
-"""
+CANTILEVER = (SCENES / "cantilever.toml").read_text()     # beside its body written here
 
 
 def run(path, out, overrides=()):
@@ -158,7 +134,6 @@ def test_an_integrated_damped_cantilever_balances_load_work_and_damping(cantilev
     assert "solved_apart" not in s
 
 
-
 BALL = """
 [[body]]
 name = "ball"
@@ -192,38 +167,6 @@ def test_a_body_the_plan_solves_apart_is_named_and_left_out_of_the_balance(canti
     assert line(lines, "energy (kinetic + potential of every body, at the output samples): initial 0.5 J")
 
 
-
-COMPLIANT = """
-[scene]
-name = "compliant"
-t_end = 0.0105
-dt = 1e-5
-
-[[body]]
-name = "beam"
-kind = "flexible"
-source = "body/body.h5"
-frame = "fixed"
-modes = 2
-
-[[body]]
-name = "bob"
-kind = "point_mass"
-mass = 0.5
-position = [0.2, 0.052, 0.025]
-velocity = [0.0, -0.2, 0.0]
-
-[[contact]]
-name = "impact"
-contour1 = { kind = "point", body = "bob" }
-contour2 = { kind = "2s", body = "beam", nodes = "y1", degree = 2, residual_flexibility = true }
-law = "impact"
-
-[outputs]
-y = { body = "bob", quantity = "position", component = "y" }
-"""
-
-
 def test_a_compliant_contact_closed_at_the_end_keeps_the_balance(cantilever, tmp_path):
     """0.5 kg at 0.2 m/s lands (e = 0) at 10 ms on the top face of the beam, 2 modes kept
     and the rest as the contact's residual flexibility; the run ends at 10.5 ms with the
@@ -234,7 +177,7 @@ def test_a_compliant_contact_closed_at_the_end_keeps_the_balance(cantilever, tmp
     import h5py
 
     path = cantilever.with_name("compliant.toml")
-    path.write_text(COMPLIANT)
+    path.write_text((SCENES / "compliant.toml").read_text())
     s, _ = run(path, tmp_path)
     b = s["energy_balance_J"]
     (start, end), = s["contact_intervals_s"]
@@ -245,43 +188,11 @@ def test_a_compliant_contact_closed_at_the_end_keeps_the_balance(cantilever, tmp
     assert abs(b["residual"]) < 1e-10 * held
 
 
-PRESSED = """\
-# A 1 kg point mass touching the plane z = 0 (gap 0: closed) slides at 1 m/s, no gravity;
-# a 10 N load presses it onto the plane from 0.1 s to 0.2 s only.
-[scene]
-name = "pressed"
-t_end = 0.3
-dt = 1e-3
-
-[[body]]
-name = "puck"
-kind = "point_mass"
-mass = 1.0
-velocity = [1.0, 0.0, 0.0]
-
-[[load]]
-kind = "force"
-body = "puck"
-force = { times = [0.1, 0.2], values = [[0.0, 0.0, -10.0], [0.0, 0.0, 0.0]] }
-
-[[contact]]
-name = "floor"
-contour1 = { kind = "point", body = "puck" }
-contour2 = { kind = "plane" }
-law = "impact"
-
-[outputs]
-z = { body = "puck", quantity = "position", component = "z" }
-"""
-
-
 def test_contact_intervals_are_where_the_contact_force_acts(tmp_path):
     """The puck touches the plane throughout (its gap is 0: closed in every step) but the
     plane pushes back only while the load presses: one interval, 0.1 s to 0.2 s (the load's
     steps; the integrator stops 1e-12 s before each load step)."""
-    path = tmp_path / "pressed.toml"
-    path.write_text(PRESSED)
-    s, lines = run(path, tmp_path / "out")
+    s, lines = run(SCENES / "pressed.toml", tmp_path / "out")
     iv = s["contact_intervals_s"]
     assert len(iv) == 1 and iv[0] == pytest.approx((0.1, 0.2), abs=1e-9)
     assert line(lines, "contact: force transmitted in 1 interval(s): 100.000-200.000 ms")

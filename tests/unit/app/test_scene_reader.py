@@ -4,6 +4,7 @@ errors that name the file, the line and the key."""
 from __future__ import annotations
 
 import dataclasses
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -22,9 +23,9 @@ from mbs import (DistributedForce, FlexibleBodyFFR, Force, Joint, NodalForces, P
                  RigidBody, SpringDamper, System, Tabulated, Torque, ground_frame, write_force_file)
 from preprocess import Material, build_body, read_body, write_body
 from preprocess.geometry import box
+from qa.fixtures import edited, fixture_text
 
 from gmsh_parts import LENGTH, RADIUS, cylinder_mesh
-from scene_files import BODIES
 
 import paths
 
@@ -112,108 +113,10 @@ def force_file(body_dir):
     return path, times, forces, blocked
 
 
-SINK = """\
-# every kind of body, link, load and output
-[scene]
-name = "sink"
-t_end = 0.002
-dt = 1e-4
-integrator = "generalized-alpha"
-n_out = 5
-gravity = [0.0, -9.81, 0.0]
-plan = false
-
-[scene.options]
-rho_inf = 0.8
-
-[[body]]
-name = "beam"
-kind = "flexible"
-source = "body/body.h5"
-modes = [0, 2, 3]
-rotation = "cardan"
-position = [0.1, 0.2, 0.3]
-orientation = [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]
-velocity = [0.01, 0.0, 0.0]
-angular_velocity = [0.0, 0.0, 0.5]
-q_f = [1e-4, 0.0, -1e-4]
-modal_velocities = [0.0, 1e-3, 0.0]
-rayleigh = [0.1, 1e-4]
-
-[[body]]
-name = "clamped"
-kind = "flexible"
-source = "body"
-modes = 4
-frame = "fixed"
-position = [0.0, 1.0, 0.0]
-modal_damping = 0.02
-
-[[body]]
-name = "block"
-kind = "rigid"
-mass = 2.0
-inertia = [0.01, 0.02, 0.03]
-com = [0.0, 0.0, 0.01]
-position = [1.0, 0.0, 0.0]
-angular_velocity = [0.1, 0.2, 0.3]
-
-[[body]]
-name = "bob"
-kind = "point_mass"
-mass = 0.3
-position = [0.0, -0.5, 0.0]
-velocity = [0.1, 0.0, 0.0]
-
-[[spring]]
-frame1 = { body = "ground", point = [0.0, 0.0, 0.0] }
-frame2 = { body = "bob" }
-stiffness = 100.0
-damping = 0.5
-free_length = 0.4
-
-[[joint]]
-kind = "spherical"
-frame1 = { body = "ground", point = [1.0, 0.0, 0.0] }
-frame2 = { body = "block" }
-
-[[load]]
-kind = "force"
-body = "beam"
-node = 7
-force = { times = [0.0, 0.001], values = [[0.0, 1.0, 0.0], [0.0, 2.0, 0.0]], kind = "step" }
-
-[[load]]
-kind = "torque"
-body = "block"
-torque = [0.0, 0.0, 0.01]
-frame_fixed = true
-
-[[load]]
-kind = "distributed"
-body = "beam"
-nodes = "x1"
-force = [0.5, 0.0, 0.0]
-
-[[load]]
-kind = "nodal"
-body = "clamped"
-file = "loads.txt"
-blocked = BLOCKED
-
-[outputs]
-tip = { body = "beam", at = [0.25, 0.05, 0.05] }
-tip_v = { body = "beam", node = 7, quantity = "velocity" }
-tip_u = { body = "clamped", node = 7, quantity = "displacement", component = "y" }
-spin = { body = "block", quantity = "angular_velocity" }
-modal = { body = "beam", quantity = "q_f" }
-bob = { body = "bob", point = [0.0, 0.0, 0.1] }
-"""
-
-
 @pytest.fixture(scope="module")
 def sink_text(force_file):
-    return SINK.replace("BLOCKED", str(force_file[3].tolist()))
+    """The kitchen-sink scene with the nodal load's blocked nodes of ``force_file``."""
+    return edited(fixture_text("scenes/kitchen_sink.toml"), ("blocked = []", f"blocked = {force_file[3].tolist()}"))
 
 
 @pytest.fixture(scope="module")
@@ -296,12 +199,7 @@ def test_inputs_list_the_scene_body_and_force_files(body_dir, sink_path):
     assert all(p.is_file() for p in files.values())
 
 
-CONTACTS = """\
-[scene]
-t_end = 0.01
-dt = 1e-4
-
-""" + BODIES + """
+CONTACTS = fixture_text("scenes/beam_block_bob.toml") + """
 [[contact]]
 name = "top"
 contour1 = { kind = "point", body = "bob" }
@@ -592,42 +490,6 @@ def test_nothing_is_built_when_a_late_entry_is_wrong(body_dir, sink_text, monkey
 
 # --- 1s contours on a feature edge of an unstructured mesh (issue 20) ------------------------------
 
-RIM = """\
-[scene]
-t_end = 0.02
-dt = 1e-4
-n_out = 3
-gravity = [0.0, 0.0, -9.81]
-
-[[body]]
-name = "cylinder"
-kind = "flexible"
-source = "rim/body.h5"
-modes = 3
-frame = "fixed"
-
-[[body]]
-name = "ball"
-kind = "point_mass"
-mass = 0.01
-position = [X, 0.0, Z]
-velocity = [0.0, 0.0, -0.2]
-
-[[contact]]
-name = "on the rim"
-contour1 = { kind = "sphere", body = "ball", radius = BALL }
-contour2.kind = "band"
-contour2.body = "cylinder"
-contour2.nodes = "rim1"
-contour2.normal = [0.0, 0.0, 1.0]
-contour2.degree = 4
-contour2.width = 0.01
-law = "impact"
-
-[outputs]
-ball = { body = "ball" }
-"""
-
 
 @pytest.fixture(scope="module")
 def rim_scene(tmp_path_factory):
@@ -640,10 +502,10 @@ def rim_scene(tmp_path_factory):
     data = build_body(cylinder_mesh(0.02, 1), Material(7800.0, 2.1e11, 0.3), n_modes=3)
     write_body(directory / "rim", data)
     write_body(directory / "bare", dataclasses.replace(data, surface_triangles=None))    # no surface to walk
-    ball = 0.005
-    rest = LENGTH + ball
-    text = (RIM.replace("X", repr(RADIUS - 0.002)).replace("Z", repr(rest + 1e-3))
-            .replace("BALL", repr(ball)))
+    text = fixture_text("scenes/ball_on_cylinder_rim.toml")
+    doc = tomllib.loads(text)
+    rest = LENGTH + doc["contact"][0]["contour1"]["radius"]
+    assert doc["body"][1]["position"] == pytest.approx([RADIUS - 0.002, 0.0, rest + 1e-3])     # as said above
     path = directory / "rim.toml"
     path.write_text(text)
     return text, path, rest

@@ -19,6 +19,7 @@ from ffrmbs_app.scene_file import read_scene
 from mbs import FlexibleBodyFFR, Joint, PointMass, PrescribedFrameMotion, RigidBody, SpringDamper, System, ground_frame
 from preprocess import Material, build_body, write_body
 from preprocess.geometry import box
+from qa.fixtures import fixture_text
 
 G = 9.81                                     # [m/s²]
 L, H = 0.2, 0.02                             # beam length and square section [m]
@@ -152,39 +153,7 @@ def test_unsupported_states_are_named(make, fragment):
 
 # --- scene files: initial = "static" -------------------------------------------------------------------
 
-SCENE = """\
-[scene]
-t_end = 0.01
-dt = 2e-5
-gravity = [0.0, -9.81, 0.0]
-
-[[body]]
-name = "beam"
-kind = "flexible"
-source = "beam/body.h5"
-frame = "fixed"
-initial = "static"
-
-[[body]]
-name = "bob"
-kind = "point_mass"
-mass = 0.5
-position = [0.0, -0.25, 0.0]
-initial = "static"
-
-[[spring]]
-frame1 = { body = "ground", point = [0.0, 0.0, 0.0] }
-frame2 = { body = "bob" }
-stiffness = 200.0
-free_length = 0.3
-
-[[body]]
-name = "ball"
-kind = "point_mass"
-mass = 0.1
-position = [0.1, 0.05, 0.01]
-velocity = [0.0, -1.0, 0.0]
-"""
+SCENE = fixture_text("scenes/static_beam_and_bob.toml")
 
 
 @pytest.fixture(scope="module")

@@ -1,72 +1,37 @@
-"""The fault audit: bad inputs through the command line, each classified by what the user sees.
+"""The fault audit's cases (:mod:`qa.fault_audit`): bad inputs, each one small edit of a valid one.
 
-``python3 -m validation.fault_audit --out DIR [--only KIND] [--jobs N] [--timeout S]``
-writes over a hundred bad inputs into ``DIR/cases/<case>/`` and runs each through
-``python3 -m ffrmbs_app.cli ...`` in its own process group (``FFRMBS_PROGRESS=0``, a time limit and
-an address-space limit of :data:`MEMORY_LIMIT` bytes, so that a run that would eat the
-machine dies instead). Each case is classified (:func:`classify`) as
+Every case is one record (:class:`Case`): its name, kind, the files to write into its case
+directory (builders of :mod:`qa.planted_files`), the argument list after ``ffrmbs`` and the
+substrings a clear message contains. The valid inputs every case starts from are written
+into the audit's ``shared/`` directory by :func:`build_shared`: the base scene
+(``tests/fixtures/scenes/every_entry.toml``), the meshes ``tests/fixtures/meshes/cube_six_tet4.inp``
+and ``bar.geo`` (the tests' fixture files) and a small body. :func:`controls` are valid
+inputs that must run cleanly, so that a case's outcome is due to its one fault.
 
-``clear``      exit status non-zero, no ``Traceback`` on stderr, and stderr's last non-empty
-               line is one message of at most :data:`MAX_MESSAGE` characters starting with
-               ``ffrmbs: error:`` (or argparse's ``ffrmbs <command>: error:``) that names
-               the file or key at fault (one of the case's expected substrings);
-``traceback``  a Python traceback on stderr;
-``unclear``    non-zero exit otherwise (a multi-line, long or unspecific message, a signal);
-``silent``     exit status 0: the bad input was accepted;
-``hang``       no exit within the time limit (the process group is killed).
-
-A case that plants code (a pickle whose ``__reduce__`` runs ``touch MARKER``) is
-``silent`` whenever the marker exists afterwards, whatever the exit status, and is flagged
-``EXECUTED``.
-
-Kinds of bad inputs (``--only``): ``scene`` (TOML scene files, :mod:`ffrmbs_app.scene_file`),
+Kinds of bad inputs (:data:`KINDS`): ``scene`` (TOML scene files, :mod:`ffrmbs_app.scene_file`),
 ``body`` (the thesis's text files and ``body.h5``, via ``ffrmbs info`` and via a scene),
 ``mesh`` (``ffrmbs preprocess`` inputs and options), ``run`` (options of the default
 scene, ``--resume`` with missing, damaged and planted checkpoints) and ``result``
 (``ffrmbs plot`` / ``export`` of missing, foreign or damaged result files).
-
-Every case is one record (:class:`Case`): its name, kind, the files to write (built from
-valid inputs in ``DIR/shared/`` by one small edit each), the argument list and the
-substrings a clear message contains. Valid controls run first (:func:`controls`): the
-base scene, body and meshes each run cleanly, so a case's outcome is due to its one
-fault. Results: a table and counts on stdout, ``DIR/audit.json`` and ``DIR/audit.md``.
-Exit status 0 when every case is ``clear`` and every control passed, 1 otherwise.
 """
 
 from __future__ import annotations
 
-import argparse
-import json
 import os
-import pickle
-import shlex
-import shutil
-import signal
-import subprocess
-import sys
-import time
 from collections import Counter
-from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
-import h5py
 import numpy as np
 
-from validation.harness import cell, write_atomic
+from qa.fixtures import edited, fixture_text
+from qa.planted_files import (PICKLED_HEADER, copy, fifo, folder, h5_edited, lines_edited, planted_object_array,
+                              planted_pickle, raw, scene_file, text, truncated)
 
 KINDS = ("scene", "body", "mesh", "run", "result")
-OUTCOMES = ("clear", "traceback", "unclear", "silent", "hang")
-TIMEOUT = 60.0                  # [s] per case
-MEMORY_LIMIT = 4 << 30          # [bytes] address space per case
-MAX_MESSAGE = 300               # [characters] of a clear message
-ERROR_PREFIX = "ffrmbs: error:"
-PICKLED_HEADER = b"ffrmbs-checkpoint-2\n" + b"0" * 64 + b"\n"   # the older pickled format's, a forged signature
 FAST_RUN = ("--t-end", "0.001", "--no-check", "--no-export")   # the default scene, 100 steps
 OUT = "{case}/out"
 
-
-# --- the case records ------------------------------------------------------------------------
 
 @dataclass
 class Case:
@@ -92,233 +57,27 @@ class Case:
         return {"case": str(root / "cases" / self.name), "shared": str(root / "shared")}
 
 
-@dataclass
-class Outcome:
-    """The result of one case: its classification, exit status, wall seconds and the
-    message (stderr's last non-empty line)."""
-
-    case: str
-    kind: str
-    outcome: str
-    returncode: int | None
-    seconds: float
-    message: str
-    argv: list = field(default_factory=list)
-    executed: bool = False
-
-
-def classify(returncode, stderr: str, expect, timed_out=False, executed=False) -> tuple[str, str]:
-    """(outcome, message) of one case (module docstring): ``returncode`` of the process (None
-    when it timed out), its ``stderr`` text, ``expect`` the substrings a clear message
-    names, ``executed`` whether planted code ran."""
-    lines = [line.strip() for line in stderr.splitlines() if line.strip()]
-    message = lines[-1] if lines else ""
-    if executed:
-        return "silent", "EXECUTED: planted code ran; " + message
-    if timed_out:
-        return "hang", message
-    if returncode == 0:
-        return "silent", message
-    if "Traceback" in stderr:
-        return "traceback", message
-    prefix = message.split(":", 1)[0] + ":" if ":" in message else ""
-    argparse_error = prefix.startswith("ffrmbs ") and message[len(prefix):].startswith(" error:")
-    if returncode < 0:
-        return "unclear", f"killed by {signal.Signals(-returncode).name}; " + message
-    clear = ((message.startswith(ERROR_PREFIX) or argparse_error) and len(message) <= MAX_MESSAGE
-             and any(_words(e.lstrip("-")) in _words(message) for e in expect))
-    return ("clear" if clear else "unclear"), message
-
-
-def _words(s: str) -> str:
-    """``s`` lower-cased with '-' and '_' as spaces, so that "mesh-size" (of "--mesh-size"),
-    "mesh_size" and "Mesh size" match."""
-    return s.lower().replace("-", " ").replace("_", " ")
-
-
-# --- builders of case files ------------------------------------------------------------------
-
-def text(content: str):
-    return lambda path, shared: path.write_text(content)
-
-
-def scene_file(content: str):
-    """A scene file; ``@CASE@`` in ``content`` stands for the case directory."""
-    return lambda path, shared: path.write_text(content.replace("@CASE@", str(path.parent)))
-
-
-def raw(content: bytes):
-    return lambda path, shared: path.write_bytes(content)
-
-
-def fifo():
-    return lambda path, shared: os.mkfifo(path)
-
-
-def folder():
-    return lambda path, shared: path.mkdir()
-
-
-def copy(rel: str):
-    """A copy of ``shared/rel`` (a file or a directory)."""
-    def build(path, shared):
-        src = shared / rel
-        if src.is_dir():
-            shutil.copytree(src, path)
-        else:
-            shutil.copyfile(src, path)
-    return build
-
-
-def edited(rel: str, edit):
-    """``shared/rel`` (a text file) with its lines passed through ``edit(lines) -> lines``."""
-    def build(path, shared):
-        path.write_text("\n".join(edit((shared / rel).read_text().splitlines())) + "\n")
-    return build
-
-
-def h5_edited(rel: str, edit):
-    """A copy of the HDF5 file ``shared/rel`` changed in place by ``edit(h5py.File)``."""
-    def build(path, shared):
-        shutil.copyfile(shared / rel, path)
-        with h5py.File(path, "r+") as f:
-            edit(f)
-    return build
-
-
-def truncated(rel: str, n_bytes: int):
-    return lambda path, shared: path.write_bytes((shared / rel).read_bytes()[:n_bytes])
-
-
-class _Planted:
-    """An object whose unpickling runs ``touch marker`` (what an attacker plants)."""
-
-    def __init__(self, marker):
-        self.marker = marker
-
-    def __reduce__(self):
-        return os.system, (f"touch {shlex.quote(str(self.marker))}",)
-
-
-def planted_pickle(header: bytes, marker: str):
-    """A checkpoint made of ``header`` and a pickle that creates the file ``marker`` beside
-    the checkpoint when loaded."""
-    return lambda path, shared: path.write_bytes(header + pickle.dumps(_Planted(path.parent / marker)))
-
-
-def planted_object_array(marker: str):
-    """A checkpoint in the current format (an .npz) with a header and an object array
-    whose pickle creates the file ``marker`` beside the checkpoint when loaded."""
-    def build(path, shared):
-        with open(path, "wb") as f:
-            np.savez(f, header=np.frombuffer(b'{"format": "ffrmbs-checkpoint", "format_version": 3}', dtype=np.uint8),
-                     plant=np.array([_Planted(path.parent / marker)], dtype=object))
-    return build
-
-
 # --- the valid inputs every case starts from -------------------------------------------------
 
-BODY_SOURCE = '"../../shared/body.h5"'
-
-BASE_SCENE = """\
-[scene]
-name = "audit"
-t_end = 0.002
-dt = 1e-4
-integrator = "moreau"
-n_out = 3
-gravity = [0.0, -9.81, 0.0]
-
-[[body]]
-name = "beam"
-kind = "flexible"
-source = SOURCE
-modes = 3
-frame = "fixed"
-q_f = [0.0, 0.0, 0.0]
-
-[[body]]
-name = "block"
-kind = "rigid"
-mass = 1.0
-inertia = [0.01, 0.02, 0.03]
-position = [1.0, 0.0, 0.0]
-
-[[body]]
-name = "bob"
-kind = "point_mass"
-mass = 0.5
-position = [0.2, 0.0502, 0.025]
-velocity = [0.0, -0.1, 0.0]
-
-[[spring]]
-frame1 = { body = "ground", point = [1.0, 0.5, 0.0] }
-frame2 = { body = "block" }
-stiffness = 100.0
-damping = 0.1
-free_length = 0.4
-
-[[joint]]
-kind = "spherical"
-frame1 = { body = "ground", point = [1.0, 0.0, 0.0] }
-frame2 = { body = "block" }
-
-[[load]]
-kind = "force"
-body = "beam"
-node = 7
-force = [0.0, -1.0, 0.0]
-
-[[contact]]
-name = "hit"
-contour1 = { kind = "point", body = "bob" }
-contour2 = { kind = "2s", body = "beam", nodes = "y1" }
-law = "coulomb"
-e = 0.0
-mu = 0.3
-
-[outputs]
-y = { body = "bob", quantity = "position", component = "y" }
-tip = { body = "beam", at = [0.25, 0.05, 0.05] }
-"""
+BASE_SCENE = fixture_text("scenes/every_entry.toml")
 """A scene touching every kind of entry: the audit's small beam (``shared/body.h5``), a
 rigid block on a spring and a spherical joint, a point mass on the beam's top face with
 Coulomb contact, gravity, a force and two outputs. 20 Moreau steps."""
 
-CUBE_INP = """\
-*HEADING
-audit cube: 0.1 m, six tet4
-*NODE
-1, 0.0, 0.0, 0.0
-2, 0.1, 0.0, 0.0
-3, 0.1, 0.1, 0.0
-4, 0.0, 0.1, 0.0
-5, 0.0, 0.0, 0.1
-6, 0.1, 0.0, 0.1
-7, 0.1, 0.1, 0.1
-8, 0.0, 0.1, 0.1
-*ELEMENT, TYPE=C3D4, ELSET=SOLID
-1, 1, 2, 3, 7
-2, 1, 3, 4, 7
-3, 1, 4, 8, 7
-4, 1, 8, 5, 7
-5, 1, 5, 6, 7
-6, 1, 6, 2, 7
-*NSET, NSET=x0
-1, 4, 5, 8
-"""
+BODY_SOURCE = '"../../shared/body.h5"'
+"""The base scene's body file, as named from a case directory."""
 
-BAR_GEO = """\
-SetFactory("OpenCASCADE");
-Box(1) = {0, 0, 0, 0.2, 0.05, 0.05};
-Physical Volume("body") = {1};
-Physical Surface("x0") = {1};
-"""
+CUBE_INP = fixture_text("meshes/cube_six_tet4.inp")
+"""A 0.1 m cube of six tet4, its face x = 0 the node set x0."""
+
+BAR_GEO = fixture_text("meshes/bar.geo")
+"""A 200 x 50 x 50 mm bar (gmsh), its face x = 0 the surface group x0."""
 
 TEXT_BODY_CONTACT = ('contour2 = { kind = "2s", body = "beam", nodes = "y1" }',
                      'contour2 = { kind = "plane", point = [0.0, 0.05, 0.0], normal = [0.0, 1.0, 0.0] }')
 """The base scene's edit for a body read from text files, which carry no node groups: the
 point mass hits a ground plane instead of the beam's top face."""
+
 
 def _material(density="1000", young="1e7", poisson="0.3"):
     """The material options of ``ffrmbs preprocess`` [kg/m³, Pa, -]."""
@@ -340,24 +99,15 @@ def build_shared(shared: Path) -> None:
                       n_modes=6, clamp="x0")
     write_body(shared / "body", body)
     os.replace(shared / "body" / HDF5_FILE, shared / "body.h5")
-    (shared / "scene.toml").write_text(BASE_SCENE.replace("SOURCE", BODY_SOURCE))
+    (shared / "scene.toml").write_text(BASE_SCENE)
     (shared / "cube.inp").write_text(CUBE_INP)
     (shared / "bar.geo").write_text(BAR_GEO)
     (shared / "notes.txt").write_text("not a result file\n")
 
 
-def edited_text(content: str, edits) -> str:
-    """``content`` with each (old, new) edit applied; ``old`` must occur exactly once."""
-    for old, new in edits:
-        if content.count(old) != 1:
-            raise ValueError(f"edit {old!r} does not match exactly once")
-        content = content.replace(old, new)
-    return content
-
-
 def scene_text(*edits, source=BODY_SOURCE) -> str:
     """:data:`BASE_SCENE` with its body file ``source`` and each (old, new) edit applied."""
-    return edited_text(BASE_SCENE.replace("SOURCE", source), edits)
+    return edited(BASE_SCENE, (f"source = {BODY_SOURCE}", f"source = {source}"), *edits)
 
 
 def scene_case(name, expect, *edits, source=BODY_SOURCE, extra=(), kind="scene") -> Case:
@@ -382,7 +132,7 @@ SCENE_EDITS = [
     ("missing_t_end", ("t_end",), "t_end = 0.002\n", ""),
     ("missing_dt", ("dt",), "dt = 1e-4\n", ""),
     ("missing_mass", ("mass",), "mass = 0.5\n", ""),
-    ("missing_source", ("source",), "source = SRC\n", ""),
+    ("missing_source", ("source",), f"source = {BODY_SOURCE}\n", ""),
     ("missing_law", ("law",), 'law = "coulomb"\n', ""),
     ("type_dt_string", ("dt",), "dt = 1e-4", 'dt = "1e-4"'),
     ("type_modes", ("modes",), "modes = 3", 'modes = "three"'),
@@ -469,7 +219,7 @@ SCENE_FILES = [
 
 
 def scene_cases() -> list[Case]:
-    cases = [scene_case(name, expect, (old.replace("SRC", BODY_SOURCE), new)) for name, expect, old, new in SCENE_EDITS]
+    cases = [scene_case(name, expect, (old, new)) for name, expect, old, new in SCENE_EDITS]
     cases += [scene_case(name, expect, source=src, extra=files) for name, src, files, expect in SCENE_SOURCES]
     cases += [Case(name, "scene", ("run", "{case}/scene.toml", "--out", OUT, "--no-check", "--no-export"), expect,
                    files) for name, files, expect in SCENE_FILES]
@@ -578,7 +328,7 @@ H5_FAULTS = [
 def body_cases() -> list[Case]:
     """Each text-file fault in a copy of the directory of the four text files, each body.h5
     fault as a lone file; both read by ``ffrmbs info`` and by the base scene."""
-    faulty = [(name, file, _replacing(edited(f"body/{file}", edit))) for name, file, edit in TEXT_FAULTS]
+    faulty = [(name, file, _replacing(lines_edited(f"body/{file}", edit))) for name, file, edit in TEXT_FAULTS]
     faulty += [(name, file, _replacing(build)) for name, file, build in TEXT_SPECIAL]
     bodies = [(name, (("body", copy("body")), (f"body/{file}", build)), "body", file) for name, file, build in faulty]
     bodies += [(name, (("body.h5", build),), "body.h5", "body.h5") for name, build in H5_FAULTS]
@@ -608,7 +358,7 @@ def _preprocess(source, *options):
 
 def _cube(*edits):
     """cube.inp with (old, new) edits."""
-    return text(edited_text(CUBE_INP, edits))
+    return text(edited(CUBE_INP, *edits))
 
 
 BOX = "box:0.2,0.05,0.05"
@@ -775,116 +525,3 @@ def controls() -> list[Case]:
         Case("control_geo", "mesh", _preprocess("{shared}/bar.geo", "--order", "1", "--mesh-size", "0.05"), ()),
         Case("control_box", "mesh", _preprocess(BOX, "--order", "1"), ()),
     ]
-
-
-# --- running ---------------------------------------------------------------------------------
-
-LAUNCH = ("import resource, runpy; resource.setrlimit(resource.RLIMIT_AS, ({0}, {0})); "
-          "runpy.run_module('ffrmbs_app.cli', run_name='__main__', alter_sys=True)").format(MEMORY_LIMIT)
-"""``python3 -c LAUNCH ARGS`` is ``python3 -m ffrmbs_app.cli ARGS`` with the address space bounded
-(set in the child itself: ``preexec_fn`` is unsafe beside the runner's threads)."""
-
-
-def run_case(case: Case, root: Path, timeout=TIMEOUT) -> Outcome:
-    """Build ``case``'s files under ``root/cases/<name>/``, run it and classify it."""
-    where = case.paths(root)
-    case_dir = Path(where["case"])
-    shared = Path(where["shared"])
-    case_dir.mkdir(parents=True)
-    for rel, build in case.files:
-        build(case_dir / rel, shared)
-    argv = [a.format(**where) for a in case.argv]
-    env = dict(os.environ, FFRMBS_PROGRESS="0")
-    t0 = time.perf_counter()
-    proc = subprocess.Popen([sys.executable, "-c", LAUNCH, *argv], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            stdin=subprocess.DEVNULL, env=env, start_new_session=True, cwd=case_dir)
-    try:
-        _, err = proc.communicate(timeout=timeout)
-        timed_out = False
-    except subprocess.TimeoutExpired:
-        os.killpg(proc.pid, signal.SIGKILL)
-        _, err = proc.communicate()
-        timed_out = True
-    seconds = time.perf_counter() - t0
-    stderr = err.decode("utf-8", errors="replace")
-    executed = case.marker is not None and (case_dir / case.marker).exists()
-    outcome, message = classify(None if timed_out else proc.returncode, stderr, case.expect, timed_out, executed)
-    return Outcome(case.name, case.kind, outcome, None if timed_out else proc.returncode, seconds, message, argv,
-                   executed)
-
-
-def run_audit(root, only=None, jobs=2, timeout=TIMEOUT, log=print) -> dict:
-    """Run the controls, then every case (of kind ``only`` if given) on ``jobs`` processes;
-    write ``root/audit.json`` and ``root/audit.md``; return the document."""
-    root = Path(root).resolve()
-    for sub in ("cases", "shared"):
-        shutil.rmtree(root / sub, ignore_errors=True)
-    (root / "shared").mkdir(parents=True)
-    build_shared(root / "shared")
-    chosen = [c for c in all_cases() if only is None or c.kind == only]
-    first, *rest = controls()
-    checks = [run_case(first, root, timeout)]          # the seed result file, before the cases copying it
-    if checks[0].returncode != 0:
-        raise SystemExit(f"fault audit: the default scene does not run cleanly ({checks[0].message}); "
-                         f"nothing audited")
-    with ThreadPoolExecutor(max(1, jobs)) as pool:
-        checks += list(pool.map(lambda c: run_case(c, root, timeout), rest))
-        for check in checks:
-            check.outcome = "ok" if check.returncode == 0 else "failed"
-            log(f"control {check.case}: {check.outcome} ({check.seconds:.1f} s) {check.message[:100]}")
-        results = []
-        for result in pool.map(lambda c: run_case(c, root, timeout), chosen):
-            results.append(result)
-            log(f"{result.case:44s} {result.kind:6s} {result.outcome:9s} {result.message[:100]}")
-    doc = {"counts": dict(Counter(r.outcome for r in results)), "tried": len(results),
-           "by_kind": {kind: dict(Counter(r.outcome for r in results if r.kind == kind))
-                       for kind in KINDS if any(r.kind == kind for r in results)},
-           "executed": [r.case for r in results if r.executed],
-           "controls": [vars(c) for c in checks], "cases": [vars(r) for r in results],
-           "limits": {"timeout_s": timeout, "memory_bytes": MEMORY_LIMIT}}
-    doc["counts"] = {k: doc["counts"].get(k, 0) for k in OUTCOMES}
-    write_atomic(root / "audit.json", lambda f: f.write(json.dumps(doc, indent=1).encode()))
-    write_atomic(root / "audit.md", lambda f: f.write(markdown(doc).encode()))
-    return doc
-
-
-def summary_line(doc) -> str:
-    c = doc["counts"]
-    return (f"bad inputs tried {doc['tried']}: clear {c['clear']}, traceback {c['traceback']}, "
-            f"unclear {c['unclear']}, silent {c['silent']}, hang {c['hang']}"
-            + (f"; EXECUTED planted code: {', '.join(doc['executed'])}" if doc["executed"] else ""))
-
-
-def markdown(doc) -> str:
-    lines = ["# Fault audit", "", summary_line(doc), "",
-             f"Limits per case: {doc['limits']['timeout_s']:g} s, {doc['limits']['memory_bytes'] / 2**30:g} GiB "
-             "address space.", "", "| kind | " + " | ".join(OUTCOMES) + " |", "|---" * (len(OUTCOMES) + 1) + "|"]
-    lines += [f"| {kind} | " + " | ".join(str(counts.get(o, 0)) for o in OUTCOMES) + " |"
-              for kind, counts in doc["by_kind"].items()]
-    failed = [c for c in doc["controls"] if c["outcome"] != "ok"]
-    lines += ["", f"Controls (valid inputs): {len(doc['controls']) - len(failed)} of {len(doc['controls'])} ran cleanly"
-              + (": failed " + ", ".join(c["case"] for c in failed) if failed else "."), "",
-              "| case | kind | outcome | exit | s | message |", "|---|---|---|---|---|---|"]
-    lines += [f"| {cell(r['case'])} | {r['kind']} | {r['outcome']} | {cell(r['returncode'])} | {r['seconds']:.1f} | "
-              f"{cell(r['message'][:100])} |" for r in doc["cases"]]
-    return "\n".join(lines) + "\n"
-
-
-def main(argv=None) -> int:
-    p = argparse.ArgumentParser(prog="python3 -m validation.fault_audit", description=__doc__.split("\n")[0])
-    p.add_argument("--out", required=True, help="directory for the cases, audit.json and audit.md")
-    p.add_argument("--only", choices=KINDS, help="run only the cases of this kind")
-    p.add_argument("--jobs", type=int, default=2, help="cases run at once (default 2)")
-    p.add_argument("--timeout", type=float, default=TIMEOUT, help=f"seconds per case (default {TIMEOUT:g})")
-    args = p.parse_args(argv)
-    doc = run_audit(args.out, args.only, args.jobs, args.timeout)
-    print(summary_line(doc))
-    print(f"wrote {Path(args.out) / 'audit.json'} and {Path(args.out) / 'audit.md'}")
-    failed = [c for c in doc["controls"] if c["outcome"] != "ok"]
-    if failed:
-        print(f"controls failed: {', '.join(c['case'] for c in failed)}: the audit's outcomes are not meaningful")
-    return 0 if not failed and doc["counts"]["clear"] == doc["tried"] else 1
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -1,7 +1,7 @@
 """Kill -9 audit of ``ffrmbs run``: a run killed at any moment leaves a readable result
 file, and resumes bit for bit whenever a checkpoint exists.
 
-    python3 -m validation.kill_audit --kills 20 --out DIR [--t-end 0.6] [--seed 18]
+    python3 -m qa.kill_audit --kills 20 --out DIR [--t-end 0.6] [--seed 18]
 
 First one uninterrupted run of the default scene (``ffrmbs run --no-check --no-export
 --checkpoint-every 0.5 --t-end T`` in ``DIR/reference``) gives the oracle and the
@@ -134,7 +134,7 @@ def table(rows) -> str:
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(prog="python3 -m validation.kill_audit", description=__doc__.split("\n")[0])
+    p = argparse.ArgumentParser(prog="python3 -m qa.kill_audit", description=__doc__.split("\n")[0])
     p.add_argument("--kills", type=int, default=20, help="number of kills (default 20)")
     p.add_argument("--out", required=True, help="output directory")
     p.add_argument("--t-end", type=float, default=0.6, help="simulated time of the default scene [s] (default 0.6)")
