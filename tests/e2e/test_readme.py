@@ -35,6 +35,8 @@ NOT_RUN = {
     "python3 -m pip install": "installs into the environment; the extras it names are checked against setup.cfg",
     "python3 -m pytest": "the whole test suite, which holds this test",
     "python3 -m sphinx": "the docs build, which .ci/run runs (warnings are errors, the gallery included)",
+    "python3 -m qa.fault_audit": "minutes of bad inputs, each in its own process; tests/qa/test_fault_audit.py runs "
+                                 "its classifier, its case table and real cases end to end",
     "ffrmbs run examples/scenes/bouncing_ball.toml --set scene.t_end=1 --checkpoint-every 1 --no-check "
     "--out out/long --resume": "continues a killed run: needs a kill after the first checkpoint; kill -9 and "
                                "resume are tested in tests/e2e/test_resume.py",
