@@ -68,10 +68,12 @@ class Outcome:
     executed: bool = False
 
 
-def classify(returncode, stderr: str, expect, timed_out=False, executed=False) -> tuple[str, str]:
+def classify(returncode, stderr: str, expect, timed_out=False, executed=False, case_dir="") -> tuple[str, str]:
     """(outcome, message) of one case (module docstring): ``returncode`` of the process (None
     when it timed out), its ``stderr`` text, ``expect`` the substrings a clear message
-    names, ``executed`` whether planted code ran."""
+    names, ``executed`` whether planted code ran. The message's length is counted with the
+    case's directory ``case_dir`` (part of every path it names) left out, so that the
+    outcome does not depend on where the audit writes."""
     lines = [line.strip() for line in stderr.splitlines() if line.strip()]
     message = lines[-1] if lines else ""
     if executed:
@@ -86,7 +88,8 @@ def classify(returncode, stderr: str, expect, timed_out=False, executed=False) -
     argparse_error = prefix.startswith("ffrmbs ") and message[len(prefix):].startswith(" error:")
     if returncode < 0:
         return "unclear", f"killed by {signal.Signals(-returncode).name}; " + message
-    clear = ((message.startswith(ERROR_PREFIX) or argparse_error) and len(message) <= MAX_MESSAGE
+    length = len(message.replace(str(case_dir).rstrip("/") + "/", "")) if case_dir else len(message)
+    clear = ((message.startswith(ERROR_PREFIX) or argparse_error) and length <= MAX_MESSAGE
              and any(_words(e.lstrip("-")) in _words(message) for e in expect))
     return ("clear" if clear else "unclear"), message
 
@@ -128,7 +131,8 @@ def run_case(case: Case, root: Path, timeout=TIMEOUT) -> Outcome:
     seconds = time.perf_counter() - t0
     stderr = err.decode("utf-8", errors="replace")
     executed = case.marker is not None and (case_dir / case.marker).exists()
-    outcome, message = classify(None if timed_out else proc.returncode, stderr, case.expect, timed_out, executed)
+    outcome, message = classify(None if timed_out else proc.returncode, stderr, case.expect, timed_out, executed,
+                                case_dir)
     return Outcome(case.name, case.kind, outcome, None if timed_out else proc.returncode, seconds, message, argv,
                    executed)
 

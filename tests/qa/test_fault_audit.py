@@ -19,6 +19,16 @@ from qa import planted_files as pf
 LONG = "ffrmbs: error: x.toml: " + "y" * 300
 
 
+def test_a_message_is_as_clear_wherever_the_audit_writes():
+    """The length limit counts the message without the case directory's path (found at 302
+    characters under a long ``--out``)."""
+    deep = "/" + "d" * 120 + "/cases/unknown_body_key"
+    stderr = f"ffrmbs: error: {deep}/scene.toml, line 4: unknown key 'bogus' in [[bodies]]; " + "k, " * 60 + "\n"
+    assert len(stderr.strip()) > fa.MAX_MESSAGE
+    assert fa.classify(2, stderr, ("bogus",), case_dir=deep)[0] == "clear"
+    assert fa.classify(2, stderr, ("bogus",))[0] == "unclear"
+
+
 @pytest.mark.parametrize("returncode, stderr, expect, timed_out, executed, outcome", [
     (2, "ffrmbs: error: /a/scene.toml, line 3: 'dt' must be > 0 [s]\n", ("dt",), False, False, "clear"),
     (2, "usage: ffrmbs run ...\nffrmbs run: error: argument --dt: expected one argument\n", ("--dt",), False, False,
