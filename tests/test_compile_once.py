@@ -37,7 +37,7 @@ OVERLOADS = textwrap.dedent("""
     from numba.core.registry import CPUDispatcher
     from ffrmbs_app.main_job import JobSettings, run_job
 
-    run_job(JobSettings(check=False, t_end=0.002), sys.argv[1], log=lambda *a: None, export=False)
+    run_job(JobSettings(check=False, t_end=0.002), sys.argv[1], log=lambda *a: None, export=False, precompile=False)
     kernels = {}
     for name, module in list(sys.modules.items()):
         if name.split(".")[0] in ("contact", "contours", "mbs", "ffrmbs", "preprocess", "ffrmbs_app"):
