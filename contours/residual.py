@@ -23,8 +23,9 @@ exact (to rounding) against the full FE static solution for loads the contour ca
 correction is taken on the undeformed contour (B, Ğ at q_f = 0), as G_res itself is.
 
 :func:`residual_compliance` builds it for a contour of a flexible body (one sparse
-factorization of the body's stiffness per body, shared through ``flexibility``; the
-projection Tᵀ G T optionally cached on disk, keyed by the body's matrices and T).
+factorization of the body's stiffness per body: a clamped body's projection Tᵀ G T comes
+from the factor's Schur complement on the loaded DOFs, eq. R4 of :mod:`preprocess.residual`;
+the projection optionally cached on disk, keyed by the body's matrices and T).
 """
 
 from __future__ import annotations
@@ -38,8 +39,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from ffrmbs.errors import ModelError
-from preprocess.residual import (StaticFlexibility, clamped_nodes_of, projected_flexibility,
-                                 residual_flexibility)
+from preprocess.residual import (StaticFlexibility, clamped_nodes_of, clamped_projected_flexibility,
+                                 projected_flexibility, residual_flexibility)
 
 from . import _offset_kernels as OK
 from . import _residual_kernels as RK
@@ -202,12 +203,24 @@ def static_flexibility(body) -> StaticFlexibility:
     return StaticFlexibility(data.stiffness, data.mass, data.u0, clamped_nodes_of(data))
 
 
+def projection(body, transfer, flexibility=None) -> np.ndarray:
+    """Tᵀ G T (m, m) [m/N] of a flexible body for load patterns ``transfer`` T (3N, m):
+    through ``flexibility`` (a :class:`~preprocess.residual.StaticFlexibility`) when given,
+    else a clamped body's from one factorization
+    (:func:`preprocess.residual.clamped_projected_flexibility`) and a free-free body's
+    through its inertia relief (:func:`static_flexibility`)."""
+    clamped = clamped_nodes_of(body.data)
+    if flexibility is None and clamped.size:
+        return clamped_projected_flexibility(body.data.stiffness, clamped, transfer)
+    return projected_flexibility(static_flexibility(body) if flexibility is None else flexibility, transfer)
+
+
 def residual_compliances(contours, flexibility=None, cache_dir=None) -> list:
     """The :class:`ResidualCompliance` of each of ``contours`` (all on one body) on the
     body's kept modes (``body.K_ff``; their control points Φ_P = F Φ are the contours'
     own, so Φᵀ T needs no T), sharing one G_P, so that cross-compliances between them
     are included. ``flexibility``: the body's
-    :class:`~preprocess.residual.StaticFlexibility` (made here when None and needed);
+    :class:`~preprocess.residual.StaticFlexibility`, or None (:func:`projection`);
     ``cache_dir``: a directory where Tᵀ G T (the costly part, independent of the modes
     kept) is read or written, keyed by the body's matrices and the contours' fitting
     matrices (:func:`_key`)."""
@@ -225,7 +238,7 @@ def residual_compliances(contours, flexibility=None, cache_dir=None) -> list:
                 TGT = None
     if TGT is None:
         T = sp.hstack([transfer_matrix(c) for c in contours], format="csr")
-        TGT = projected_flexibility(static_flexibility(body) if flexibility is None else flexibility, T)
+        TGT = projection(body, T, flexibility)
         if path is not None:
             _save(path, TGT)
     n_f = body.K_ff.shape[0]

@@ -9,9 +9,10 @@ output samples of the point mass's y position ``y`` [m] and velocity ``vy`` [m/s
 ``impact`` — the names of ``examples/scenes/point_mass_beam.toml``; a warm-up run of
 12.5 ms at Δt = 1e-4 s (past the first contact) compiles the numba kernels first.
 Written to ``out``: ``point_mass_beam.h5`` (the result file, :mod:`mbs.result_file`),
-``point_mass_beam.png`` and ``point_mass_beam-paraview/``. The contour carries the
-residual flexibility of the modes left out (:mod:`contours.residual`; with the impact
-law). The job's accuracy check runs the scene at Δt/2 (time step), with twice the
+``point_mass_beam.png`` and ``point_mass_beam-paraview/``. On a first run the kernels are
+compiled in a second process while the beam is preprocessed (:mod:`ffrmbs_app.precompile`).
+The contour carries the residual flexibility of the modes left out (:mod:`contours.residual`;
+with the impact law). The job's accuracy check runs the scene at Δt/2 (time step), with twice the
 modes (modal truncation) and on the 25 mm tet10 mesh (mesh: the difference to a mesh
 twice as coarse, which overstates the error of this one); the validation cases
 ``contact_point_mass_beam`` (modes against all of them) and ``contact_full_fe`` (against a
@@ -110,13 +111,27 @@ def default_scene(settings: JobSettings, data=None, beam=None):
 
 
 def run_job(settings: JobSettings, out, log=print, resume=False, checkpoint_every=60.0, export=True,
-            no_limits=False) -> dict:
+            no_limits=False, precompile=True) -> dict:
     """Run the default scene as a job (:func:`ffrmbs_app.job.run_scene`); return the summary.
-    The settings are checked first (:meth:`JobSettings.validate`)."""
+    The settings are checked first (:meth:`JobSettings.validate`). When the beam is yet to
+    be preprocessed (a first run) and ``precompile``, a second process compiles the
+    scene's kernels meanwhile (:mod:`ffrmbs_app.precompile`)."""
+    from ffrmbs_app import precompile as pre
     from ffrmbs_app.job import run_scene
     from ffrmbs_app.scenes import point_mass_beam as pmb
+    from ffrmbs_app.scenes.cache import cached_body_path
 
     settings.validate()
-    data = pmb.TET10.default_beam_data(log=log)
+    compiler = None
+    if precompile and not cached_body_path(pmb.TET10.recipe()).exists():
+        compiler = pre.start(settings, log)
+    try:
+        data = pmb.TET10.default_beam_data(log=log)
+    except BaseException:
+        if compiler is not None:
+            compiler.stop()
+        raise
+    if compiler is not None:
+        compiler.wait(log)
     return run_scene(lambda: default_scene(settings, data), out, check=settings.check, resume=resume,
                      checkpoint_every=checkpoint_every, export=export, log=log, no_limits=no_limits)

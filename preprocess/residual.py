@@ -30,11 +30,22 @@ whose columns are nodal load patterns (for a NURBS contour, a unit force on one
 control point spread over the contour's nodes by the fitting matrix), the reduced
 residual flexibility is Tᵀ G_res T (m, m): :func:`projected_flexibility` solves Tᵀ G T
 (independent of the modes kept), :func:`residual_flexibility` removes the kept modes.
+
+A clamped body's Tᵀ G T needs no solve at all (:func:`clamped_projected_flexibility`):
+with the free DOFs the loads act on (T's non-zero rows, c) ordered after the others (i),
+the LU factor K_ff = L U holds in its trailing blocks the Schur complement
+
+    L_cc U_cc = S = K_cc − K_ci K_ii⁻¹ K_ic,     (K_ff⁻¹)_cc = S⁻¹,
+    Tᵀ G T = T_cᵀ U_cc⁻¹ L_cc⁻¹ T_c                                       (R4)
+
+(block inverse; T_c the rows c of T), so the factorization alone gives it, and the
+|c| × |c| triangular inverses replace the m solves through the whole factor.
 """
 
 from __future__ import annotations
 
 import numpy as np
+import scipy.linalg as la
 import scipy.sparse as sp
 import scipy.sparse.linalg as sla
 from threadpoolctl import threadpool_limits
@@ -47,6 +58,21 @@ from .modes import clamped_dofs, rigid_body_modes
 
 #: smallest |pivot| of the LU factor, relative to the largest, of a regular stiffness matrix
 SINGULAR_PIVOT = 1e-12
+
+
+def factor(matrix, **options):
+    """SuperLU's LU factor of a stiffness ``matrix`` (sparse CSC; ``options`` of
+    ``scipy.sparse.linalg.splu``); ModelError when it is singular, or nearly (smallest
+    |pivot| below ``SINGULAR_PIVOT`` of the largest): the supports do not hold the body."""
+    try:
+        lu = sla.splu(matrix, **options)
+        pivots = np.abs(lu.U.diagonal())
+        if not pivots.min() > SINGULAR_PIVOT * pivots.max():
+            raise RuntimeError(f"pivot ratio {pivots.min() / pivots.max():.2g}")
+    except RuntimeError as exc:            # SuperLU: "Factor is exactly singular", or nearly
+        raise ModelError("the static flexibility cannot be computed: the stiffness matrix is singular "
+                         f"with the body's supports ({exc}); clamp enough nodes to hold the body") from None
+    return lu
 
 
 class StaticFlexibility:
@@ -70,22 +96,14 @@ class StaticFlexibility:
         n_dof = K.shape[0]
         self.n_dof = n_dof
         self.clamped = clamped_nodes is not None and len(clamped_nodes) > 0
-        try:
-            if self.clamped:
-                self.free = ~clamped_dofs(n_dof, clamped_nodes)
-                self._lu = sla.splu(K[self.free][:, self.free].tocsc())
-            else:
-                mass = masses if sp.issparse(masses) else np.asarray(masses, float)
-                self.rigid = rigid_body_modes(np.asarray(u0, float), mass)
-                MR = mass_times(mass, self.rigid)
-                bordered = sp.bmat([[K, sp.csc_matrix(MR)], [sp.csc_matrix(MR.T), None]], format="csc")
-                self._lu = sla.splu(bordered)
-            pivots = np.abs(self._lu.U.diagonal())
-            if not pivots.min() > SINGULAR_PIVOT * pivots.max():
-                raise RuntimeError(f"pivot ratio {pivots.min() / pivots.max():.2g}")
-        except RuntimeError as exc:            # SuperLU: "Factor is exactly singular", or nearly
-            raise ModelError("the static flexibility cannot be computed: the stiffness matrix is singular "
-                             f"with the body's supports ({exc}); clamp enough nodes to hold the body") from None
+        if self.clamped:
+            self.free = ~clamped_dofs(n_dof, clamped_nodes)
+            self._lu = factor(K[self.free][:, self.free].tocsc())
+        else:
+            mass = masses if sp.issparse(masses) else np.asarray(masses, float)
+            self.rigid = rigid_body_modes(np.asarray(u0, float), mass)
+            MR = mass_times(mass, self.rigid)
+            self._lu = factor(sp.bmat([[K, sp.csc_matrix(MR)], [sp.csc_matrix(MR.T), None]], format="csc"))
 
     def solve(self, forces) -> np.ndarray:
         """Displacements G f (3N, m) [m] of load columns ``forces`` (3N, m) [N]."""
@@ -118,6 +136,50 @@ def projected_flexibility(flexibility: StaticFlexibility, transfer) -> np.ndarra
             b = min(a + CHUNK, m)
             out[:, a:b] = T.T @ flexibility.solve(T[:, a:b].toarray())
     return 0.5 * (out + out.T)
+
+
+#: SuperLU on a symmetric positive definite matrix: pivots on the diagonal, in the order given
+SYMMETRIC = dict(diag_pivot_thresh=0.0, options=dict(SymmetricMode=True))
+
+
+def clamped_projected_flexibility(stiffness, clamped_nodes, transfer) -> np.ndarray:
+    """Tᵀ G T (m, m) [m/N] of a clamped body (G = K_ff⁻¹, eq. R2) for load patterns
+    ``transfer`` T (3N, m) from one factorization, through the Schur complement on the
+    loaded DOFs (eq. R4): the loaded DOFs c ordered last, the others in SuperLU's
+    minimum-degree order of K_ii (a factorization of K_ii finds it). Equal to
+    :func:`projected_flexibility` to rounding, without its m solves. Symmetrized.
+    ModelError for supports that do not hold the body."""
+    K = sp.csc_matrix(stiffness)
+    T = sp.csr_matrix(transfer)
+    free = ~clamped_dofs(K.shape[0], clamped_nodes)
+    loaded = np.zeros(K.shape[0], dtype=bool)
+    loaded[T.nonzero()[0]] = True
+    loaded &= free
+    inner, outer = np.flatnonzero(free & ~loaded), np.flatnonzero(loaded)
+    with threadpool_limits(limits=1, user_api="blas"):
+        if inner.size:
+            lu_inner = factor(K[inner][:, inner].tocsc(), permc_spec="MMD_AT_PLUS_A", **SYMMETRIC)
+            inner = inner[np.argsort(lu_inner.perm_c)]         # column j of K_ii is at perm_c[j]
+        order = np.concatenate([inner, outer])
+        lu = factor(K[order][:, order].tocsc(), permc_spec="NATURAL", **SYMMETRIC)
+        S_inv = _trailing_inverse(lu, outer.size)
+        T_c = T[outer]
+        out = T_c.T @ (S_inv @ T_c)
+    return 0.5 * (out + out.T)
+
+
+def _trailing_inverse(lu, c) -> np.ndarray:
+    """The trailing c × c block of A⁻¹ (A = L U, SuperLU's ``lu``): U_cc⁻¹ L_cc⁻¹ when SuperLU
+    kept the trailing rows and columns in place (eq. R4), else c solves through the factor."""
+    n = lu.shape[0]
+    kept = np.arange(n - c, n)
+    if np.array_equal(lu.perm_c[kept], kept) and np.array_equal(lu.perm_r[kept], kept):
+        L = lu.L[n - c:, n - c:].toarray()
+        U = lu.U[n - c:, n - c:].toarray()
+        return la.solve_triangular(U, la.solve_triangular(L, np.eye(c), lower=True, unit_diagonal=True))
+    unit = np.zeros((n, c))
+    unit[kept, np.arange(c)] = 1.0
+    return lu.solve(unit)[kept]
 
 
 def residual_flexibility(projected, phi_t, modal_stiffness) -> np.ndarray:

@@ -3,7 +3,8 @@
 Entries live in ``$FFRMBS_CACHE`` or ``~/.cache/ffrmbs``, one directory per scene and
 hash of its recipe (geometry, mesh, material, modes, version), so a changed recipe gets
 a new entry and an old one is never read by mistake. Writing goes through
-:func:`preprocess.write_body`, which leaves no half-written file.
+:func:`preprocess.write_body`, which leaves no half-written file; an entry is its
+``body.h5`` alone (the thesis's text files are for bodies a user writes).
 """
 
 from __future__ import annotations
@@ -35,5 +36,5 @@ def cached_body(recipe: dict, build, log=None):
     if not h5.exists():
         if log:
             log(f"preprocessing the {recipe['scene']} body (once; cached in {h5.parent})")
-        write_body(h5.parent, build())
+        write_body(h5.parent, build(), text_files=False)
     return read_body(h5)

@@ -2,7 +2,8 @@
 literal constant, since numba types a literal argument (``0``, ``True``, a module constant
 such as ``Q_AT``) as ``Literal[int](0)`` / ``Literal[bool](True)`` and compiles the callee
 once more for it, beside the ``int64`` / ``bool`` version the other callers use (issue 30,
-item 22: compile only what a scene needs)."""
+item 22: compile only what a scene needs). A first run compiles them in a second process
+while the beam is preprocessed (:mod:`ffrmbs_app.precompile`)."""
 
 import ast
 import importlib
@@ -38,7 +39,7 @@ OVERLOADS = textwrap.dedent("""
     from numba.core.registry import CPUDispatcher
     from ffrmbs_app.main_job import JobSettings, run_job
 
-    run_job(JobSettings(check=False, t_end=0.002), sys.argv[1], log=lambda *a: None, export=False)
+    run_job(JobSettings(check=False, t_end=0.002), sys.argv[1], log=lambda *a: None, export=False, precompile=False)
     kernels = {}
     for name, module in list(sys.modules.items()):
         if name.split(".")[0] in ("contact", "contours", "mbs", "ffrmbs", "preprocess", "ffrmbs_app"):
@@ -116,3 +117,45 @@ def test_a_cold_default_run_compiles_each_kernel_once(tmp_path):
     report = json.loads(done.stdout.strip().splitlines()[-1])
     assert report["used"] > 30               # the run compiled its kernels here, nested ones included
     assert report["several"] == {}
+
+
+# The default scene's first run (empty numba cache and body cache), 200 steps, as ``ffrmbs
+# run`` does it: the kernels compiled by a second process while the beam is preprocessed.
+PRECOMPILED = textwrap.dedent("""
+    import json, sys
+    from ffrmbs_app.main_job import JobSettings, run_job
+
+    lines = []
+    summary = run_job(JobSettings(check=False, t_end=0.002), sys.argv[1], log=lines.append, export=False)
+    print(json.dumps({"compiled": summary["kernels_compiled"], "log": lines}))
+""")
+
+
+@pytest.mark.slow      # about a minute of CPU: every kernel of the default scene compiled from an empty cache
+def test_a_first_run_compiles_the_kernels_in_a_second_process_beside_the_preprocessing(tmp_path):
+    """The job compiles no kernel itself: the second process, started before the beam's
+    preprocessing, compiled them all into numba's disk cache (before: 23 compiled in the
+    job's warm-up, after the preprocessing)."""
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba"), FFRMBS_CACHE=str(tmp_path / "bodies"),
+               PYTHONPATH=os.pathsep.join([str(ROOT)] + [p for p in [os.environ.get("PYTHONPATH")] if p]))
+    done = subprocess.run([sys.executable, "-c", PRECOMPILED, str(tmp_path / "out")], env=env, cwd=tmp_path,
+                          capture_output=True, text=True, check=True)
+    report = json.loads(done.stdout.strip().splitlines()[-1])
+    log = report["log"]
+    started = next(i for i, line in enumerate(log) if "compiling numba kernels in a second process" in line)
+    preprocessing = next(i for i, line in enumerate(log) if line.startswith("preprocessing the point_mass_beam"))
+    finished = next(i for i, line in enumerate(log) if line.startswith("kernels compiled in a second process"))
+    assert started < preprocessing < finished
+    assert report["compiled"] == 0
+    assert any(line.startswith("kernels: loaded from numba's disk cache") for line in log)
+
+
+def test_a_failed_second_process_is_named_and_the_job_goes_on():
+    from ffrmbs_app.precompile import Precompiler
+
+    lines = []
+    Precompiler(subprocess.Popen([sys.executable, "-c", "raise SystemExit(3)"])).wait(lines.append)
+    assert lines == ["compiling the kernels in a second process failed (exit 3); the run compiles them itself"]
+    child = Precompiler(subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"]))
+    child.stop()
+    assert child.process.returncode is not None

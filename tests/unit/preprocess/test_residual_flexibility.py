@@ -16,6 +16,7 @@ import os
 
 import numpy as np
 import pytest
+import scipy.sparse as sp
 import scipy.sparse.linalg as sla
 
 from contours import Contour1sNeutralFFR, Contour2sNeutralFFR, FlexibleBand
@@ -26,6 +27,7 @@ from mbs import FlexibleBodyFFR, PrescribedFrameMotion
 from preprocess import Material, build_body
 from preprocess.geometry import box
 from preprocess.modes import all_modes, clamped_dofs
+from preprocess import residual
 from preprocess.residual import StaticFlexibility, clamped_nodes_of
 
 RTOL = 1e-8
@@ -239,3 +241,73 @@ def test_projection_solves_on_one_blas_thread(clamped_data, monkeypatch):
     residual.projected_flexibility(StaticFlexibility(data.stiffness, data.masses, data.u0,
                                                      clamped_nodes_of(data)), T)
     assert threads and set(threads) == {1}
+
+
+def _dense_projection(data, T):
+    """Tᵀ K_ff⁻¹ T by a dense solve of the clamped stiffness (the oracle)."""
+    K = data.stiffness.toarray()
+    free = ~clamped_dofs(K.shape[0], clamped_nodes_of(data))
+    return T[free].T @ np.linalg.solve(K[np.ix_(free, free)], T[free])
+
+
+@pytest.mark.parametrize("loads", ["face", "every DOF"])
+def test_clamped_projection_from_the_schur_complement_equals_a_dense_solve(clamped_data, loads):
+    """Eq. R4: Tᵀ G T from the trailing blocks of one factorization (the loaded DOFs last)
+    equals Tᵀ K_ff⁻¹ T by a dense solve, for load patterns on the face y = 20 mm (random
+    weights, more patterns than loaded DOFs) and for every DOF loaded (no interior)."""
+    from preprocess.residual import clamped_projected_flexibility
+
+    data = clamped_data
+    n = 3 * data.n_nodes
+    rng = np.random.default_rng(3)
+    if loads == "face":
+        face = np.flatnonzero(np.isclose(data.u0[:, 1], 0.02))
+        T = np.zeros((n, 2 * 3 * face.size))
+        T[(3 * face[:, None] + np.arange(3)).ravel()] = rng.standard_normal((3 * face.size, T.shape[1]))
+    else:
+        T = rng.standard_normal((n, 40))
+    expected = _dense_projection(data, T)
+    got = clamped_projected_flexibility(data.stiffness, clamped_nodes_of(data), T)
+    assert np.allclose(got, expected, rtol=1e-9, atol=1e-12 * np.abs(expected).max())
+
+
+def test_trailing_inverse_of_a_reordered_factor():
+    """The trailing block of A⁻¹ when SuperLU permutes (COLAMD, partial pivoting): the
+    solves through the factor, equal to the dense inverse's block."""
+    from preprocess.residual import _trailing_inverse
+
+    rng = np.random.default_rng(4)
+    A = rng.standard_normal((30, 30)) + 30 * np.eye(30)
+    A[rng.random((30, 30)) < 0.7] = 0.0
+    A += 30 * np.eye(30)
+    lu = sla.splu(sp.csc_matrix(A))
+    assert not np.array_equal(lu.perm_c, np.arange(30))
+    assert np.allclose(_trailing_inverse(lu, 7), np.linalg.inv(A)[23:, 23:], rtol=1e-12, atol=1e-15)
+
+
+def test_clamped_contour_projection_takes_no_solves(clamped_data, monkeypatch):
+    """A clamped body's residual compliance comes from the factorization alone (eq. R4):
+    no solve through the whole factor (before: one per load column, 1107 on the default
+    beam), and the same compliance as the solves give."""
+    data = clamped_data
+    beam = FlexibleBodyFFR(data, modes=8, frame=PrescribedFrameMotion.fixed())
+    contour = Contour2sNeutralFFR(beam, "y1")
+    T = transfer_matrix(contour)
+    by_solves = residual.projected_flexibility(StaticFlexibility(data.stiffness, data.masses, data.u0,
+                                                                 clamped_nodes_of(data)), T)
+
+    def refused(self, forces):
+        raise AssertionError("solved through the whole factor")
+
+    monkeypatch.setattr(StaticFlexibility, "solve", refused)
+    got = residual_compliance(contour).G_P
+    expected = residual.residual_flexibility(by_solves, contour.mode_shapes.ctrl.reshape(-1, 8).T, beam.K_ff)
+    assert np.allclose(got, expected, rtol=1e-9, atol=1e-12 * np.abs(expected).max())
+
+
+def test_singular_supports_are_one_clear_error_of_the_schur_route(clamped_data):
+    from preprocess.residual import clamped_projected_flexibility
+
+    T = np.eye(3 * clamped_data.n_nodes)[:, :12]
+    with pytest.raises(ModelError, match="singular"):
+        clamped_projected_flexibility(clamped_data.stiffness, np.array([0]), T)

@@ -1,0 +1,76 @@
+"""Compile the default scene's numba kernels in a second process while the job preprocesses.
+
+A cold first ``ffrmbs run`` spends most of its time compiling numba kernels (about 40 CPU
+s on a 2-core machine) and preprocessing the beam (its modes, some 5 s). Both are
+single-threaded, so on two cores they can run side by side: :func:`start` launches
+``python -m ffrmbs_app.precompile SETTINGS`` that builds the default scene on the 25 mm
+mesh (:data:`~ffrmbs_app.scenes.point_mass_beam.TET10_COARSE`, the job's mesh check,
+cached for it) and runs its warm-up, which compiles every kernel the scene calls with the
+argument types of the 12.5 mm mesh's scene (the same arrays, other sizes) into numba's
+disk cache (``cache=True``; ``$NUMBA_CACHE_DIR``, inherited). The job preprocesses the
+12.5 mm beam meanwhile and :meth:`Precompiler.wait`\\ s for the child before it calls a
+kernel, then loads them from the cache; nothing is compiled twice and nothing depends on
+the child: if it fails, the job compiles what it needs itself.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import time
+from dataclasses import asdict
+
+
+class Precompiler:
+    """A running child process compiling the default scene's kernels (module docstring)."""
+
+    def __init__(self, process):
+        self.process = process
+        self.started = time.perf_counter()
+
+    def wait(self, log) -> float:
+        """Wait for the child; say how long it took (wall seconds since its start, which
+        ran beside the preprocessing) and return it; a failed child is named in one line."""
+        code = self.process.wait()
+        seconds = time.perf_counter() - self.started
+        if code == 0:
+            log(f"kernels compiled in a second process beside the preprocessing: {seconds:.2f} s "
+                "(cached on disk for the next run; not counted in the cost)")
+        else:
+            log(f"compiling the kernels in a second process failed (exit {code}); the run compiles them itself")
+        return seconds
+
+    def stop(self) -> None:
+        """End the child (the job stopped before it needed the kernels)."""
+        self.process.kill()
+        self.process.wait()
+
+
+def start(settings, log) -> Precompiler:
+    """Launch the child for the default scene's ``settings`` (a
+    :class:`~ffrmbs_app.main_job.JobSettings`); its output is discarded."""
+    log("compiling numba kernels in a second process while preprocessing (first run; cached on disk for the "
+        "next) ...")
+    process = subprocess.Popen([sys.executable, "-m", "ffrmbs_app.precompile", json.dumps(asdict(settings))],
+                               stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    return Precompiler(process)
+
+
+def compile_kernels(settings) -> None:
+    """Run the warm-up of the default scene with ``settings`` on the 25 mm mesh: every
+    kernel it calls is compiled into numba's disk cache."""
+    from ffrmbs_app.job import _simulate
+    from ffrmbs_app.main_job import default_scene
+    from ffrmbs_app.scenes import point_mass_beam as pmb
+
+    coarse = pmb.TET10_COARSE
+    scene = default_scene(settings, coarse.default_beam_data(), coarse)
+    t_w, dt_w = scene.warmup
+    _simulate(scene, dt=dt_w, t_end=t_w, n_out=2)
+
+
+if __name__ == "__main__":
+    from ffrmbs_app.main_job import JobSettings
+
+    compile_kernels(JobSettings(**json.loads(sys.argv[1])))
