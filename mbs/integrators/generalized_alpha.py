@@ -33,7 +33,6 @@ import scipy.linalg
 
 from ffrmbs.errors import ModelError
 
-from ..body_stage import BodyStage
 from ._kernels import combine_into, ga_base, ga_newton_update, ga_predict
 from .driver import Integrator, StepFailure
 
@@ -100,7 +99,7 @@ class GeneralizedAlpha(Integrator):
         a1 = w.a1
         a1[:] = self.a
         lam = self.lam.copy() if sys.n_c else self.lam
-        nu, nc = sys.nu, sys.n_c
+        nc = sys.n_c
         hg, hhb = h * gm, h * h * bt
         ga_base(self.u, self.abar, h * (1 - gm), h, h * h * (0.5 - bt), w.base_u, w.base_dq)
         for it in range(1, self.max_iter + 1):

@@ -310,7 +310,7 @@ def run(model: FullFEModel, position, velocity, k=PENALTY_K, t_end=T_END, n_out=
     out["t"] = np.linspace(0.0, t_end, n_out)
 
     def sample(i):
-        vn, vpn = v + 0.5 * dt * a, vp + 0.5 * dt * ap
+        vpn = vp + 0.5 * dt * ap
         out["y"][i], out["vy"][i], out["node19"][i] = xp[1], vpn[1], u[node_dof]
         out["kinetic"][i] = 0.5 * (m3 @ (v * (v + dt * a)) + mass * vp @ (vp + dt * ap))
         out["elastic"][i] = 0.5 * u @ f

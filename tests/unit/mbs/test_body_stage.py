@@ -332,7 +332,7 @@ def mixed_system(data, leave_out=False):
     fixed = system.add(FlexibleBodyFFR(data, N_F, frame=PrescribedFrameMotion.fixed(), modal_damping=0.01,
                                        name="fixed"))
     rigid = system.add(RigidBody(3.0, np.diag([1.0, 2.0, 3.0]), com=(0.1, 0.2, -0.3), name="rigid"))
-    rigid_c = system.add(RigidBody(2.0, np.diag([1.0, 1.5, 2.0]), rotation="cardan", name="rigid cardan"))
+    system.add(RigidBody(2.0, np.diag([1.0, 1.5, 2.0]), rotation="cardan", name="rigid cardan"))
     point = system.add(PointMass(0.7, position=(1.0, 2.0, 3.0), name="point"))
     system.add(SpringDamper(free.node(3), point.point, 1e3, 5.0, free_length=0.5))
     system.add(SpringDamper(rigid.frame_at((0.3, 0.0, 0.0)), system.ground, 50.0, free_length=0.1))
