@@ -6,14 +6,14 @@ writes over a hundred bad inputs into ``DIR/cases/<case>/`` and runs each throug
 an address-space limit of :data:`MEMORY_LIMIT` bytes, so that a run that would eat the
 machine dies instead). Each case is classified (:func:`classify`) as
 
-``clear``      exit status non-zero, no ``Traceback`` on stderr, and stderr's last non-empty
-               line is one message of at most :data:`MAX_MESSAGE` characters starting with
-               ``ffrmbs: error:`` (or argparse's ``ffrmbs <command>: error:``) that names
-               the file or key at fault (one of the case's expected substrings);
-``traceback``  a Python traceback on stderr;
-``unclear``    non-zero exit otherwise (a multi-line, long or unspecific message, a signal);
-``silent``     exit status 0: the bad input was accepted;
-``hang``       no exit within the time limit (the process group is killed).
+- ``clear``      exit status non-zero, no ``Traceback`` on stderr, and stderr's last non-empty
+  line is one message of at most :data:`MAX_MESSAGE` characters starting with
+  ``ffrmbs: error:`` (or argparse's ``ffrmbs <command>: error:``) that names
+  the file or key at fault (one of the case's expected substrings);
+- ``traceback``  a Python traceback on stderr;
+- ``unclear``    non-zero exit otherwise (a multi-line, long or unspecific message, a signal);
+- ``silent``     exit status 0: the bad input was accepted;
+- ``hang``       no exit within the time limit (the process group is killed).
 
 A case that plants code (a pickle whose ``__reduce__`` runs ``touch MARKER``) is
 ``silent`` whenever the marker exists afterwards, whatever the exit status, and is flagged

@@ -80,8 +80,9 @@ class Interpolation1D:
     def control_points(self, values):
         """Control points P with N P = Q (eq. 3.22, unit weights).
 
-        values : (k, ...) data at the parameters, any trailing shape (e.g. (k, 3) node
-            positions [m] or (k, 3, n_f) mode shapes).
+        - values : (k, ...) data at the parameters, any trailing shape (e.g. (k, 3) node
+          positions [m] or (k, 3, n_f) mode shapes).
+
         Returns (n_ctrl, ...) in the units of ``values``; for closed curves the last p rows
         repeat the first p.
         """
