@@ -40,7 +40,12 @@ class Interpolation1D:
 
     Attributes
     ----------
-    degree, closed, params (k,), n_points (k)
+    degree, closed
+        As given.
+    params : (k,)
+        The parameters.
+    n_points : int
+        k.
     knots : (n_ctrl + p + 1,) knot vector for evaluation — clamped, NURBS Book eq. 9.8
         (open), or periodic (closed), see :mod:`contours.nurbs.knots`.
     n_ctrl : k (open) or k + p (closed: the k control points with the first p repeated
