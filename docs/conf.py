@@ -34,7 +34,6 @@ extensions = [
     "sphinx.ext.autosummary",
     "sphinx.ext.napoleon",
     "sphinx.ext.mathjax",
-    "sphinx.ext.viewcode",
     "myst_parser",
     "sphinx_gallery.gen_gallery",
     "api_links",
@@ -43,7 +42,7 @@ extensions = [
 ]
 
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
-exclude_patterns = ["_build", "**/_data/**/report.md", "gallery/*.ipynb"]
+exclude_patterns = ["_build", "validation/_data", "gallery/*.ipynb"]
 root_doc = "index"
 
 # --- API reference: autosummary stubs generated per public module --------------------------------

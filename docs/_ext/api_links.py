@@ -7,7 +7,9 @@
 2. The numpy-style docstrings give types in prose with shapes and units ("(N, 3) ndarray
    [m]"). Sphinx would try to link every word of a ``:type:``, ``:vartype:`` or
    ``:rtype:`` field (``N``, ``m`` ...) to any attribute of that name; such a type is
-   shown as text instead.
+   shown as text instead. An attribute entry naming several attributes
+   (``w_N1, w_N2 : (nu1,), (nu2,)``) becomes one field per name: Sphinx would read the
+   first name as a type.
 3. The docstrings write math in plain text, where ``|x|`` is a magnitude; reST would read
    it as a substitution reference. A bar outside literals, roles and literal blocks is
    shown as a bar.
@@ -25,19 +27,25 @@ _BLOCK_START = re.compile(r"(::\s*$)|(^\s*\.\. [\w:-]+::)")          # a literal
 
 
 def _defining_name(target: str) -> str | None:
-    """``pkg.sub.Name`` for a re-exported ``pkg.Name`` (None if it is not one)."""
-    module_name, _, attr = target.rpartition(".")
-    if not module_name:
-        return None
-    try:
-        obj = getattr(importlib.import_module(module_name), attr)
-    except (ImportError, AttributeError, ValueError):
-        return None
-    home = getattr(obj, "__module__", None)
-    qualname = getattr(obj, "__qualname__", None)
-    if not home or not qualname or home == module_name:
-        return None
-    return f"{home}.{qualname}"
+    """``pkg.sub.Name[.attr]`` for a re-exported ``pkg.Name[.attr]`` (None if it is not one)."""
+    parts = target.split(".")
+    for cut in range(len(parts) - 1, 0, -1):          # the longest importable module prefix
+        module_name = ".".join(parts[:cut])
+        try:
+            obj = importlib.import_module(module_name)
+        except ImportError:
+            continue
+        try:
+            for attr in parts[cut:]:
+                obj = getattr(obj, attr)
+        except AttributeError:
+            return None
+        home = getattr(obj, "__module__", None)
+        qualname = getattr(obj, "__qualname__", None)
+        if not home or not qualname or f"{home}.{qualname}" == target:
+            return None
+        return f"{home}.{qualname}"
+    return None
 
 
 def resolve_reexport(app, env, node, contnode):
@@ -54,11 +62,33 @@ def resolve_reexport(app, env, node, contnode):
     return make_refnode(app.builder, node["refdoc"], entry.docname, entry.node_id, contnode, target)
 
 
+_SHARED_FIELD = re.compile(r"^:(ivar|vartype) ([^:]+,[^:]*):(.*)$")
+
+
+def _fields_per_name(lines: list) -> list:
+    """``:ivar a, b: text`` (and its indented continuation) as ``:ivar a: text``, ``:ivar b: text``."""
+    out, i = [], 0
+    while i < len(lines):
+        m = _SHARED_FIELD.match(lines[i])
+        j = i + 1
+        while m and j < len(lines) and lines[j][:1].isspace() and lines[j].strip():
+            j += 1
+        if m:
+            for name in (n.strip() for n in m.group(2).split(",") if n.strip()):
+                out += [f":{m.group(1)} {name}:{m.group(3)}"] + lines[i + 1:j]
+        else:
+            out += lines[i:j]
+        i = j
+    return out
+
+
 def types_as_text(app, what, name, obj, options, lines):
-    """``autodoc-process-docstring`` handler (after napoleon): type fields as emphasized text."""
+    """``autodoc-process-docstring`` handler (after napoleon): one attribute field per
+    name, type fields as emphasized text."""
+    lines[:] = _fields_per_name(lines)
     for i, line in enumerate(lines):
         m = _TYPE_FIELD.match(line)
-        if m and not m.group(2).startswith("*"):
+        if m and not m.group(2).startswith("*") and "`" not in m.group(2):     # a role stays a link
             text = m.group(2).replace("*", "\\*")
             lines[i] = f"{m.group(1)} *{text}*"
 
