@@ -80,6 +80,8 @@ def key_table(title: str, keys: dict, defaults: dict | None = None, intro: str =
     lines = [title, "~" * len(title), ""]
     if intro:
         lines += [intro, ""]
+    if not keys:
+        return lines
     lines += [".. list-table::", "   :header-rows: 1", "   :widths: 14 9 8 12 22 35", ""]
     lines += ["   * - " + COLUMNS[0]] + [f"     - {c}" for c in COLUMNS[1:]]
     for name, key in keys.items():
@@ -125,7 +127,7 @@ def tables() -> list[tuple[str, dict, dict | None, str]]:
         out.append((f'law = "{law}"', keys, None,
                     f"The parameters of :class:`{cls.__module__}.{cls.__qualname__}`"
                     + (" (friction: both ``mu`` and ``v_eps`` or neither)." if schema.friction_keys(law) else ".")
-                    + ("" if keys else " None.")))
+                    + ("" if keys else " It has none.")))
     out.append(("[outputs] (one table per output)", schema.OUTPUT, None,
                 "Units of the quantities: " + ", ".join(f"{q} [{u}]" for q, u in schema.QUANTITY_UNITS.items())
                 + "; ``q_f`` in the modes' normalization."))
