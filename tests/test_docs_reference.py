@@ -69,3 +69,37 @@ def test_every_schema_key_appears_with_its_default_and_choices():
             assert f"``{name}``" in text
     for name in schema.INTEGRATORS.names() + schema.LAWS.names() + tuple(schema.QUANTITIES):
         assert f'"{name}"' in text
+
+
+DATA = Path(__file__).resolve().parents[1] / "docs" / "validation" / "_data"
+
+
+def test_validation_page_shows_every_case_row_and_figure_of_the_data():
+    """The generated validation page against the committed output it is made from: every
+    case a section, every row's error in it, every PNG of the directory shown."""
+    import json
+
+    validation_report = pytest.importorskip("validation_report")
+    data = DATA / "quick"
+    doc = json.loads((data / "results.json").read_text())
+    page = validation_report.validation_page(data, "../_data/quick", "CMD")
+    sections = re.findall(r"^## (\S+)$", page, flags=re.M)
+    assert sections == list(doc["cases"])
+    shown = set(re.findall(r"\]\(\.\./_data/quick/([^)]+\.png)\)", page))
+    assert shown == {p.name for p in data.glob("*.png")}
+    for row in doc["rows"]:
+        if row["error"] is not None:
+            assert f"{row['error']:.3e}" in page
+    assert "CMD" in page and doc["date"] in page
+
+
+def test_stability_page_shows_every_row():
+    import json
+
+    validation_report = pytest.importorskip("validation_report")
+    data = DATA / "stability"
+    doc = json.loads((data / "stability.json").read_text())
+    page = validation_report.stability_page(data, "../_data/stability", "CMD")
+    for row in doc["rows"]:
+        assert f"| {row['case']} |" in page
+    assert f"{sum(r['passed'] for r in doc['rows'])} of {len(doc['rows'])} cases passed" in page
