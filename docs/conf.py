@@ -44,6 +44,7 @@ extensions = [
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
 exclude_patterns = ["_build", "validation/_data", "gallery/*.ipynb"]
 root_doc = "index"
+smartquotes = False               # "moreau" in the text is what a scene file takes, straight quotes
 
 # --- API reference: autosummary stubs generated per public module --------------------------------
 autosummary_generate = True

@@ -56,7 +56,7 @@ def default(value) -> str:
     if value is schema.REQUIRED:
         return "no default"
     if value is None:
-        return "absent"
+        return "optional"
     if isinstance(value, bool):
         return f"``{str(value).lower()}``"
     if isinstance(value, str):
@@ -139,8 +139,8 @@ def reference_text() -> str:
     lines = [inspect.cleandoc(schema.__doc__), "", "Tables of keys", "==============", "",
              "Generated from :mod:`ffrmbs_app.scene_file.schema` when these pages were built: "
              "every key of every table, its type, unit, default, the allowed values and its note.",
-             "``no default`` marks a key that has to be given when its table needs it (the "
-             "description above says when).", ""]
+             "*no default* marks a key that has to be given when its table needs it, *optional* one "
+             "that may be left out (the description above says what each means then).", ""]
     for title, keys, defaults, intro in tables():
         lines += key_table(title, keys, defaults, intro)
     return "\n".join(lines)
