@@ -3,7 +3,7 @@
 Build (warnings are errors; about a minute plus the gallery's run time)::
 
     python3 -m pip install '.[docs]'
-    python3 -m sphinx -W --keep-going -b html docs docs/_build/html
+    python3 -m sphinx -j auto -W --keep-going -b html docs docs/_build/html
 
 Generated at build time, never committed: the API stubs (``api/generated/``), the
 gallery (``gallery/``, from ``../examples/gallery``), the scene-key reference (from
