@@ -46,7 +46,7 @@ from .search import Contact1sSearch, Contact2sSearch
 class ContactKinematics(ABC):
     """Normal gap, contact frame, relative velocity and Jacobians of a contact between
     contour1 (point side) and contour2 (surface side), thesis eq. 3.2–3.8 (see the module
-    docstring).
+    docstring). The attributes are filled by :meth:`update`.
 
     Parameters
     ----------
@@ -56,13 +56,18 @@ class ContactKinematics(ABC):
         no System get a local layout (body 1, then body 2) and nu_total defaults to its
         length.
 
-    Attributes (filled by :meth:`update`)
+    Attributes
     ----------
     point1, point2 : ContourPoint
         C1 and C2 (positions, frames; velocities and J_T when asked for).
     active : bool
         A contact point was found inside contour 2's domain; the rest is valid only then.
-    g_N : float [m];  n : (3,);  T : (3, 2);  gd_N : float [m/s];  gd_T : (2,) [m/s]
+    g_N, gd_N : float
+        Normal gap [m] and its rate [m/s].
+    n, T : (3,), (3, 2)
+        Normal and tangents of contour 2 at C2.
+    gd_T : (2,)
+        Tangential relative velocity [m/s].
     w_N1, w_N2 : (nu1,), (nu2,)
         Point-local Jacobian pieces J_T1ᵀ n and −J_T2ᵀ n in the bodies' own u.
     w_T1, w_T2 : (nu1, 2), (nu2, 2)

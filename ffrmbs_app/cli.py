@@ -2,17 +2,17 @@
 
 Subcommands
 -----------
-``preprocess``  mesh -> FE model -> modes -> body files (thesis Sec. 4.2.1 text files and body.h5)
-``info``        summary of a body (text-file directory or HDF5 file)
-``validate``    validation cases: error against run time (see ../DESIGN.md)
-``run``         a scene as a job (result file streamed, checkpoints, ``--resume``, plot,
-                ParaView export): the default point mass on the flexible beam (thesis
-                Sec. 5.2), a TOML scene file or a Python model script
-``sweep``       a scene file over a grid of overrides, one run per Dask task: table, work-precision plot
-``bench``       every benchmark in one process: tables, target verdicts, JSON (validation.bench)
-``plot``        outputs, energy and contacts of a result file against time, as a PNG (ffrmbs_app.plot)
-``export``      a result file to ParaView: deformed surfaces over time, .pvd + .vtu (ffrmbs_app.export)
-``contour``     a 2s contour fitted to a face group of a body: fit report, PNG, .vtu (ffrmbs_app.contour_report)
+- ``preprocess``  mesh -> FE model -> modes -> body files (thesis Sec. 4.2.1 text files and body.h5)
+- ``info``        summary of a body (text-file directory or HDF5 file)
+- ``validate``    validation cases: error against run time (see ../DESIGN.md)
+- ``run``         a scene as a job (result file streamed, checkpoints, ``--resume``, plot,
+  ParaView export): the default point mass on the flexible beam (thesis
+  Sec. 5.2), a TOML scene file or a Python model script
+- ``sweep``       a scene file over a grid of overrides, one run per Dask task: table, work-precision plot
+- ``bench``       every benchmark in one process: tables, target verdicts, JSON (validation.bench)
+- ``plot``        outputs, energy and contacts of a result file against time, as a PNG (ffrmbs_app.plot)
+- ``export``      a result file to ParaView: deformed surfaces over time, .pvd + .vtu (ffrmbs_app.export)
+- ``contour``     a 2s contour fitted to a face group of a body: fit report, PNG, .vtu (ffrmbs_app.contour_report)
 
 Progress bars (preprocessing stages, export) are drawn on stderr only when it is a
 terminal; ``FFRMBS_PROGRESS=1`` forces them on, ``FFRMBS_PROGRESS=0`` off (ffrmbs_app.progress).

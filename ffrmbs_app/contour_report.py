@@ -97,13 +97,13 @@ def parse_smoothing(text) -> float:
 class GroupFit:
     """A node group's fitted contour and its errors (lengths in m).
 
-    group : the node group's name.
-    fit, patch : the :class:`~contours.fitting.SurfaceFit` and
-        :class:`~contours.fitting.SurfacePatch`.
-    report : the :class:`~contours.fitting.FitReport` (geometry and every mode; its
-        ``ctrl``, ``node_deviation`` and ``mid_deviation`` are drawn and written).
-    grid : (n_η, n_ξ) of the node matrix O when the group is a planar structured grid, else None.
-    trim : the :class:`~contours.fitting.Trim` of a face with holes, else None.
+    - group : the node group's name.
+    - fit, patch : the :class:`~contours.fitting.SurfaceFit` and
+      :class:`~contours.fitting.SurfacePatch`.
+    - report : the :class:`~contours.fitting.FitReport` (geometry and every mode; its
+      ``ctrl``, ``node_deviation`` and ``mid_deviation`` are drawn and written).
+    - grid : (n_η, n_ξ) of the node matrix O when the group is a planar structured grid, else None.
+    - trim : the :class:`~contours.fitting.Trim` of a face with holes, else None.
     """
 
     group: str

@@ -279,6 +279,8 @@ def sweep(scene, grid, out, client=None, zip=False, workers=None, scheduler=None
     as_frame : bool
         Return a pandas DataFrame (pandas must be installed) instead of a list of dicts.
 
+    Notes
+    -----
     Returns the table: one dict per run (:func:`rows`'s columns), in grid order.
     """
     if client is not None and (workers is not None or scheduler is not None):

@@ -99,10 +99,13 @@ class SphereTable:
     kind, at : (n_s,) int
         Kernel kind (:data:`._sphere_kernels.POINT`, ``AT_REST``, ``CALLED``) and the first
         index into the global q it reads (the point's position, the body's q_f).
-    offset (n_s, 3) [m], radius0 (n_s,) [m], reach (n_s, max n_f) [m], n_reach (n_s,) :
-        The constants of :func:`._sphere_kernels.sphere_states`.
-    contact, sphere1, sphere2 : (n_p,) int;  margin : (n_p,) [m]
-        Each prunable contact's index and spheres, and its margin.
+    offset, radius0, reach, n_reach
+        The constants of :func:`._sphere_kernels.sphere_states`: offset (n_s, 3) [m],
+        radius0 (n_s,) [m], reach (n_s, max n_f) [m], n_reach (n_s,).
+    contact, sphere1, sphere2 : (n_p,) int
+        Each prunable contact's index and spheres.
+    margin : (n_p,)
+        Each prunable contact's margin [m].
     ints, floats : int and float vectors
         The arrays above are views of these two (layout of
         :func:`._sphere_kernels.prune`), which the kernel takes.

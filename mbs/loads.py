@@ -86,6 +86,8 @@ class Tabulated:
         f_{−1} = 0 in report eq. 9); with ``hold_first=True`` it is values[0] there.
         After times[-1] the last value holds, for both kinds.
 
+    Notes
+    -----
     Calling the table at a time t [s] returns a float (1-D values) or a (k,) array.
     """
 

@@ -48,6 +48,8 @@ class SpringDamper(ForceElement):
         l0 >= 0. There is no default: a forgotten free length (0, or the initial distance)
         would silently give another model.
 
+    Notes
+    -----
     Where the points coincide the direction e is undefined and a :class:`ModelError` is
     raised — except for an undamped spring of zero free length, whose force k d needs no
     direction.

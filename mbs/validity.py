@@ -43,6 +43,8 @@ class SpinMonitor:
     ratio : float
         Warn when |Ω| > ratio · ω1 [-]; default :data:`SPIN_RATIO` = 0.2.
 
+    Notes
+    -----
     For each watched body ω1 [rad/s] is the square root of the smallest eigenvalue of
     its retained modal problem K_ff ψ = ω² M_ff ψ (K_ff = Φᵀ K Φ, M_ff = m_ff of thesis
     eq. 2.69), computed once here. ``events`` lists (t [s], body name, |Ω| [rad/s],

@@ -316,7 +316,7 @@ def _cad_groups(gmsh, path, face_boxes, scale):
 
 
 def face_planes(mesh: Mesh) -> dict:
-    """The bounding-plane groups ``x0 .. z1`` of :func:`bounding_face_groups` that hold a
+    """The bounding-plane groups ``x0`` to ``z1`` of :func:`bounding_face_groups` that hold a
     face of ``mesh`` (a surface triangle with its three corners on the plane), and ``body``."""
     corners = mesh.surface_triangles()[:, :3]
     groups = {}

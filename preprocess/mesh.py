@@ -15,6 +15,7 @@ geometrically: each mid-edge node is matched to the edge whose midpoint it lies
 closest to. This accepts any tool's convention and catches corrupt connectivity.
 
 Readers (regular files only, :mod:`preprocess.inputfiles`):
+
 * ``.geo`` and ``.msh``: the gmsh Python API (``.geo`` is meshed, see
   :func:`preprocess.geometry.mesh_geo_file`, after the checks of
   :func:`preprocess.geometry.check_geo_file`); physical groups become node groups.

@@ -1,8 +1,8 @@
 """Unit systems of the body files (thesis Table 5.1).
 
-``"si"``     m, N, kg, s, Pa, kg/m³ — the units of :class:`preprocess.body.BodyData`.
-``"si-mm"``  mm, N, t (= 1e3 kg), s, MPa, t/mm³ — the "SI(mm)" system of Table 5.1,
-             the usual one of ABAQUS models given in millimetres.
+- ``"si"``     m, N, kg, s, Pa, kg/m³ — the units of :class:`preprocess.body.BodyData`.
+- ``"si-mm"``  mm, N, t (= 1e3 kg), s, MPa, t/mm³ — the "SI(mm)" system of Table 5.1,
+  the usual one of ABAQUS models given in millimetres.
 
 Each :class:`UnitSystem` holds the factors that convert a value in its units to SI
 (``value_si = value_file * factor``). Force and time are N and s in both systems.

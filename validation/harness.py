@@ -597,6 +597,8 @@ def run_validation(out_dir, quick=False, only=None, cases=None, progress=print, 
         another in this process. The report and results.json are the same either way;
         each case's CPU time is measured inside its task.
 
+    Notes
+    -----
     Returns the rows of all cases. A case that raises is recorded as ``FAILED: <message>``
     and the others still run; after writing the files, FfrmbsError names the failed cases.
     Rows whose error is NaN or zero, or whose cpu time is not positive, are left out of the plots; signed errors are plotted as |error|.

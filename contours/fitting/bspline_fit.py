@@ -51,7 +51,13 @@ class FitDirection:
 
     Attributes
     ----------
-    knots, degree, closed, domain = (0.0, 1.0), n_ctrl (n open, n + p closed), n_unique = n.
+    knots, degree, closed
+        The knot vector, the degree and whether the direction is closed.
+    domain : (0.0, 1.0)
+    n_ctrl : int
+        n (open) or n + p (closed).
+    n_unique : int
+        n.
     """
 
     def __init__(self, n, degree=3, closed=False):
@@ -154,7 +160,12 @@ class SurfaceFit:
 
     Attributes
     ----------
-    eta, xi : :class:`FitDirection`; params; n_points = k.
+    eta, xi : FitDirection
+        The two directions.
+    params
+        The parameters.
+    n_points : int
+        k.
     """
 
     def __init__(self, params, n_ctrl, degree=3, closed=(False, False), smoothing=SMOOTHING):

@@ -32,13 +32,13 @@ _MID_CORNER, _MID_EDGE = -1.0 / 9.0, 4.0 / 9.0
 class FitReport:
     """Errors of one fitted patch (lengths in m, angles in degrees).
 
-    rows : list of dicts, one for the geometry and one per mode: field, node_max,
-        node_rms, mid_max, mid_rms (m for the geometry, relative for modes).
-    ctrl : (n_η n_ξ, 3) [m] the distinct control points of the undeformed surface.
-    node_deviation (k,), mid_deviation (T,) [m] : |S − x| at each node and mid-point.
-    normal_max, normal_rms : the normal's angle error [deg].
-    spacing : mean node spacing of the patch [m].
-    warnings : lines saying which bound is exceeded and how to lower the error.
+    - rows : list of dicts, one for the geometry and one per mode: field, node_max,
+      node_rms, mid_max, mid_rms (m for the geometry, relative for modes).
+    - ctrl : (n_η n_ξ, 3) [m] the distinct control points of the undeformed surface.
+    - node_deviation (k,), mid_deviation (T,) [m] : |S − x| at each node and mid-point.
+    - normal_max, normal_rms : the normal's angle error [deg].
+    - spacing : mean node spacing of the patch [m].
+    - warnings : lines saying which bound is exceeded and how to lower the error.
     """
 
     name: str

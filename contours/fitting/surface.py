@@ -46,10 +46,10 @@ def surface_fit(points, surface_triangles, group, control_points=None, degree=3,
     """(fit, patch) of the node ``group`` of a body with undeformed positions ``points``
     (N, 3) [m] and ``surface_triangles``.
 
-    control_points : None (:func:`default_control_points`), an int or (n_η, n_ξ): the
-        distinct control points per direction.
-    degree : int or (p_η, p_ξ) (3: C²).
-    smoothing : dimensionless thin-plate weight (:mod:`.bspline_fit`).
+    - control_points : None (:func:`default_control_points`), an int or (n_η, n_ξ): the
+      distinct control points per direction.
+    - degree : int or (p_η, p_ξ) (3: C²).
+    - smoothing : dimensionless thin-plate weight (:mod:`.bspline_fit`).
     """
     patch = SurfacePatch(points, surface_triangles, group, name)
     params, closed = parameterize(patch)

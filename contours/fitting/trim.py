@@ -27,7 +27,9 @@ class Trim:
 
     Attributes
     ----------
-    polygons, vertices (M, 2), starts (H + 1,) — the packed layout of :func:`._kernels.in_material`.
+    polygons, vertices, starts
+        The polygons, their vertices (M, 2) and starts (H + 1,): the packed layout of
+        :func:`._kernels.in_material`.
     """
 
     def __init__(self, polygons):

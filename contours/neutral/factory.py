@@ -7,7 +7,7 @@ contour interface of :mod:`contours.base` on top of them: the update once per st
 fields at (η, ξ), the frame (1s: curve tangent and a reference normal; 2s: eq. 3.27–3.29
 with the outward sign) and the Jacobians. A body model plugs in with one concrete
 factory per dimension that creates its products from its nodal data (the FFR family in
-:mod:`.ffr`, the rigid family in :mod:`.rigid`); other contours (band, cylinder) are
+:mod:`.ffr`, the rigid family in :mod:`~contours.neutral.rigid`); other contours (band, cylinder) are
 built on the neutral ones and serve every family unchanged.
 
 The per-step path does not go through the products (``compiled=True``, the default):

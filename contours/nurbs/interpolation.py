@@ -40,7 +40,12 @@ class Interpolation1D:
 
     Attributes
     ----------
-    degree, closed, params (k,), n_points (k)
+    degree, closed
+        As given.
+    params : (k,)
+        The parameters.
+    n_points : int
+        k.
     knots : (n_ctrl + p + 1,) knot vector for evaluation — clamped, NURBS Book eq. 9.8
         (open), or periodic (closed), see :mod:`contours.nurbs.knots`.
     n_ctrl : k (open) or k + p (closed: the k control points with the first p repeated
@@ -80,8 +85,9 @@ class Interpolation1D:
     def control_points(self, values):
         """Control points P with N P = Q (eq. 3.22, unit weights).
 
-        values : (k, ...) data at the parameters, any trailing shape (e.g. (k, 3) node
-            positions [m] or (k, 3, n_f) mode shapes).
+        - values : (k, ...) data at the parameters, any trailing shape (e.g. (k, 3) node
+          positions [m] or (k, 3, n_f) mode shapes).
+
         Returns (n_ctrl, ...) in the units of ``values``; for closed curves the last p rows
         repeat the first p.
         """

@@ -237,7 +237,9 @@ class MoreauTimeStepping(Integrator):
 class AdaptiveMoreauTimeStepping(MoreauTimeStepping):
     """Moreau time-stepping with step-size control by step doubling (module docstring).
 
-    Parameters (besides MoreauTimeStepping's)
+    Its parameters besides MoreauTimeStepping's:
+
+    Parameters
     ----------
     atol : float > 0
         Absolute tolerance of the positions q per step [m, or the unit of each

@@ -2,13 +2,13 @@
 
 One step of length h, after the report's algorithm (Sec. 3.4.4):
 
-1. state f_ext, R, Ω, r, ṙ (b = b0 + P r, ḃ = P ṙ), ρ_cm, ρ̇_cm, Î(r);
-2.–6. the report's explicit rigid-body step (:func:`mbs.modal._kernels.report_step`,
-   eq. 16, 20, 26–28) with the deformed body's Î(r) and the torque of the deformed
-   lever arms T = Σ (b0_i + P_i r) × f_i (eq. 19);
-7. the fictitious forces of eq. 22 with the updated Ω, projected into modal space;
-8. the modes advanced exactly over h under 𝓕_ext + 𝓕_fict held constant (eq. 10–12);
-9. Î updated with the new r.
+- step 1: state f_ext, R, Ω, r, ṙ (b = b0 + P r, ḃ = P ṙ), ρ_cm, ρ̇_cm, Î(r);
+- steps 2–6: the report's explicit rigid-body step (:func:`mbs.modal._kernels.report_step`,
+  eq. 16, 20, 26–28) with the deformed body's Î(r) and the torque of the deformed
+  lever arms T = Σ (b0_i + P_i r) × f_i (eq. 19);
+- step 7: the fictitious forces of eq. 22 with the updated Ω, projected into modal space;
+- step 8: the modes advanced exactly over h under 𝓕_ext + 𝓕_fict held constant (eq. 10–12);
+- step 9: Î updated with the new r.
 
 The report projects eq. 22 node by node and re-assembles Î from all nodes each step
 (O(N n) per step, and the reason it cannot use the boundary approach, Sec. 4.2.1).

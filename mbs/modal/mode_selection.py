@@ -78,6 +78,8 @@ def effective_masses(phi, omega2, masses, forces, weighting="static") -> np.ndar
     weighting : "static" — |φ_jᵀ f| / ω_j², the quasi-static modal amplitude of
         eq. 12 [m kg^1/2]; "report" — eq. 36 literally, |φ_jᵀ M f| / ω_j² [m kg^3/2].
 
+    Notes
+    -----
     Returns (n,) m_eff; for a history, per mode the maximum over the load steps.
     """
     phi = np.asarray(phi, dtype=float)

@@ -78,6 +78,8 @@ class StepResponse:
     forces : (K, n), the modal force 𝓕_k on [s_k, s_{k+1}) (the last holds for ever).
     r0, v0 : (n,), modal displacement and velocity at s_0.
 
+    Notes
+    -----
     The constructor runs the recursion once: O(K n). ``__call__(t)`` then costs
     O(len(t) n), whatever the time since the last load change.
     """

@@ -22,17 +22,17 @@ from .basis import ModalBasis
 class ModalResult:
     """Output of PureMA, SimpleRB and CoupledRB.
 
-    t : (n_t,) [s] output times.
-    r, rdot : (n_t, n) modal coordinates and velocities.
-    basis : the :class:`ModalBasis` the modes come from.
-    nodes : (k,) node indices of the nodal outputs.
-    rho, v : (n_t, 3) centre of mass [m] and its velocity [m/s] in G, or None (PureMA).
-    R : (n_t, 3, 3) orientation of B in G, or None.
-    Omega : (n_t, 3) angular velocity [rad/s] in B axes, or None.
-    inertia : (n_t, 3, 3) inertia tensor about the centre of mass [kg m²] (constant
-        for SimpleRB, updated with the deformation for CoupledRB), or None.
-    relative_angular_momentum : (n_t, 3) Σ m_i b_i × ḃ_i in B axes (CoupledRB), or None.
-    stats : dict, e.g. ``cpu_s`` (solver CPU time), ``load_steps``, ``rigid_steps``.
+    - t : (n_t,) [s] output times.
+    - r, rdot : (n_t, n) modal coordinates and velocities.
+    - basis : the :class:`ModalBasis` the modes come from.
+    - nodes : (k,) node indices of the nodal outputs.
+    - rho, v : (n_t, 3) centre of mass [m] and its velocity [m/s] in G, or None (PureMA).
+    - R : (n_t, 3, 3) orientation of B in G, or None.
+    - Omega : (n_t, 3) angular velocity [rad/s] in B axes, or None.
+    - inertia : (n_t, 3, 3) inertia tensor about the centre of mass [kg m²] (constant
+      for SimpleRB, updated with the deformation for CoupledRB), or None.
+    - relative_angular_momentum : (n_t, 3) Σ m_i b_i × ḃ_i in B axes (CoupledRB), or None.
+    - stats : dict, e.g. ``cpu_s`` (solver CPU time), ``load_steps``, ``rigid_steps``.
     """
 
     t: np.ndarray

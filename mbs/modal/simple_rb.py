@@ -80,7 +80,7 @@ class SimpleRB:
     loads : sequence of :class:`StepLoads`, body or inertial frame.
     gravity : (3,) [m/s²] uniform gravity in G, or None.
     rayleigh, zeta : damping of the elastic modes (see :func:`decay_rates`).
-    u_init, v_init / r0, rdot0 : initial elastic state (nodal fields in B, or modal).
+    u_init, v_init, r0, rdot0 : initial elastic state (nodal fields u_init, v_init in B, or modal r0, rdot0).
     position : initial centre of mass in G [m] (default: its mesh coordinates, so that
         displacements compare with an FE code's); velocity [m/s] in G.
     orientation : initial R (3, 3) (B → G); angular_velocity : initial Ω [rad/s] in B axes.

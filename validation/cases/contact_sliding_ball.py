@@ -43,6 +43,7 @@ Checks (rows: error against CPU seconds of the simulation):
    check 5 is the compliant contact's counterpart.
 3. **Sliding ball, thesis Sec. 5.3** — per run, with and without residual flexibility
    (quick: 20 modes; full: 20 and 100):
+
    - *ball frequency*: ω of the ball's y(t), fitted by least squares (y = a + b t +
      A cos ωt + B sin ωt), against the fundamental of an Euler–Bernoulli cantilever
      carrying the 1 kg point mass at the ball's mean position x̄ (modal series, 60 modes:

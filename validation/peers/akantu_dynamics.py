@@ -18,7 +18,7 @@ displacement, velocity, acceleration, external-force and blocked-DOF arrays are
 numpy views of Akantu's memory and are read and written in place.
 
 The scheme (found with akantu 5.0.7, and checked by tests/integration/test_akantu_dynamics.py)
----------------------------------------------------------------------------------
+----------------------------------------------------------------------------------------------
 Akantu's explicit solver is Newmark-β with β = 0, γ = 1/2 (central differences).
 One ``solveStep`` from t_n to t_{n+1} = t_n + Δt does
 

@@ -17,9 +17,11 @@ is filled directly with the node positions ``u0``, the lumped mass matrix
 ``ObjectFFRFreducedOrderInterface`` then forms the reduced matrices ``phiᵀ M phi``,
 ``phiᵀ K phi`` and the constant inertia integrals from these.
 
-Exudyn's conventions, as found (Exudyn 1.13.6, ``exudyn/FEM.py`` and checked at run
-time against Exudyn's own mesh-node output)
---------------------------------------------------------------------------------
+Exudyn's conventions, as found
+------------------------------
+Exudyn 1.13.6, ``exudyn/FEM.py``, checked at run time against Exudyn's own mesh-node
+output:
+
 * Reference frame: the rigid-body node of the object holds the frame origin ``R``
   and Euler parameters (orientation ``A``); the mesh node positions are
   ``r_i = R + A (x_ref,i + Psi_i q)`` with ``x_ref`` = the ``Position`` nodes of the
