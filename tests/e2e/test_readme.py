@@ -140,6 +140,14 @@ def test_readme_is_short():
     assert len(_text(README).splitlines()) <= README_LINES
 
 
+def test_ci_runs_the_readme_test_and_docs_commands():
+    """.ci/run runs the README's test command and its docs build exactly as the README shows them."""
+    shown = [line.strip() for lang, _, body in rc.fenced_blocks(_text(README)) if lang in ("sh", "bash", "console")
+             for line in body.splitlines() if "pytest" in line or "sphinx" in line]
+    ci = [line.strip() for line in (REPO / ".ci" / "run").read_text().splitlines()]
+    assert len(shown) == 2 and all(line in ci for line in shown), (shown, ci)
+
+
 def test_every_command_parses():
     problems = []
     for document, command in _all_commands():
