@@ -256,6 +256,9 @@ class Data:
         self.work_u = np.zeros(nu)          # M̂⁻¹ W Λ, then (1 − 2θ)Δt u_k
         self.u_prev = np.zeros(nu)          # u_k while u_{k+1} is formed
         self.solver_work = np.zeros((WORK_ROWS, m))
+        self.newton_matrix_buf = np.zeros(m * m)    # the Newton phases with friction: J (m, m),
+        self.newton_pivots = np.zeros((2, m), dtype=np.int64)    # pivots,
+        self.newton_local = np.zeros((5, 3))        # an entry's z, P, ∂P/∂z
         # compliant contacts (mbs.residual_contact, contact.compliance): spring state per
         # contact row (end force [N], deflection [m], its rate [m/s]), the last step's
         # Λ₀ = (1 − θ)Δt F_k per contact row [N s] (its impulse is Λ₀ + lam_prev), and this step's
