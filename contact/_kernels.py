@@ -398,12 +398,12 @@ def newton_phase(G, c, r, kinds, offsets, mu, lam, F, d, trial, J, perm_r, perm_
     (:func:`complete_pivoting_solve`), the step is the largest s = 2^-k >= NEWTON_MIN_STEP
     with |F(Λ + s d)|² <= (1 − ARMIJO_SIGMA s) |F(Λ)|² (Qi & Sun 1993; De Luca, Facchinei
     & Kanzow 1996). Ends after ``max_steps`` steps or where the line search fails (Λ is
-    then the last accepted iterate). ``F``, ``d``, ``trial`` (m,), ``J`` (m, m), ``local``
+    then the last accepted iterate), with Λ projected onto the admissible impulses. ``F``, ``d``, ``trial`` (m,), ``J`` (m, m), ``local``
     (5, 3) work.
     Returns the steps taken (one solve each)."""
     m = lam.shape[0]
     scale = NEWTON_R_SCALE
-    psi = natural_map(G, c, r, scale, kinds, offsets, mu, lam, F, J, True, local)
+    psi = natural_map(G, c, r, scale, kinds, offsets, mu, lam, F, J, bool(True), local)
     steps = 0
     while steps < max_steps and psi > 0.0:
         for i in range(m):
@@ -415,7 +415,8 @@ def newton_phase(G, c, r, kinds, offsets, mu, lam, F, d, trial, J, perm_r, perm_
         while s >= NEWTON_MIN_STEP:
             for i in range(m):
                 trial[i] = lam[i] + s * d[i]
-            if natural_map(G, c, r, scale, kinds, offsets, mu, trial, F, J, False, local) <= (1.0 - ARMIJO_SIGMA * s) * psi:
+            psi_trial = natural_map(G, c, r, scale, kinds, offsets, mu, trial, F, J, bool(False), local)
+            if psi_trial <= (1.0 - ARMIJO_SIGMA * s) * psi:
                 accepted = True
                 break
             s *= 0.5
@@ -423,8 +424,22 @@ def newton_phase(G, c, r, kinds, offsets, mu, lam, F, d, trial, J, perm_r, perm_
             break
         for i in range(m):
             lam[i] = trial[i]
-        psi = natural_map(G, c, r, scale, kinds, offsets, mu, lam, F, J, True, local)
+        psi = natural_map(G, c, r, scale, kinds, offsets, mu, lam, F, J, bool(True), local)
+    _project_admissible(kinds, offsets, mu, lam)
     return steps
+
+
+@njit(cache=True)
+def _project_admissible(kinds, offsets, mu, lam):
+    """Λ onto the admissible impulses, in place: Λ_N >= 0, |Λ_T| <= μ Λ_N (a Newton
+    iterate may leave them by rounding)."""
+    for k in range(kinds.shape[0]):
+        o = offsets[k]
+        if kinds[k] == BILATERAL:
+            continue
+        lam[o] = max(lam[o], 0.0)
+        if kinds[k] == COULOMB:
+            lam[o + 1], lam[o + 2] = _disk(lam[o + 1], lam[o + 2], mu[k] * lam[o])
 
 
 @njit(cache=True)
