@@ -398,7 +398,7 @@ def newton_phase(G, c, r, kinds, offsets, mu, lam, F, d, trial, J, perm_r, perm_
     (:func:`complete_pivoting_solve`), the step is the largest s = 2^-k >= NEWTON_MIN_STEP
     with |F(Λ + s d)|² <= (1 − ARMIJO_SIGMA s) |F(Λ)|² (Qi & Sun 1993; De Luca, Facchinei
     & Kanzow 1996). Ends after ``max_steps`` steps or where the line search fails (Λ is
-    then the last accepted iterate), with Λ projected onto the admissible impulses. ``F``, ``d``, ``trial`` (m,), ``J`` (m, m), ``local``
+    then the last accepted iterate). ``F``, ``d``, ``trial`` (m,), ``J`` (m, m), ``local``
     (5, 3) work.
     Returns the steps taken (one solve each)."""
     m = lam.shape[0]
@@ -425,14 +425,13 @@ def newton_phase(G, c, r, kinds, offsets, mu, lam, F, d, trial, J, perm_r, perm_
         for i in range(m):
             lam[i] = trial[i]
         psi = natural_map(G, c, r, scale, kinds, offsets, mu, lam, F, J, bool(True), local)
-    _project_admissible(kinds, offsets, mu, lam)
     return steps
 
 
 @njit(cache=True)
 def _project_admissible(kinds, offsets, mu, lam):
     """Λ onto the admissible impulses, in place: Λ_N >= 0, |Λ_T| <= μ Λ_N (a Newton
-    iterate may leave them by rounding)."""
+    iterate within the tolerance may leave them by a rounding-sized amount)."""
     for k in range(kinds.shape[0]):
         o = offsets[k]
         if kinds[k] == BILATERAL:
@@ -440,6 +439,21 @@ def _project_admissible(kinds, offsets, mu, lam):
         lam[o] = max(lam[o], 0.0)
         if kinds[k] == COULOMB:
             lam[o + 1], lam[o + 2] = _disk(lam[o + 1], lam[o + 2], mu[k] * lam[o])
+
+
+@njit(cache=True)
+def _solved_after_newton(G, c, r, kinds, offsets, mu, lam, xi, tol, c_ref):
+    """(residual [m/s], whether Λ is within the threshold of :func:`prox_iterate`); a Λ
+    within it is projected onto the admissible impulses and checked again."""
+    m = c.shape[0]
+    v_terms = velocities(G, c, lam, xi)
+    residual = prox_step(xi, r, kinds, offsets, mu, lam, bool(False))
+    if residual > threshold(tol, c_ref, m, v_terms):
+        return residual, False
+    _project_admissible(kinds, offsets, mu, lam)
+    v_terms = velocities(G, c, lam, xi)
+    residual = prox_step(xi, r, kinds, offsets, mu, lam, bool(False))
+    return residual, residual <= threshold(tol, c_ref, m, v_terms)
 
 
 @njit(cache=True)
@@ -503,9 +517,8 @@ def prox_iterate(G, c, r, kinds, offsets, mu, lam, xi, r_work, jacobi, tol, max_
     if newton and newton_first:
         it += _newton_phase_counted(G, c, r, kinds, offsets, mu, lam, xi, p, q, J, perm_r, perm_c, local,
                                     max_iter - it)
-        v_terms = velocities(G, c, lam, xi)
-        residual = prox_step(xi, r, kinds, offsets, mu, lam, bool(False))
-        if residual <= threshold(tol, c_ref, m, v_terms):
+        residual, solved = _solved_after_newton(G, c, r, kinds, offsets, mu, lam, xi, tol, c_ref)
+        if solved:
             return it, residual, True
     while it < max_iter:
         it += 1
@@ -539,9 +552,8 @@ def prox_iterate(G, c, r, kinds, offsets, mu, lam, xi, r_work, jacobi, tol, max_
         if newton and sweeps % NEWTON_EVERY == 0 and it < max_iter:
             it += _newton_phase_counted(G, c, r, kinds, offsets, mu, lam, xi, p, q, J, perm_r, perm_c, local,
                                         max_iter - it)
-            v_terms = velocities(G, c, lam, xi)
-            residual = prox_step(xi, r, kinds, offsets, mu, lam, bool(False))
-            if residual <= threshold(tol, c_ref, m, v_terms):
+            residual, solved = _solved_after_newton(G, c, r, kinds, offsets, mu, lam, xi, tol, c_ref)
+            if solved:
                 return it, residual, True
     v_terms = velocities(G, c, lam, xi)
     residual = prox_step(xi, r, kinds, offsets, mu, lam, bool(False))
