@@ -25,6 +25,12 @@ ADAPT_WINDOW = 50             # sweeps between the checks for progress of prox_i
 MAX_HALVINGS = 20             # of the r-factors in one prox_iterate (r >= 1e-6 r0)
 NORMAL_PHASE_FACTOR = 4       # with friction: a normal phase every this many subspace intervals
 NORMAL_PHASE_WINDOW = 4       # normal phases between the checks for progress (friction)
+NEWTON_EVERY = 20             # with friction: sweeps between the Newton phases
+NEWTON_STEPS = 30             # most steps of one Newton phase
+NEWTON_R_SCALE = 1000.0       # the Newton phase's prox factors: this times the sweeps' r
+NEWTON_MIN_STEP = 1e-6        # smallest line-search step of the Newton phase
+ARMIJO_SIGMA = 1e-4           # sufficient decrease of |F|² in the Newton phase
+PIVOT_TOL = 1e-13             # pivots below this times the first: the rank of the Newton matrix
 
 
 @njit(cache=True)
@@ -274,7 +280,192 @@ def normal_phase(G, c, r, kinds, offsets, lam, xi, p, q, tol, c_ref, subspace_ev
 
 
 @njit(cache=True)
-def prox_iterate(G, c, r, kinds, offsets, mu, lam, xi, r_work, jacobi, tol, max_iter, subspace_every, p, q):
+def _local_projection(kind, mu_k, z, P, D):
+    """prox_C of one entry at z (its rows) into P and its generalized derivative ∂P/∂z
+    into D (3, 3): bilateral P = z; unilateral P = max(z, 0); Coulomb P_N = max(z_N, 0),
+    P_T = z_T inside the disk of radius μ P_N, else μ P_N n (n = z_T / |z_T|), whose
+    derivative is μ P_N / |z_T| (I − n nᵀ) in z_T and μ n in z_N (z_N > 0)."""
+    D[:, :] = 0.0
+    if kind == BILATERAL:
+        P[0] = z[0]
+        D[0, 0] = 1.0
+        return
+    P[0] = max(z[0], 0.0)
+    D[0, 0] = 1.0 if z[0] > 0.0 else 0.0
+    if kind != COULOMB:
+        return
+    radius = mu_k * P[0]
+    norm = math.hypot(z[1], z[2])
+    if norm <= radius and radius > 0.0:
+        P[1], P[2] = z[1], z[2]
+        D[1, 1] = D[2, 2] = 1.0
+    elif norm > 0.0:
+        n1, n2 = z[1] / norm, z[2] / norm
+        P[1], P[2] = radius * n1, radius * n2
+        f = radius / norm
+        D[1, 1], D[1, 2], D[2, 1], D[2, 2] = f * (1.0 - n1 * n1), -f * n1 * n2, -f * n1 * n2, f * (1.0 - n2 * n2)
+        if z[0] > 0.0:
+            D[1, 0], D[2, 0] = mu_k * n1, mu_k * n2
+    else:
+        P[1] = P[2] = 0.0
+
+
+@njit(cache=True)
+def natural_map(G, c, r, scale, kinds, offsets, mu, lam, F, J, jacobian, local):
+    """The natural map F(Λ) = (Λ − prox_C(Λ − s r ξ)) / (s r) [m/s], ξ = c + G Λ, s =
+    ``scale``, into ``F`` (m,); zero exactly at a solution (Alart & Curnier 1991; Acary &
+    Brogliato 2008, sec. 12.5). With ``jacobian``, a generalized Jacobian ∂F/∂Λ =
+    (I − D (I − s R G)) / (s r) into ``J`` (m, m) (D the block diagonal of the entries'
+    ∂P/∂z, :func:`_local_projection`). ``local`` (5, 3) work (z, P, D of an entry).
+    Returns |F|² [m²/s²]."""
+    m = lam.shape[0]
+    z = local[0]
+    P = local[1]
+    D = local[2:5]
+    psi = 0.0
+    for k in range(kinds.shape[0]):
+        o = offsets[k]
+        rows = 3 if kinds[k] == COULOMB else 1
+        for a in range(rows):
+            xi, _ = _row_velocity(G, c, lam, o + a)
+            z[a] = lam[o + a] - scale * r[o + a] * xi
+        _local_projection(kinds[k], mu[k], z, P, D)
+        for a in range(rows):
+            ra = scale * r[o + a]
+            F[o + a] = (lam[o + a] - P[a]) / ra
+            psi += F[o + a] * F[o + a]
+            if jacobian:
+                for col in range(m):
+                    v = 1.0 if col == o + a else 0.0
+                    for b in range(rows):
+                        e = 1.0 if col == o + b else 0.0
+                        v -= D[a, b] * (e - scale * r[o + b] * G[o + b, col])
+                    J[o + a, col] = v / ra
+    return psi
+
+
+@njit(cache=True)
+def complete_pivoting_solve(A, b, x, perm_r, perm_c, tol):
+    """A basic solution of A x = b (A (m, m), overwritten, as is ``b``) by Gaussian
+    elimination with complete pivoting; elimination stops where the largest remaining
+    pivot is below ``tol`` times the first (the numerical rank k), and the unknowns past
+    k are zero (Golub & Van Loan 2013, sec. 3.4.8). For a consistent singular system
+    (more contacts than velocities) this is an exact solution. ``perm_r``, ``perm_c`` (m,)
+    int64 work. Returns k."""
+    m = b.shape[0]
+    for i in range(m):
+        perm_r[i] = i
+        perm_c[i] = i
+    first = 0.0
+    rank = m
+    for k in range(m):
+        p, q, big = k, k, -1.0
+        for i in range(k, m):
+            for j in range(k, m):
+                v = abs(A[perm_r[i], perm_c[j]])
+                if v > big:
+                    p, q, big = i, j, v
+        if k == 0:
+            first = big
+        if not big > tol * first or big == 0.0:
+            rank = k
+            break
+        perm_r[k], perm_r[p] = perm_r[p], perm_r[k]
+        perm_c[k], perm_c[q] = perm_c[q], perm_c[k]
+        pr, pc = perm_r[k], perm_c[k]
+        for i in range(k + 1, m):
+            ri = perm_r[i]
+            f = A[ri, pc] / A[pr, pc]
+            if f != 0.0:
+                for j in range(k + 1, m):
+                    A[ri, perm_c[j]] -= f * A[pr, perm_c[j]]
+                b[ri] -= f * b[pr]
+    for j in range(m):
+        x[j] = 0.0
+    for k in range(rank - 1, -1, -1):
+        pr = perm_r[k]
+        s = b[pr]
+        for j in range(k + 1, rank):
+            s -= A[pr, perm_c[j]] * x[perm_c[j]]
+        x[perm_c[k]] = s / A[pr, perm_c[k]]
+    return rank
+
+
+@njit(cache=True)
+def newton_phase(G, c, r, kinds, offsets, mu, lam, F, d, trial, J, perm_r, perm_c, local, max_steps):
+    """Semismooth Newton steps on the natural map with prox factors NEWTON_R_SCALE · r
+    (:func:`natural_map`), in place: the direction solves J d = −F
+    (:func:`complete_pivoting_solve`), the step is the largest s = 2^-k >= NEWTON_MIN_STEP
+    with |F(Λ + s d)|² <= (1 − ARMIJO_SIGMA s) |F(Λ)|² (Qi & Sun 1993; De Luca, Facchinei
+    & Kanzow 1996). Ends after ``max_steps`` steps or where the line search fails (Λ is
+    then the last accepted iterate). ``F``, ``d``, ``trial`` (m,), ``J`` (m, m), ``local``
+    (5, 3) work.
+    Returns the steps taken (one solve each)."""
+    m = lam.shape[0]
+    scale = NEWTON_R_SCALE
+    psi = natural_map(G, c, r, scale, kinds, offsets, mu, lam, F, J, bool(True), local)
+    steps = 0
+    while steps < max_steps and psi > 0.0:
+        for i in range(m):
+            trial[i] = -F[i]
+        complete_pivoting_solve(J, trial, d, perm_r, perm_c, PIVOT_TOL)
+        steps += 1
+        s = 1.0
+        accepted = False
+        while s >= NEWTON_MIN_STEP:
+            for i in range(m):
+                trial[i] = lam[i] + s * d[i]
+            psi_trial = natural_map(G, c, r, scale, kinds, offsets, mu, trial, F, J, bool(False), local)
+            if psi_trial <= (1.0 - ARMIJO_SIGMA * s) * psi:
+                accepted = True
+                break
+            s *= 0.5
+        if not accepted or not _finite(trial):
+            break
+        for i in range(m):
+            lam[i] = trial[i]
+        psi = natural_map(G, c, r, scale, kinds, offsets, mu, lam, F, J, bool(True), local)
+    return steps
+
+
+@njit(cache=True)
+def _project_admissible(kinds, offsets, mu, lam):
+    """Λ onto the admissible impulses, in place: Λ_N >= 0, |Λ_T| <= μ Λ_N (a Newton
+    iterate within the tolerance may leave them by a rounding-sized amount)."""
+    for k in range(kinds.shape[0]):
+        o = offsets[k]
+        if kinds[k] == BILATERAL:
+            continue
+        lam[o] = max(lam[o], 0.0)
+        if kinds[k] == COULOMB:
+            lam[o + 1], lam[o + 2] = _disk(lam[o + 1], lam[o + 2], mu[k] * lam[o])
+
+
+@njit(cache=True)
+def _solved_after_newton(G, c, r, kinds, offsets, mu, lam, xi, tol, c_ref):
+    """(residual [m/s], whether Λ is within the threshold of :func:`prox_iterate`); a Λ
+    within it is projected onto the admissible impulses and checked again."""
+    m = c.shape[0]
+    v_terms = velocities(G, c, lam, xi)
+    residual = prox_step(xi, r, kinds, offsets, mu, lam, bool(False))
+    if residual > threshold(tol, c_ref, m, v_terms):
+        return residual, False
+    _project_admissible(kinds, offsets, mu, lam)
+    v_terms = velocities(G, c, lam, xi)
+    residual = prox_step(xi, r, kinds, offsets, mu, lam, bool(False))
+    return residual, residual <= threshold(tol, c_ref, m, v_terms)
+
+
+@njit(cache=True)
+def _newton_phase_counted(G, c, r, kinds, offsets, mu, lam, F, d, trial, J, perm_r, perm_c, local, budget):
+    """:func:`newton_phase` of at most min(NEWTON_STEPS, ``budget``) steps; returns them."""
+    return newton_phase(G, c, r, kinds, offsets, mu, lam, F, d, trial, J, perm_r, perm_c, local,
+                        min(NEWTON_STEPS, budget))
+
+
+@njit(cache=True)
+def prox_iterate(G, c, r, kinds, offsets, mu, lam, xi, r_work, jacobi, tol, max_iter, subspace_every, p, q,
+                 newton_first, J, perm_r, perm_c, local):
     """Sweep until the scaled change and then the natural residual are <= the threshold
 
         tol · max_i |c_i| + ROUNDING · (m + 1) · max_i (|c_i| + Σ_j |G_ij Λ_j|)   [m/s],
@@ -296,8 +487,14 @@ def prox_iterate(G, c, r, kinds, offsets, mu, lam, xi, r_work, jacobi, tol, max_
     subspace step (:func:`subspace_step`) minimizes the problem's quadratic on the rows
     the sweeps found active; with friction, every NORMAL_PHASE_FACTOR · ``subspace_every``
     sweeps a normal phase (:func:`normal_phase`) solves the normal problem with the
-    tangential impulses held. Their sweeps and conjugate-gradient iterations count as
-    sweeps (one G p or one row pass each); they work in ``p``, ``q`` (m,).
+    tangential impulses held, and every NEWTON_EVERY sweeps a Newton phase
+    (:func:`newton_phase`, also before the first sweep with ``newton_first``) takes
+    semismooth Newton steps on the natural map, where the sweeps converge linearly at a
+    rate set by the conditioning of G (a face whose few carrying contacts slide by
+    velocities 1e-4 of ξ_free). Their sweeps, conjugate-gradient iterations and Newton
+    steps count as sweeps (one G p, one row pass or one solve each); they work in ``p``,
+    ``q`` (m,), and the Newton phase also in ``xi``, ``J`` (m, m), ``perm_r``, ``perm_c``
+    (m,) int64 and ``local`` (5, 3).
     Returns (sweeps, residual [m/s], converged); the residual is the natural-map
     residual of the returned Λ (one extra G Λ per check).
     """
@@ -316,6 +513,13 @@ def prox_iterate(G, c, r, kinds, offsets, mu, lam, xi, r_work, jacobi, tol, max_
     window_change = math.inf
     it = 0
     sweeps = 0
+    newton = frictional and subspace_every > 0
+    if newton and newton_first:
+        it += _newton_phase_counted(G, c, r, kinds, offsets, mu, lam, xi, p, q, J, perm_r, perm_c, local,
+                                    max_iter - it)
+        residual, solved = _solved_after_newton(G, c, r, kinds, offsets, mu, lam, xi, tol, c_ref)
+        if solved:
+            return it, residual, True
     while it < max_iter:
         it += 1
         sweeps += 1
@@ -345,6 +549,12 @@ def prox_iterate(G, c, r, kinds, offsets, mu, lam, xi, r_work, jacobi, tol, max_
             else:
                 it += subspace_step(G, c, r, kinds, offsets, lam, xi, p, q, threshold(tol, c_ref, m, v_terms),
                                     max_iter - it)
+        if newton and sweeps % NEWTON_EVERY == 0 and it < max_iter:
+            it += _newton_phase_counted(G, c, r, kinds, offsets, mu, lam, xi, p, q, J, perm_r, perm_c, local,
+                                        max_iter - it)
+            residual, solved = _solved_after_newton(G, c, r, kinds, offsets, mu, lam, xi, tol, c_ref)
+            if solved:
+                return it, residual, True
     v_terms = velocities(G, c, lam, xi)
     residual = prox_step(xi, r, kinds, offsets, mu, lam, bool(False))
     return max_iter, residual, residual <= threshold(tol, c_ref, m, v_terms)
@@ -370,13 +580,15 @@ def diagonal_floor(G, tiny, d):
 
 @njit(cache=True)
 def gauss_seidel_solve(G, xi_free, gamma_pre, restitution, kinds, offsets, mu, tangent_at, alpha, tiny, tol,
-                       max_iter, subspace_every, lam, gamma_plus, work):
+                       max_iter, subspace_every, lam, gamma_plus, work, newton_first, J, pivots, local):
     """The projected Gauss–Seidel solve of :meth:`contact.solver.ProxSolver.solve_into`
     with automatic r, whole: c = ξ_free + ε γ⁻ (Λ = 0 when c = 0); r_i = α / G_ii
     (:func:`diagonal_floor`), a Coulomb contact's tangential rows α / max(λ_max(G_TT),
     G_T1T1, G_T2T2); :func:`prox_iterate` from the warm start in ``lam``; γ⁺ = ξ_free + G Λ.
     ``tangent_at``: the first tangential row of every Coulomb contact; ``work`` (6, m)
-    scratch (c, r, ξ, the sweeps' r, the subspace step's p and q). Returns (sweeps, residual [m/s], converged).
+    scratch (c, r, ξ, the sweeps' r, the subspace step's p and q); ``newton_first``, ``J``
+    (m, m), ``pivots`` (2, m) int64 and ``local`` (5, 3): the Newton phases of a problem
+    with friction (:func:`prox_iterate`). Returns (sweeps, residual [m/s], converged).
     Numpy reference: the same steps with ``np.multiply``, ``np.add``, ``np.matmul``
     (``tests/unit/contact/test_contact_solver.py``)."""
     m = G.shape[0]
@@ -406,7 +618,8 @@ def gauss_seidel_solve(G, xi_free, gamma_pre, restitution, kinds, offsets, mu, t
         lam_max = 0.5 * (a + e) + math.hypot(0.5 * (a - e), b)
         r[t] = r[t + 1] = alpha / max(lam_max, r_work[t], r_work[t + 1])
     it, residual, converged = prox_iterate(G, c, r, kinds, offsets, mu, lam, xi, r_work, bool(False), tol, max_iter,
-                                           subspace_every, work[4], work[5])
+                                           subspace_every, work[4], work[5], newton_first, J, pivots[0], pivots[1],
+                                           local)
     for i in range(m):
         s = 0.0
         for j in range(m):

@@ -34,7 +34,8 @@ Methods (:class:`ProxSolver`):
   the bodies have velocities), a subspace step (below) from Λ clipped to Λ ≥ 0 takes the
   Newton step's place (counted as one), and Newton goes on from there. It covers
   :class:`~contact.laws.UnilateralNewtonImpact` and :class:`~contact.laws.Bilateral`
-  contacts; a problem with friction raises ModelError (use a prox method).
+  contacts. A problem with friction is solved by the Gauss–Seidel iteration below that
+  starts with a Newton phase on the natural map.
 
 Subspace steps (``subspace_every`` > 0): the sweeps fix the
 active set (the rows with Λ_i > 0) within a few iterations but crawl towards the
@@ -51,8 +52,15 @@ contacts with μ = 0.3 whose first impulse is carried by 5 of them): every
 problem with the tangential impulses held, a frictionless problem, by sweeps over the
 normal rows and subspace steps (:func:`contact._kernels.normal_phase`; the normal half of
 the staggered projections of Kaufman, Sueda, James & Pai 2008); each of its row passes
-counts as one iteration. Convergence stays usual, not guaranteed: linear at a rate set by
-the normal–tangential coupling, slow for a few sliding contacts on a flexible body.
+counts as one iteration. The sweeps still converge linearly at a rate set by the
+conditioning of G, slowly where the few contacts that carry a face's load slide by
+velocities 1e-4 of ξ_free; so every NEWTON_EVERY sweeps a Newton phase takes
+semismooth Newton steps on the natural map F(Λ) = (Λ − prox_C(Λ − r ξ)) / r (Alart &
+Curnier 1991), with r a thousand times the sweeps' (the stick–slip switch then follows the
+velocities), the direction from Gaussian elimination with complete pivoting (a basic
+solution where G is singular) and an Armijo line search on |F|²; where the line search
+fails the sweeps go on (:func:`contact._kernels.newton_phase`). Each Newton step counts
+as one iteration. Convergence stays usual, not guaranteed.
 
 Convergence: an iteration stops when the scaled change max_i |ΔΛ_i| / r_i (prox
 methods) and the natural-map residual max_i |Λ_i − prox(Λ − r ξ)_i| / r_i [m/s] (zero
@@ -244,19 +252,21 @@ class ProxSolver:
                                                   np.empty((WORK_ROWS, cs.m)))
         return ContactSolution(lam, gamma_plus, it, residual, converged)
 
-    def solve_into(self, cs, G, xi_free, gamma_pre, lam, gamma_plus, work):
+    def solve_into(self, cs, G, xi_free, gamma_pre, lam, gamma_plus, work, newton_scratch=None):
         """:meth:`solve` on consistent float arrays without validation: Λ in place in
         ``lam`` (its warm start on entry), γ⁺ = ξ_free + G Λ into ``gamma_plus``,
-        ``work`` (WORK_ROWS, m) scratch; returns (iterations, residual [m/s], converged). The
-        Gauss–Seidel method with automatic r is one kernel call
-        (:func:`contact._kernels.gauss_seidel_solve`) and allocates nothing."""
-        if self.method == "newton" and cs.frictional:
-            raise ModelError("ProxSolver: method 'newton' covers unilateral and bilateral "
-                             "contacts only; use 'gauss-seidel' with friction")
-        if self.method == "gauss-seidel" and self.r == "auto":
+        ``work`` (WORK_ROWS, m) scratch, ``newton_scratch`` the scratch of the Newton phases
+        of a problem with friction (:func:`newton_work`; made here when None); returns
+        (iterations, residual [m/s], converged). The Gauss–Seidel method with automatic r,
+        and the Newton method with friction, are one kernel call
+        (:func:`contact._kernels.gauss_seidel_solve`) and allocate nothing."""
+        frictional_newton = self.method == "newton" and cs.frictional
+        if frictional_newton or (self.method == "gauss-seidel" and self.r == "auto"):
+            J, pivots, local = newton_scratch if newton_scratch is not None else newton_work_for(cs)
             it, residual, converged = kern.gauss_seidel_solve(
                 G, xi_free, gamma_pre, cs.restitution, cs.kinds, cs.entry_offsets, cs.mu, cs.tangent_at,
-                self.relaxation, TINY_DIAGONAL, self.tol, self.max_iter, self.subspace_every, lam, gamma_plus, work)
+                self.relaxation, TINY_DIAGONAL, self.tol, self.max_iter, self.subspace_every, lam, gamma_plus, work,
+                frictional_newton, J, pivots, local)
             return int(it), float(residual), bool(converged)
         c, r, xi, r_work = work[0], work[1], work[2], work[3]
         np.multiply(cs.restitution, gamma_pre, out=c)
@@ -269,9 +279,11 @@ class ProxSolver:
             it, residual, converged = self._newton(cs, G, c, _diagonal(G) ** -1.0, lam, work[4:6])
         else:
             self._prox_factors(cs, G, r)
+            J, pivots, local = newton_scratch if newton_scratch is not None else newton_work_for(cs)
             it, residual, converged = kern.prox_iterate(
                 G, c, r, cs.kinds, cs.entry_offsets, cs.mu, lam, xi, r_work, self.method == "jacobi",
-                self.tol, self.max_iter, self.subspace_every, work[4], work[5])
+                self.tol, self.max_iter, self.subspace_every, work[4], work[5], False, J, pivots[0], pivots[1],
+                local)
         np.matmul(G, lam, out=gamma_plus)
         np.add(xi_free, gamma_plus, out=gamma_plus)
         return int(it), float(residual), bool(converged)
@@ -357,6 +369,18 @@ class ProxSolver:
                 return trial
             step *= 0.5
         return None
+
+
+def newton_work(m):
+    """Scratch of the Newton phases of an m-row problem with friction: (J (m, m),
+    pivots (2, m) int64, local (5, 3)) (:func:`contact._kernels.newton_phase`)."""
+    return np.empty((m, m)), np.empty((2, m), dtype=np.int64), np.empty((5, 3))
+
+
+def newton_work_for(cs):
+    """:func:`newton_work` of ``cs``'s rows with friction, empty stand-ins without (the
+    kernels never touch them)."""
+    return newton_work(cs.m if cs.frictional else 0)
 
 
 def _diagonal(G):

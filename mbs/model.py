@@ -43,7 +43,7 @@ from .fused_detection import fused_detection
 from .residual_contact import ResidualContacts
 
 N_FACTORS = 8          # Cholesky factors of a constant M̂ kept for different step sizes (+1)
-CACHES = ("contact_sets", "problem_views", "factor_dt", "factor_last", "comp_entries")
+CACHES = ("contact_sets", "problem_views", "newton_views", "factor_dt", "factor_last", "comp_entries")
 # ^ Data rebuilt on demand (the last step's factor of a constant M̂ is looked up again in
 #   ``factors``; the compliant contacts' entries are made each step): not in a checkpoint
 CARRIED = ("t", "q", "u", "closed", "lam_prev", "warm", "lam_joints", "warm_joints", "comp_force", "comp_delta",
@@ -256,6 +256,10 @@ class Data:
         self.work_u = np.zeros(nu)          # M̂⁻¹ W Λ, then (1 − 2θ)Δt u_k
         self.u_prev = np.zeros(nu)          # u_k while u_{k+1} is formed
         self.solver_work = np.zeros((WORK_ROWS, m))
+        self.newton_matrix_buf = np.zeros(m * m)    # the Newton phases with friction: J (m, m),
+        self.newton_pivots = np.zeros((2, m), dtype=np.int64)    # pivots,
+        self.newton_local = np.zeros((5, 3))        # an entry's z, P, ∂P/∂z
+        self.newton_views = {}              # m -> views of the three above (stages.impulses)
         # compliant contacts (mbs.residual_contact, contact.compliance): spring state per
         # contact row (end force [N], deflection [m], its rate [m/s]), the last step's
         # Λ₀ = (1 − θ)Δt F_k per contact row [N s] (its impulse is Λ₀ + lam_prev), and this step's

@@ -181,8 +181,12 @@ def impulses(model, data, dt):
         return
     W, MW, G, lam, gamma_plus, xi_free, gamma_pre, closing, offset = data.problem(model.nu, m)
     warm_start(model, data, lam)
+    newton = data.newton_views.get(m)
+    if newton is None:                       # the Newton phases' scratch of m rows, made once per m
+        newton = data.newton_views[m] = (data.newton_matrix_buf[:m * m].reshape(m, m), data.newton_pivots[:, :m],
+                                         data.newton_local)
     it, residual, converged = model.solver.solve_into(contact_set(model, data), G, xi_free, gamma_pre, lam,
-                                                      gamma_plus, data.solver_work[:, :m])
+                                                      gamma_plus, data.solver_work[:, :m], newton)
     if not converged:
         raise StepFailure(f"contact problem not solved: residual {residual:.3g} m/s after "
                           f"{it} iterations ({data.n_closed} closed contacts)")

@@ -9,7 +9,7 @@ from scipy.optimize import nnls
 
 from contact import _kernels as kern
 from contact.laws import Bilateral, UnilateralCoulombContact, UnilateralNewtonImpact
-from contact.solver import SUBSPACE_EVERY, WORK_ROWS, ContactSet, ProxSolver
+from contact.solver import SUBSPACE_EVERY, WORK_ROWS, ContactSet, ProxSolver, newton_work
 from ffrmbs.errors import ModelError
 
 
@@ -195,19 +195,20 @@ def test_newton_agrees_with_pgs_on_random_frictionless_problems():
 
 
 def test_cycling_frictional_contact_converges_by_r_reduction():
-    """A strongly coupled contact on which plain PGS with α = 1 cycles with period 2."""
+    """A strongly coupled contact on which plain PGS with α = 1 cycles with period 2
+    (sweeps alone, subspace_every = 0: no normal or Newton phase)."""
     G = np.array([[1.237326, 2.24091, -1.251171],
                   [2.24091, 7.796883, -2.855814],
                   [-1.251171, -2.855814, 4.652451]])
     c = np.array([-1.073583, -2.566174, 3.599061])
     law = UnilateralCoulombContact(0.0, 0.9566748993705659)
-    sol = ProxSolver(tol=1e-12).solve([law], G, c, np.zeros(3))
+    sol = ProxSolver(tol=1e-12, subspace_every=0).solve([law], G, c, np.zeros(3))
     assert sol.converged and sol.iterations > 50
     lam_T, g_T = sol.lam[1:], sol.gamma_plus[1:]
     assert sol.lam[0] > 0 and abs(sol.gamma_plus[0]) < 1e-11
     assert np.linalg.norm(lam_T) == pytest.approx(law.mu * sol.lam[0], rel=1e-10)
     np.testing.assert_allclose(lam_T / np.linalg.norm(lam_T), -g_T / np.linalg.norm(g_T), atol=1e-9)
-    jacobi = ProxSolver("jacobi", tol=1e-12).solve([law], G, c, np.zeros(3))
+    jacobi = ProxSolver("jacobi", tol=1e-12, subspace_every=0).solve([law], G, c, np.zeros(3))
     np.testing.assert_allclose(jacobi.lam, sol.lam, atol=1e-10)
 
 
@@ -309,8 +310,6 @@ def test_bad_problems_raise_model_error():
         solver.solve(laws, -np.eye(2), np.zeros(2), np.zeros(2))
     with pytest.raises(ModelError, match="not a set-valued"):
         solver.solve([UnilateralCoulombContact(0, 0.3).friction], np.eye(2), np.zeros(2), np.zeros(2))
-    with pytest.raises(ModelError, match="friction"):
-        ProxSolver("newton").solve([UnilateralCoulombContact(0, 0.3)], np.eye(3), -np.ones(3), np.zeros(3))
 
 
 def reference_gauss_seidel_solve(cs, G, xi_free, gamma_pre, lam, alpha=1.0, tol=1e-10, max_iter=10_000):
@@ -324,9 +323,10 @@ def reference_gauss_seidel_solve(cs, G, xi_free, gamma_pre, lam, alpha=1.0, tol=
         GT = G[t:t + 2, t:t + 2]
         r[t:t + 2] = alpha / max(np.linalg.eigvalsh(GT).max(), d[t], d[t + 1])
     m = len(c)
+    J, pivots, local = newton_work(m)
     it, residual, converged = kern.prox_iterate(G, c, r, cs.kinds, cs.entry_offsets, cs.mu, lam, np.empty(m),
                                                 np.empty(m), False, tol, max_iter, SUBSPACE_EVERY, np.empty(m),
-                                                np.empty(m))
+                                                np.empty(m), False, J, pivots[0], pivots[1], local)
     return it, residual, converged, xi_free + G @ lam
 
 
@@ -436,3 +436,66 @@ def test_normal_phase_solves_the_normal_problem_with_the_tangential_impulses_hel
     assert steps < 10_000
     np.testing.assert_array_equal(np.delete(lam, N), lam_T)
     np.testing.assert_allclose(lam[N], lam_N, atol=1e-9 * max(1.0, lam_N.max()))
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_natural_map_kernel_equals_the_laws_projections_and_its_jacobian_finite_differences(seed):
+    """F(Λ) = (Λ − prox_C(Λ − s r ξ)) / (s r) of the Newton phase against the laws'
+    ``project`` in numpy, and its Jacobian against central differences at a random Λ (off
+    the kinks of the projection with probability one)."""
+    rng = np.random.default_rng(seed)
+    cs = ContactSet(mixed_laws(rng, 6))
+    m = cs.m
+    G = random_delassus(rng, m)
+    c, lam = rng.normal(size=m), rng.normal(size=m)
+    r, scale = rng.uniform(0.5, 2.0, size=m), 10.0
+    r[cs.tangent_rows() + 1] = r[cs.tangent_rows()]           # the disk's r is isotropic
+    F, J, dF = np.empty(m), np.empty((m, m)), np.empty(m)
+    local = newton_work(0)[2]
+    psi = kern.natural_map(G, c, r, scale, cs.kinds, cs.entry_offsets, cs.mu, lam, F, J, True, local)
+    sr = scale * r
+    z = lam - sr * (c + G @ lam)
+    prox = np.concatenate([law.project(z[o:o + law.dim]) for law, o in zip(cs.laws, cs.offsets)])
+    np.testing.assert_allclose(F, (lam - prox) / sr, rtol=1e-12, atol=1e-12 * np.abs(F).max())
+    assert psi == pytest.approx(F @ F, rel=1e-12)
+    h = 1e-7
+    for j in range(m):
+        e = np.zeros(m)
+        e[j] = h
+        plus, minus = np.empty(m), np.empty(m)
+        kern.natural_map(G, c, r, scale, cs.kinds, cs.entry_offsets, cs.mu, lam + e, plus, J[:0, :0], False, local)
+        kern.natural_map(G, c, r, scale, cs.kinds, cs.entry_offsets, cs.mu, lam - e, minus, J[:0, :0], False, local)
+        dF[:] = (plus - minus) / (2 * h)
+        np.testing.assert_allclose(J[:, j], dF, rtol=1e-5, atol=1e-6 * np.abs(J).max())
+
+
+def test_complete_pivoting_solve_equals_numpy_and_solves_a_consistent_singular_system():
+    """Regular: np.linalg.solve. Singular of rank 5 (a Delassus matrix of more contacts
+    than velocities) with b in its range: rank 5 found, A x = b to rounding."""
+    rng = np.random.default_rng(2)
+    m = 12
+    A, b = rng.normal(size=(m, m)), rng.normal(size=m)
+    x, pivots = np.empty(m), np.empty((2, m), dtype=np.int64)
+    assert kern.complete_pivoting_solve(A.copy(), b.copy(), x, pivots[0], pivots[1], 1e-13) == m
+    np.testing.assert_allclose(x, np.linalg.solve(A, b), rtol=1e-10)
+    W = rng.normal(size=(5, m))
+    S = W.T @ W
+    b = S @ rng.normal(size=m)
+    assert kern.complete_pivoting_solve(S.copy(), b.copy(), x, pivots[0], pivots[1], 1e-13) == 5
+    np.testing.assert_allclose(S @ x, b, atol=1e-12 * np.abs(b).max())
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_newton_with_friction_agrees_with_gauss_seidel(seed):
+    """Random problems with Coulomb contacts: the Newton method (a Newton phase first)
+    and the Gauss–Seidel method both converge, each to a Λ whose natural residual with
+    r = 1 (the laws' projections in numpy) is zero to the tolerance."""
+    rng = np.random.default_rng(seed)
+    laws = mixed_laws(rng, 8)
+    m = sum(law.dim for law in laws)
+    G, xi_free = random_delassus(rng, m), rng.normal(size=m)
+    for method in ("gauss-seidel", "newton"):
+        sol = ProxSolver(method, tol=1e-12, max_iter=5000).solve(laws, G, xi_free, np.zeros(m))
+        assert sol.converged
+        _, residual = reference_prox_step(ContactSet(laws), G, xi_free, np.ones(m), sol.lam)
+        assert residual <= 1e-9 * np.abs(xi_free).max()
