@@ -6,8 +6,8 @@ starts (they inherit the environment), and kept for the next run, under
 ``$FFRMBS_TEST_CACHE`` (default ``.pytest_cache/ffrmbs`` in the repository):
 
 * ``bodies/``: :func:`preprocess.build_body`'s results by recipe (:mod:`body_cache`);
-* ``scenes-<digest>/``: ``$FFRMBS_CACHE``, the built-in scenes' bodies and the peers'
-  results, one directory per digest of the packages' source (a changed line gets a new one);
+* ``scenes/``: ``$FFRMBS_CACHE``, the built-in scenes' bodies and the peers' results, by
+  their recipes (:mod:`ffrmbs_app.scenes.cache`), as a user's run keeps them;
 * ``numba/``: ``$NUMBA_CACHE_DIR``, numba's compiled kernels.
 
 They are set before numba is imported. A test that checks the first run gives its
@@ -18,7 +18,6 @@ once) and the tests marked ``xdist_group(name)`` of all modules on one worker (t
 tests: ``dask``); the addopts' ``--dist loadgroup`` does this.
 """
 
-import hashlib
 import os
 import sys
 from pathlib import Path
@@ -27,21 +26,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent / "support"))
 
 import paths  # noqa: E402
 
-PACKAGES = ("ffrmbs", "ffrmbs_app", "preprocess", "mbs", "contours", "contact", "validation")
-
-
-def _source_digest() -> str:
-    """The first 16 hex digits of the SHA-256 of the packages' source files."""
-    h = hashlib.sha256()
-    for package in PACKAGES:
-        for path in sorted((paths.REPO / package).rglob("*.py")):
-            h.update(str(path.relative_to(paths.REPO)).encode())
-            h.update(path.read_bytes())
-    return h.hexdigest()[:16]
-
-
 CACHE = Path(os.environ.get("FFRMBS_TEST_CACHE") or paths.REPO / ".pytest_cache" / "ffrmbs").resolve()
-os.environ["FFRMBS_CACHE"] = str(CACHE / f"scenes-{_source_digest()}")
+os.environ["FFRMBS_CACHE"] = str(CACHE / "scenes")
 os.environ["NUMBA_CACHE_DIR"] = str(CACHE / "numba")
 
 import pytest  # noqa: E402
