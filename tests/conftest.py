@@ -1,17 +1,63 @@
 """Shared fixtures: small meshes of the report's beam (built once per session), and the
-test helpers of ``tests/support`` on the import path of every test module."""
+test helpers of ``tests/support`` on the import path of every test module.
 
+The session's caches, shared by every test, every xdist worker and every subprocess a test
+starts (they inherit the environment), and kept for the next run, under
+``$FFRMBS_TEST_CACHE`` (default ``.pytest_cache/ffrmbs`` in the repository):
+
+* ``bodies/``: :func:`preprocess.build_body`'s results by recipe (:mod:`body_cache`);
+* ``scenes/``: ``$FFRMBS_CACHE``, the built-in scenes' bodies and the peers' results, by
+  their recipes (:mod:`ffrmbs_app.scenes.cache`), as a user's run keeps them;
+* ``numba/``: ``$NUMBA_CACHE_DIR``, numba's compiled kernels.
+
+They are set before numba is imported. A test that checks the first run gives its
+process an empty cache of its own (``tests/qa/test_compile_once.py``).
+
+Under ``pytest -n`` each test module runs on one worker (its module fixtures are made
+once) and the tests marked ``xdist_group(name)`` of all modules on one worker (the Dask
+tests: ``dask``); the addopts' ``--dist loadgroup`` does this.
+"""
+
+import os
 import sys
 from pathlib import Path
 
-import pytest
-
 sys.path.insert(0, str(Path(__file__).resolve().parent / "support"))
 
-from contours import Contour1sNeutralFFR
-from mbs import FlexibleBodyFFR
-from preprocess import Material, build_body
-from preprocess.geometry import box
+import paths  # noqa: E402
+
+CACHE = Path(os.environ.get("FFRMBS_TEST_CACHE") or paths.REPO / ".pytest_cache" / "ffrmbs").resolve()
+os.environ["FFRMBS_CACHE"] = str(CACHE / "scenes")
+os.environ["NUMBA_CACHE_DIR"] = str(CACHE / "numba")
+
+import pytest  # noqa: E402
+
+import preprocess  # noqa: E402
+from preprocess import pipeline  # noqa: E402
+from body_cache import BodyCache  # noqa: E402
+
+preprocess.build_body = pipeline.build_body = BodyCache(CACHE / "bodies", pipeline.build_body)
+
+from contours import Contour1sNeutralFFR  # noqa: E402
+from mbs import FlexibleBodyFFR  # noqa: E402
+from preprocess import Material, build_body  # noqa: E402
+from preprocess.geometry import box  # noqa: E402
+
+DASK = "dask"
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_collection_modifyitems(config, items):
+    """The ``xdist_group`` of every test without one (given before xdist reads the marks for
+    ``--dist loadgroup``): ``dask`` for the modules of the tests that use the session's
+    Dask cluster (:func:`dask_client`, one per worker process), else the test's module."""
+    def module(item):
+        return item.nodeid.split("::")[0]
+
+    on_dask = {module(item) for item in items if "dask_client" in item.fixturenames}
+    for item in items:
+        if item.get_closest_marker("xdist_group") is None:
+            item.add_marker(pytest.mark.xdist_group(DASK if module(item) in on_dask else module(item)))
 
 
 @pytest.fixture(scope="session")
