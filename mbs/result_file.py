@@ -183,6 +183,7 @@ class ResultRecorder:
                 self.checkpoint_path.unlink(missing_ok=True)
                 ensure_space(self.path.parent, sum(getattr(b, "phi", np.zeros(0)).nbytes for b in integ.system.bodies))
                 self.file = f = h5py.File(part, "w")
+                metadata_at_flush_only(f)
                 st = integ.state
                 f.attrs.update(format=FORMAT, format_version=FORMAT_VERSION, status="running",
                                scene=self.meta.get("scene", ""), description=self.meta.get("description", ""),
@@ -210,6 +211,7 @@ class ResultRecorder:
             raise InputFileError(self.path, None, "the result file of the run to resume is missing")
         try:
             f = h5py.File(self.path, "r+")
+            metadata_at_flush_only(f)
         except BlockingIOError:              # HDF5's own file lock: another process has it open
             raise OutputFileError(self.path, "in use by another process (HDF5 file lock); wait for it to "
                                              "end") from None
@@ -382,6 +384,19 @@ class ResultRecorder:
         self.written = b
         self.traced += min((len(v) for v in rows.values()), default=0)
         self._last_flush = time.perf_counter()
+
+
+def metadata_at_flush_only(f) -> None:
+    """Keep HDF5's metadata of the open file ``f`` in memory until the next flush: with
+    evictions disabled (which needs the cache's automatic resizing off) the library writes
+    no metadata between flushes, so a run killed there leaves the file as of its last
+    flush. With evictions on, a chunk index could reach the disk pointing at space that
+    the file's end-of-allocation did not yet cover ("addr overflow" on reading), found by
+    killing runs at random moments (tests/qa/test_audit_results.py)."""
+    config = f.id.get_mdc_config()
+    config.incr_mode = config.decr_mode = config.flash_incr_mode = 0     # H5C_*_off
+    config.evictions_enabled = False
+    f.id.set_mdc_config(config)
 
 
 def free_bytes(directory) -> int:

@@ -26,7 +26,7 @@ import pytest
 
 from ffrmbs_app import cli
 from ffrmbs_app.export import export_paraview
-from mbs import FlexibleBodyFFR, System
+from mbs import FlexibleBodyFFR, PointMass, System
 from mbs.integrators.moreau import TRACE_KEYS
 from mbs.result_file import ResultRecorder, load_result
 from preprocess import Material, build_body
@@ -323,6 +323,25 @@ def wait_for(condition, proc, timeout=120.0):
             proc.kill()
             pytest.fail("timed out")
         time.sleep(0.001)
+
+
+def test_the_result_file_writes_its_metadata_only_when_it_flushes(tmp_path):
+    """HDF5 may evict metadata to disk between flushes; a kill then can leave a chunk index
+    pointing past the file's end-of-allocation ("addr overflow", found by the kill test
+    below). The recorder's open file keeps its metadata until a flush,
+    from the first flush on and after a resume's reopening alike."""
+    seen = []
+
+    class Watching(ResultRecorder):
+        def _flush(self, integ):
+            seen.append(self.file.id.get_mdc_config().evictions_enabled)
+            super()._flush(integ)
+
+    system = System()
+    system.add(PointMass(1.0, velocity=(1.0, 0.0, 0.0)))
+    system.simulate(0.01, 1e-3, integrator="moreau", recorder=Watching(tmp_path / "m.h5"))
+    assert seen and not any(seen)
+    assert load_result(tmp_path / "m.h5")[0].t[-1] == pytest.approx(0.01)
 
 
 @pytest.mark.slow
