@@ -13,6 +13,12 @@ starts (they inherit the environment), and kept for the next run, under
 They are set before numba is imported. A test that checks the first run gives its
 process an empty cache of its own (``tests/qa/test_compile_once.py``).
 
+Every subprocess a test starts imports this checkout (``PYTHONPATH`` starts with it), not
+an installed copy: numba keys its disk cache by the source file's directory, so a second
+copy of the code would compile every kernel again. Each process keeps BLAS to one thread
+(``OPENBLAS_NUM_THREADS`` and the like, unless set): the xdist workers and the processes
+they start share the machine's cores, and idle BLAS threads spinning beside them cost CPU.
+
 Under ``pytest -n`` each test module runs on one worker (its module fixtures are made
 once) and the tests marked ``xdist_group(name)`` of all modules on one worker (the Dask
 tests: ``dask``); the addopts' ``--dist loadgroup`` does this.
@@ -29,6 +35,13 @@ import paths  # noqa: E402
 CACHE = Path(os.environ.get("FFRMBS_TEST_CACHE") or paths.REPO / ".pytest_cache" / "ffrmbs").resolve()
 os.environ["FFRMBS_CACHE"] = str(CACHE / "scenes")
 os.environ["NUMBA_CACHE_DIR"] = str(CACHE / "numba")
+os.environ["PYTHONPATH"] = os.pathsep.join([str(paths.REPO)] + [p for p in [os.environ.get("PYTHONPATH")] if p])
+for _variable in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_variable, "1")
+
+from threadpoolctl import threadpool_limits  # noqa: E402
+
+threadpool_limits(int(os.environ["OPENBLAS_NUM_THREADS"]))   # for a BLAS loaded before this file
 
 import pytest  # noqa: E402
 

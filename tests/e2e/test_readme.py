@@ -206,7 +206,9 @@ IGNORED = ("plate", "plate_hole", "channel", "__pycache__")     # bodies a user 
 def _fresh_clone(tmp):
     """A directory laid out like a fresh clone: the repository's tracked top-level entries
     (all non-hidden ones without git) as symlinks — copies for those the README's commands
-    write into — so outputs land in tmp."""
+    write into — so outputs land in tmp. The commands import the code from the repository
+    itself (``PYTHONPATH``, and ``PYTHONSAFEPATH`` keeps the working directory off
+    ``sys.path``), whose kernels are in numba's cache, keyed by the source's directory."""
     try:
         tracked = subprocess.run(["git", "ls-files"], cwd=REPO, capture_output=True, text=True, check=True).stdout
         names = {path.split("/")[0] for path in tracked.splitlines()}
@@ -237,12 +239,14 @@ def test_the_readme_shows_commands_this_test_runs():
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("document", [d for d in DOCUMENTS if _to_run(d)], ids=lambda d: str(d.relative_to(REPO)))
+@pytest.mark.parametrize("document", [pytest.param(d, marks=pytest.mark.xdist_group(f"readme-{d.stem}"))
+                                      for d in DOCUMENTS if _to_run(d)], ids=lambda d: str(d.relative_to(REPO)))
 def test_commands_run_as_written(document, tmp_path):
-    """The document's fenced commands and self-contained snippets, in its order, each exits 0."""
+    """The document's fenced commands and self-contained snippets, in its order, each exits 0
+    (one xdist group per document: they share nothing, so the workers can split them)."""
     items = _to_run(document)
     work = _fresh_clone(tmp_path / "clone")
-    env = {**os.environ, "FFRMBS_PROGRESS": "0",
+    env = {**os.environ, "FFRMBS_PROGRESS": "0", "PYTHONSAFEPATH": "1",
            "PYTHONPATH": os.pathsep.join(filter(None, [str(REPO), os.environ.get("PYTHONPATH")]))}
     failures = []
     for item in items:

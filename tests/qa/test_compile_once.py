@@ -10,9 +10,11 @@ import importlib
 import inspect
 import json
 import os
+import pickle
 import subprocess
 import sys
 import textwrap
+from pathlib import Path
 
 import pytest
 from numba.core.registry import CPUDispatcher
@@ -29,26 +31,6 @@ def _kernel_modules():
             if "njit" in path.read_text(encoding="utf-8"):
                 name = ".".join(path.relative_to(ROOT).with_suffix("").parts)
                 yield name
-
-
-# Runs the default scene for 2 ms (200 steps) in a fresh process with an empty numba cache
-# (kernels loaded from the disk cache do not list their nested callees' overloads) and
-# prints every kernel of the project numba holds more than one signature of.
-OVERLOADS = textwrap.dedent("""
-    import json, sys
-    from numba.core.registry import CPUDispatcher
-    from ffrmbs_app.main_job import JobSettings, run_job
-
-    run_job(JobSettings(check=False, t_end=0.002), sys.argv[1], log=lambda *a: None, export=False, precompile=False)
-    kernels = {}
-    for name, module in list(sys.modules.items()):
-        if name.split(".")[0] in ("contact", "contours", "mbs", "ffrmbs", "preprocess", "ffrmbs_app"):
-            for f in vars(module).values():
-                if isinstance(f, CPUDispatcher):
-                    kernels[f.py_func.__module__ + "." + f.py_func.__name__] = [str(s) for s in f.signatures]
-    print(json.dumps({"used": sum(1 for s in kernels.values() if s),
-                      "several": {k: s for k, s in kernels.items() if len(s) > 1}}))
-""")
 
 
 def _literal_arguments(source, names):
@@ -105,20 +87,6 @@ def test_the_check_finds_a_literal_argument():
     assert len(names["callee"].signatures) == 5     # numba's: int64/bool, float64/bool, three literal variants
 
 
-@pytest.mark.slow      # about a minute of CPU: every kernel of the default scene compiled from an empty cache
-def test_a_cold_default_run_compiles_each_kernel_once(tmp_path):
-    """The default scene, 200 steps from an empty numba cache: no kernel holds more than one
-    signature (before: point_jacobian_T, frame_rates_jacobians, contract_surface, prox_step
-    twice, _modal and _grown three times)."""
-    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba"),
-               PYTHONPATH=os.pathsep.join([str(ROOT)] + [p for p in [os.environ.get("PYTHONPATH")] if p]))
-    done = subprocess.run([sys.executable, "-c", OVERLOADS, str(tmp_path / "out")], env=env, cwd=tmp_path,
-                          capture_output=True, text=True, check=True)
-    report = json.loads(done.stdout.strip().splitlines()[-1])
-    assert report["used"] > 30               # the run compiled its kernels here, nested ones included
-    assert report["several"] == {}
-
-
 # The default scene's first run (empty numba cache and body cache), 200 steps, as ``ffrmbs
 # run`` does it: the kernels compiled by a second process while the beam is preprocessed.
 PRECOMPILED = textwrap.dedent("""
@@ -131,16 +99,36 @@ PRECOMPILED = textwrap.dedent("""
 """)
 
 
-@pytest.mark.slow      # about a minute of CPU: every kernel of the default scene compiled from an empty cache
-def test_a_first_run_compiles_the_kernels_in_a_second_process_beside_the_preprocessing(tmp_path):
+@pytest.fixture(scope="module")
+def first_run(tmp_path_factory):
+    """The suite's one cold run (about a minute of CPU: every kernel of the default scene
+    compiled from an empty cache): its report and its numba cache directory."""
+    tmp = tmp_path_factory.mktemp("first_run")
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp / "numba"), FFRMBS_CACHE=str(tmp / "bodies"))
+    done = subprocess.run([sys.executable, "-c", PRECOMPILED, str(tmp / "out")], env=env, cwd=tmp,
+                          capture_output=True, text=True, check=True)
+    return json.loads(done.stdout.strip().splitlines()[-1]), tmp / "numba"
+
+
+def _cached_signatures(cache_dir):
+    """{kernel: number of signatures} in a numba disk cache: each kernel's index file
+    (``<name>-<line>.py<version>.nbi``: numba's format version, then the pickled source
+    stamp and the overloads, one per compiled signature, nested callees included)."""
+    counts = {}
+    for index in sorted(Path(cache_dir).rglob("*.nbi")):
+        with open(index, "rb") as f:
+            pickle.load(f)
+            _, overloads = pickle.loads(f.read())
+        counts[f"{index.parent.name.rsplit('_', 1)[0]}/{index.name.split('.py')[0]}"] = len(overloads)
+    return counts
+
+
+@pytest.mark.slow
+def test_a_first_run_compiles_the_kernels_in_a_second_process_beside_the_preprocessing(first_run):
     """The job compiles no kernel itself: the second process, started before the beam's
     preprocessing, compiled them all into numba's disk cache (before: 23 compiled in the
     job's warm-up, after the preprocessing)."""
-    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba"), FFRMBS_CACHE=str(tmp_path / "bodies"),
-               PYTHONPATH=os.pathsep.join([str(ROOT)] + [p for p in [os.environ.get("PYTHONPATH")] if p]))
-    done = subprocess.run([sys.executable, "-c", PRECOMPILED, str(tmp_path / "out")], env=env, cwd=tmp_path,
-                          capture_output=True, text=True, check=True)
-    report = json.loads(done.stdout.strip().splitlines()[-1])
+    report, _ = first_run
     log = report["log"]
     started = next(i for i, line in enumerate(log) if "compiling numba kernels in a second process" in line)
     preprocessing = next(i for i, line in enumerate(log) if line.startswith("preprocessing the point_mass_beam"))
@@ -148,6 +136,39 @@ def test_a_first_run_compiles_the_kernels_in_a_second_process_beside_the_preproc
     assert started < preprocessing < finished
     assert report["compiled"] == 0
     assert any(line.startswith("kernels: loaded from numba's disk cache") for line in log)
+
+
+@pytest.mark.slow
+def test_a_cold_default_run_compiles_each_kernel_once(first_run):
+    """The first run's numba cache holds one signature of each kernel (before:
+    point_jacobian_T, frame_rates_jacobians, contract_surface, prox_step twice, _modal and
+    _grown three times)."""
+    signatures = _cached_signatures(first_run[1])
+    assert len(signatures) > 30              # the run compiled its kernels there, nested ones included
+    assert {k: n for k, n in signatures.items() if n > 1} == {}
+
+
+def test_the_cache_reader_counts_each_signature(tmp_path):
+    """:func:`_cached_signatures` on a cache written for it: a kernel called with an int, a
+    float and (from a second kernel) a literal 0 holds three signatures, the caller one."""
+    source = textwrap.dedent("""
+        from numba import njit
+
+        @njit(cache=True)
+        def callee(x, k):
+            return x + k
+
+        @njit(cache=True)
+        def caller(x):
+            return callee(x, 0)
+
+        callee(1.0, 2); callee(1.0, 2.5); caller(1.0)
+    """)
+    (tmp_path / "toy.py").write_text(source)
+    subprocess.run([sys.executable, "toy.py"], cwd=tmp_path, check=True,
+                   env=dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba")))
+    counts = _cached_signatures(tmp_path / "numba")
+    assert sorted(counts.values()) == [1, 3] and len(counts) == 2
 
 
 def test_a_failed_second_process_is_named_and_the_job_goes_on():
