@@ -8,7 +8,8 @@ starts (they inherit the environment), and kept for the next run, under
 * ``bodies/``: :func:`preprocess.build_body`'s results by recipe (:mod:`body_cache`);
 * ``scenes/``: ``$FFRMBS_CACHE``, the built-in scenes' bodies and the peers' results, by
   their recipes (:mod:`ffrmbs_app.scenes.cache`), as a user's run keeps them;
-* ``numba/``: ``$NUMBA_CACHE_DIR``, numba's compiled kernels.
+* ``numba/``: ``$NUMBA_CACHE_DIR``, numba's compiled kernels, each compiled by one worker
+  at a time (:mod:`compile_lock`, ``numba-locks/``).
 
 They are set before numba is imported. A test that checks the first run gives its
 process an empty cache of its own (``tests/qa/test_compile_once.py``).
@@ -45,11 +46,13 @@ threadpool_limits(int(os.environ["OPENBLAS_NUM_THREADS"]))   # for a BLAS loaded
 
 import pytest  # noqa: E402
 
+import compile_lock  # noqa: E402
 import preprocess  # noqa: E402
 from preprocess import pipeline  # noqa: E402
 from body_cache import BodyCache  # noqa: E402
 
 preprocess.build_body = pipeline.build_body = BodyCache(CACHE / "bodies", pipeline.build_body)
+compile_lock.install(CACHE / "numba-locks")
 
 from contours import Contour1sNeutralFFR  # noqa: E402
 from mbs import FlexibleBodyFFR  # noqa: E402
