@@ -83,7 +83,7 @@ def test_the_bench_runs_from_an_installed_copy_and_its_baseline_from_the_old_tre
         pytest.skip(f"no baseline to run: {why}")
     install_copy(site, tmp_path)
     t_end = 2e-4
-    env = {**os.environ, "PYTHONPATH": str(site)}
+    env = {**os.environ, "PYTHONPATH": str(site), "NUMBA_DISABLE_JIT": "1"}    # the kernels' Python: no compiling
     run = subprocess.run([sys.executable, "-c", BENCH_FROM_INSTALLED_COPY, str(tmp_path), str(baseline), str(t_end)],
                          cwd=tmp_path, env=env, capture_output=True, text=True, check=False)
     assert run.returncode == 0, run.stderr[-3000:]
