@@ -75,7 +75,11 @@ def test_the_bench_runs_from_an_installed_copy_and_its_baseline_from_the_old_tre
     the installed copy, which is no git clone (one line says so), and its worker imports
     the installed packages. The baseline commit's tree (exported from this clone; it has
     no ``ffrmbs_app``, the installed copy has) runs the default scene with every project
-    package from its own tree and gives this checkout's v_y(T)."""
+    package from its own tree and gives this checkout's v_y(T). Both copies run their
+    kernels as Python (``NUMBA_DISABLE_JIT``): numba's disk cache is keyed by the source's
+    directory, so they would compile every kernel anew (some 40 CPU s), and what is
+    checked here is where the code comes from and what it computes, not its speed; this
+    checkout's v_y(T) is the compiled kernels'."""
     site, baseline = tmp_path / "site", tmp_path / "baseline"
     baseline.mkdir()
     why = step_cost.export_baseline(step_cost.BASELINE, baseline)
@@ -83,7 +87,7 @@ def test_the_bench_runs_from_an_installed_copy_and_its_baseline_from_the_old_tre
         pytest.skip(f"no baseline to run: {why}")
     install_copy(site, tmp_path)
     t_end = 2e-4
-    env = {**os.environ, "PYTHONPATH": str(site)}
+    env = {**os.environ, "PYTHONPATH": str(site), "NUMBA_DISABLE_JIT": "1"}    # the kernels' Python: no compiling
     run = subprocess.run([sys.executable, "-c", BENCH_FROM_INSTALLED_COPY, str(tmp_path), str(baseline), str(t_end)],
                          cwd=tmp_path, env=env, capture_output=True, text=True, check=False)
     assert run.returncode == 0, run.stderr[-3000:]

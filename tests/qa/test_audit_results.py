@@ -33,6 +33,7 @@ from preprocess import Material, build_body
 from preprocess.geometry import box
 
 import paths
+from damage_places import damage_places, damaged as damaged_bytes
 
 ENV = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
 
@@ -384,13 +385,16 @@ def test_kill_9_at_random_moments_leaves_a_readable_file(tmp_path):
 def test_a_damaged_result_file_is_a_clear_error(default_run, tmp_path):
     """64 bytes of 0xff every 4 KiB of a result file, one place at a time (damaged HDF5
     metadata made h5py raise RuntimeError, OSError or KeyError, and bad JSON a
-    JSONDecodeError): load_result reads the file or raises InputFileError, nothing else."""
+    JSONDecodeError; within one dataset's raw data, where the damage is NaN or -1 values,
+    one place per dataset): load_result reads the file or raises InputFileError, nothing
+    else."""
     from ffrmbs.errors import InputFileError
 
-    data = (default_run[0] / "point_mass_beam.h5").read_bytes()
+    path = default_run[0] / "point_mass_beam.h5"
+    data = path.read_bytes()
     damaged, faults = tmp_path / "damaged.h5", 0
-    for offset in range(0, len(data), 4096):
-        damaged.write_bytes(data[:offset] + b"\xff" * 64 + data[offset + 64:])
+    for offset in damage_places(path):
+        damaged.write_bytes(damaged_bytes(data, offset))
         try:
             load_result(damaged)
         except InputFileError as exc:

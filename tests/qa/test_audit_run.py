@@ -5,6 +5,8 @@ kept inside --out, short quotations of file contents."""
 
 from __future__ import annotations
 
+import contextlib
+import io
 import os
 import pickle
 import subprocess
@@ -34,8 +36,22 @@ def scene_file(tmp_path, name="fall", t_end=0.01, dt=1e-3, n_out=11, gravity="[0
 
 
 def ffrmbs(*args, cwd=None):
+    """``python -m ffrmbs_app.cli ARGS`` in its own process: exit code, stdout, stderr."""
     return subprocess.run([sys.executable, "-m", "ffrmbs_app.cli", *map(str, args)], capture_output=True, text=True,
                           env=ENV, cwd=cwd, timeout=600)
+
+
+def ffrmbs_in_process(*args):
+    """``ffrmbs_app.cli.main(ARGS)`` in this process, its output captured, as a
+    CompletedProcess (a command refused up front costs no interpreter start; an exception
+    that escapes main, which would be a traceback, fails the test).
+    test_a_refusal_is_the_same_in_its_own_process checks that the process adds nothing."""
+    from ffrmbs_app import cli
+
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = cli.main([str(a) for a in args])
+    return subprocess.CompletedProcess(["ffrmbs", *map(str, args)], code, out.getvalue(), err.getvalue())
 
 
 def one_clear_line(res, *fragments):
@@ -46,6 +62,19 @@ def one_clear_line(res, *fragments):
     for fragment in fragments:
         assert fragment in lines[0], (fragment, lines[0])
     return lines[0]
+
+
+@pytest.mark.parametrize("args, scene", [(["--modes", "0"], None), ([], dict(gravity="[0.0, -1e300, 0.0]"))],
+                         ids=["default scene option", "scene file value"])
+def test_a_refusal_is_the_same_in_its_own_process(tmp_path, args, scene):
+    """The refusals below run ffrmbs_app.cli.main in the test's process: the command in
+    its own process gives the same exit code 2, the same one line (no traceback, no
+    warning) and the same nothing on stdout, and writes no output directory."""
+    argv = ["run", *([scene_file(tmp_path, **scene)] if scene else []), "--out", tmp_path / "out", *args]
+    own, here = ffrmbs(*argv), ffrmbs_in_process(*argv)
+    one_clear_line(own)
+    assert (own.returncode, own.stdout, own.stderr) == (here.returncode, here.stdout, here.stderr)
+    assert not (tmp_path / "out").exists()
 
 
 # --- 15: checkpoints hold data, not code ----------------------------------------------------------
@@ -92,11 +121,11 @@ def test_a_planted_checkpoint_is_refused_unread(tmp_path, kind):
 def test_resume_from_a_planted_checkpoint_runs_nothing(tmp_path):
     scene = scene_file(tmp_path)
     out = tmp_path / "out"
-    assert ffrmbs("run", scene, "--out", out, "--no-check", "--no-export").returncode == 0
+    assert ffrmbs_in_process("run", scene, "--out", out, "--no-check", "--no-export").returncode == 0
     marker = tmp_path / "marker"
     for kind, data in planted_checkpoints(marker).items():
         (out / "fall.h5.ckpt").write_bytes(data)
-        res = ffrmbs("run", scene, "--out", out, "--no-check", "--no-export", "--resume")
+        res = ffrmbs_in_process("run", scene, "--out", out, "--no-check", "--no-export", "--resume")
         one_clear_line(res, "fall.h5.ckpt", refused(kind))
         assert not marker.exists(), kind
 
@@ -113,7 +142,7 @@ def test_resume_from_a_planted_checkpoint_runs_nothing(tmp_path):
     (["--dt", "0.2", "--t-end", "0.1"], "dt must be smaller than t_end, got dt = 0.2 s, t_end = 0.1 s"),
 ])
 def test_default_scene_options_are_checked_up_front(tmp_path, option, fragment):
-    res = ffrmbs("run", "--out", tmp_path / "out", *option)
+    res = ffrmbs_in_process("run", "--out", tmp_path / "out", *option)
     one_clear_line(res, "default scene: ", fragment)
     assert not (tmp_path / "out").exists()
 
@@ -122,7 +151,7 @@ def test_default_scene_options_are_checked_up_front(tmp_path, option, fragment):
 
 @pytest.mark.parametrize("value", ["-5", "0", "nan", "inf"])
 def test_checkpoint_every_must_be_positive_and_finite(tmp_path, value):
-    res = ffrmbs("run", scene_file(tmp_path), "--out", tmp_path / "out", f"--checkpoint-every={value}")
+    res = ffrmbs_in_process("run", scene_file(tmp_path), "--out", tmp_path / "out", f"--checkpoint-every={value}")
     one_clear_line(res, "checkpoint_every (--checkpoint-every) must be a finite number of seconds > 0")
     assert not (tmp_path / "out").exists()
 
@@ -135,7 +164,7 @@ def test_checkpoint_every_must_be_positive_and_finite(tmp_path, value):
 def test_scene_numbers_beyond_the_physical_bound_are_refused(tmp_path, key, settings, line):
     scene = scene_file(tmp_path, **settings)
     assert f"{key} =" in scene.read_text().splitlines()[line - 1]          # the line the message must name
-    res = ffrmbs("run", scene, "--out", tmp_path / "out")
+    res = ffrmbs_in_process("run", scene, "--out", tmp_path / "out")
     one_clear_line(res, f"scene.toml, line {line}: ", f"{key!r}: ", "is beyond the bound |x| <= 1e+12 (SI units)")
     assert not (tmp_path / "out").exists()
 
@@ -143,7 +172,7 @@ def test_scene_numbers_beyond_the_physical_bound_are_refused(tmp_path, key, sett
 def test_a_mass_beyond_the_bound_is_refused(tmp_path):
     scene = scene_file(tmp_path)
     scene.write_text(scene.read_text().replace("mass = 1.0", "mass = 1e300"))
-    res = ffrmbs("run", scene, "--out", tmp_path / "out")
+    res = ffrmbs_in_process("run", scene, "--out", tmp_path / "out")
     one_clear_line(res, "line 12: body 'ball': ", "'mass': 1e+300 [kg] is beyond the bound")
 
 
@@ -240,7 +269,7 @@ def test_a_reader_holding_the_result_file_does_not_stop_a_new_run(tmp_path, monk
 # --- 13: resources bounded before anything is allocated --------------------------------------------
 
 def test_too_many_steps_are_refused_with_the_numbers(tmp_path):
-    res = ffrmbs("run", scene_file(tmp_path, t_end=1e9, dt=1e-3), "--out", tmp_path / "out")
+    res = ffrmbs_in_process("run", scene_file(tmp_path, t_end=1e9, dt=1e-3), "--out", tmp_path / "out")
     one_clear_line(res, "1e+12 time steps (t_end / dt = 1e+09 s / 0.001 s) exceed the limit of 1e+08",
                    "--no-limits")
     assert not (tmp_path / "out").exists()
@@ -253,7 +282,7 @@ def test_too_much_memory_is_refused_with_the_numbers(tmp_path):
     from ffrmbs_app.limits import physical_memory
 
     n_out = int(physical_memory()) // 80
-    res = ffrmbs("run", scene_file(tmp_path, n_out=n_out), "--out", tmp_path / "out", "--no-check")
+    res = ffrmbs_in_process("run", scene_file(tmp_path, n_out=n_out), "--out", tmp_path / "out", "--no-check")
     line = one_clear_line(res, f"({n_out} samples x 80 bytes)", "over 25% of the machine's", "--no-limits")
     assert f"about {n_out * 80 / 1e9:.3g} GB" in line
     assert not (tmp_path / "out").exists()
@@ -275,7 +304,7 @@ def test_a_scene_name_that_is_no_plain_file_stem_is_refused(tmp_path, name):
     work = tmp_path / "a" / "b"
     work.mkdir(parents=True)
     scene = scene_file(work, name=name.replace("\t", "\\t"))
-    res = ffrmbs("run", scene, "--out", work / "out")
+    res = ffrmbs_in_process("run", scene, "--out", work / "out")
     one_clear_line(res, "scene.toml, line 2: [scene]: the scene name ", "is not a plain file stem")
     assert sorted(p.name for p in tmp_path.rglob("*")) == ["a", "b", "scene.toml"]
 
@@ -283,7 +312,7 @@ def test_a_scene_name_that_is_no_plain_file_stem_is_refused(tmp_path, name):
 def test_a_scene_name_from_the_file_stem_is_checked_too(tmp_path):
     scene = scene_file(tmp_path, file=".hidden.toml")
     scene.write_text(scene.read_text().replace('name = "fall"\n', ""))
-    res = ffrmbs("run", scene, "--out", tmp_path / "out")
+    res = ffrmbs_in_process("run", scene, "--out", tmp_path / "out")
     one_clear_line(res, ".hidden.toml, line 1: [scene]: the scene name '.hidden' is not a plain file stem",
                    "(taken from the file name; set 'name')")
 
