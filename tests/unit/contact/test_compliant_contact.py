@@ -322,11 +322,14 @@ def test_recorded_gap_of_a_compliant_contact_is_the_effective_gap(beam_data):
 def test_a_face_of_compliant_contacts_creates_no_energy():
     """Two free rods 100 x 20 x 20 mm (E = 50 MPa, 20 free-free modes each) end to end at
     0.2 m/s, the 25 end-face nodes of one against the other's face with residual
-    flexibility, e = 0, Δt = 2 µs: when the face contacts close one after another, a
+    flexibility, e = 0, Δt = 4 µs: when the face contacts close one after another, a
     closing contact starts with the deflection its neighbours' forces already cause at its
     point (contact.compliance); with δ = 0 there the rods gained 8.7 % of their energy.
-    After the rods part (t = 1.2 ms, the springs relaxed) their energy is at most E₀."""
-    L, H, v0, dt = 0.1, 0.02, 0.2, 2e-6
+    After the rods part (t = 1.2 ms, the springs relaxed) their energy is at most E₀.
+    (Measured: the last contact opens at 0.93 ms, E/E₀ − 1 = −5.9 % as at Δt = 2 µs; with
+    δ = 0 at a closing contact the face is still closed at 1.2 ms, at Δt = 2 and 4 µs,
+    not at 8 µs.)"""
+    L, H, v0, dt = 0.1, 0.02, 0.2, 4e-6
     rod = build_body(box(L, H, H, None, order=1, divisions=(4, 4, 4)), Material(920.0, 5e7, 0.3), n_modes=20)
     system = System()
     r1 = system.add(FlexibleBodyFFR(rod, modes=20, frame="free", name="rod1"))

@@ -94,7 +94,8 @@ def test_a_face_resting_on_a_plane_is_solved_and_balances_the_weight(n_contacts,
     assert len(model.contacts) == n_contacts
     P0 = system.linear_momentum(0.0, d.q, d.u)[2]
     sums, iterations = [], []
-    for _ in range(100):
+    steps = 50                                        # mean Σ Λ / (m g Δt): 0.9983 (1.0004 at 100)
+    for _ in range(steps):
         before = d.stats["solver_iterations"]
         stages.step(model, d, DT)                     # raises StepFailure when not solved
         sums.append(d.lam_buf[:d.m].sum())
@@ -104,7 +105,7 @@ def test_a_face_resting_on_a_plane_is_solved_and_balances_the_weight(n_contacts,
     print(f"\n{n_contacts} contacts, {method}: iterations per step median {np.median(iterations):.0f}, "
           f"max {max(iterations)}; mean Σ Λ / (m g Δt) = {np.mean(sums) / weight:.5f}; "
           f"deepest penetration {d.stats['max_penetration']:.2e} m")
-    assert sum(sums) == pytest.approx(100 * weight + dP, rel=1e-6)      # momentum balance
+    assert sum(sums) == pytest.approx(steps * weight + dP, rel=1e-6)    # momentum balance
     assert np.mean(sums) == pytest.approx(weight, rel=1e-2)             # at rest: the weight
     assert d.stats["max_penetration"] < 1e-8                            # g Δt² = 1e-7 m
 

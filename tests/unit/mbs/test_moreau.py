@@ -117,9 +117,11 @@ def test_adaptive_steps_shrink_at_the_impact_and_bound_penetration_and_timing_by
     assert np.diff(E).max() < 1e-12 * E[0]                      # never gains energy
 
 
-@pytest.mark.slow
 def test_adaptive_is_cheaper_than_the_fixed_step_of_equal_impact_accuracy():
-    fixed = bouncing_ball(1.0, 1.0, 1e-5, t_out=[1.0])
+    """Both meet the 1e-4 m height after the bounce: the fixed step at dt = 1e-4 s (the
+    impact mistimed by up to v1 dt, measured 5e-5 m) and the adaptive one at atol = 1e-5
+    (measured 6e-6 m) in less than a thirtieth of the fixed steps."""
+    fixed = bouncing_ball(1.0, 1.0, 1e-4, t_out=[1.0])
     adaptive = bouncing_ball(1.0, 1.0, 1e-2, integrator="moreau-adaptive", atol=1e-5, t_out=[1.0])
     v1 = np.sqrt(2 * G * H0)
     z_exact = H0 - 0.5 * G * (1.0 - 2 * v1 / G) ** 2           # e = 1: the second fall, from H0
