@@ -30,6 +30,13 @@ from .base import D_ETA, D_ETA_ETA, D_ETA_XI, D_XI, D_XI_XI, VALUE, Contour
 R_AT, A_AT, V_AT, W_AT, J_AT = 0, 3, 12, 15, 18
 
 
+def cross3(a, b):
+    """a × b of a 3-vector ``a`` and ``b`` (3,) or (3, n) (column by column): component
+    by component, as ``np.cross(a, b, axis=0)`` computes it (the same roundings), without
+    its overhead on such small arrays (it dominated the rigid contours' evaluation)."""
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
+
 class _FrameContour(Contour):
     """Shared state of the rigid contours: the frame's position, orientation, velocity
     and Jacobians, read once per update (views of one vector ``state``, layout
@@ -79,11 +86,11 @@ class _FrameContour(Contour):
         if velocity:
             point.v[:] = self._v
             if d is not None:
-                point.v += np.cross(self._w, d)
+                point.v += cross3(self._w, d)
         if jacobians:
             point.J_T[:] = self._J_T
             if d is not None:
-                point.J_T -= np.cross(d[:, None], self._J_R, axis=0)
+                point.J_T -= cross3(d, self._J_R)
             point.J_R[:] = self._J_R
 
 
@@ -140,7 +147,7 @@ class SphereContour(_FrameContour):
         D[D_XI_XI] = -r * n
         point.frame[:, 2] = n
         point.frame[:, 0] = A @ np.array([-se, ce, 0.0])  # t_η / |t_η| (undefined at the poles: kept finite)
-        point.frame[:, 1] = np.cross(n, point.frame[:, 0])
+        point.frame[:, 1] = cross3(n, point.frame[:, 0])
         self._fill_offset(point, r * n, velocity, jacobians)
         return point
 

@@ -9,7 +9,7 @@ import pytest
 
 from validation.cases import contact_bounce, contact_friction
 
-from case_rows import quick_rows_by_case, select
+from case_rows import quick_rows_without_files, select
 
 pytestmark = pytest.mark.slow   # seconds each: left out of the fast subset (-m "not slow")
 
@@ -19,9 +19,9 @@ V1 = math.sqrt(2.0 * G * contact_bounce.H)      # impact speed of the first impa
 
 
 @pytest.fixture(scope="module")
-def rows(tmp_path_factory):
-    """{case name: rows} of one quick harness run of both cases."""
-    return quick_rows_by_case(tmp_path_factory.mktemp("contact"), CASES)
+def rows():
+    """{case name: rows} of both cases run quick as the harness runs them (no plots)."""
+    return quick_rows_without_files(CASES)
 
 
 def one(rows, **config):

@@ -1,24 +1,38 @@
-"""The contact_point_mass_beam case (thesis Sec. 5.2) in quick mode, run once through the
-harness: energy balance of every set-valued run, the contact closing at the analytic
-10 ms, reduced models near the all-modes reference, band and 2s contour agreeing."""
+"""The contact_point_mass_beam case (thesis Sec. 5.2): its quick sweeps (:func:`sweeps`, what
+``run(quick=True)`` computes after its warm-up) on a shorter horizon — setup A dropped from
+0.2 mm instead of 2 mm, so the contact closes at 1 ms, and 10 ms of contact dynamics
+simulated (quick mode: 20 ms after 10 ms of free flight), references with all 750 modes at
+the quick Δt = 5e-6 s. Before the contact the beam rests and the mass flies at constant
+speed, so the shift only drops free flight, which dilutes the RMS errors. Checked: energy
+balance of every set-valued run, reduced models near the all-modes reference, residual
+flexibility, adaptive step control, band and 2s contour agreeing; and, on the original
+setup, the contact closing at the analytic 10 ms."""
 
 import math
 
 import pytest
 
 from validation.cases import contact_point_mass_beam as case
-from validation.harness import run_validation
 from ffrmbs_app.scenes import point_mass_beam as pmb
 
 pytestmark = pytest.mark.slow   # seconds each: left out of the fast subset (-m "not slow")
 
+GAP = 2e-4                      # [m] setup A's initial gap here (the scene's: 2 mm)
+T_END = GAP / 0.2 + 0.010       # [s] the contact closes at GAP / 0.2 m/s, then 10 ms of contact dynamics
+
 
 @pytest.fixture(scope="module")
 def rows(tmp_path_factory):
-    out = tmp_path_factory.mktemp("pmb")
-    rows = run_validation(out, quick=True, cases=[case], progress=None)
-    assert (out / "contact_point_mass_beam_outputs.png").exists()
-    return rows
+    data = pmb.default_beam_data()
+    case.warm_up(data)                                  # as run(): no compilation in the rows' CPU times
+    x, y, z = pmb.SETUPS["A"]
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setitem(pmb.SETUPS, "A", (x, pmb.HEIGHT + GAP, z))
+        result = case.sweeps(data, T_END, 5e-6, quick=True)
+    figure = tmp_path_factory.mktemp("pmb") / "outputs.png"
+    result.figures["outputs"](figure)
+    assert figure.exists()
+    return result.rows
 
 
 def pick(rows, kind, **config):
@@ -68,7 +82,7 @@ def test_reduced_models_follow_the_all_modes_reference(rows):
 def test_adaptive_controls_the_penetration_by_its_tolerance(rows):
     for r in pick(rows, "y max [m]", integrator="moreau-adaptive"):
         assert r["max_penetration"] <= 2 * r["config"]["atol"] + 1e-12
-        assert r["steps"] < 0.03 / 1e-5 / 2                  # fewer than half the fixed steps
+        assert r["steps"] < T_END / 1e-5 / 2                 # fewer than half the fixed steps
 
 
 def test_the_contact_closes_when_the_mass_has_fallen_two_millimetres():

@@ -83,12 +83,24 @@ def _extras(scene, res):
 
 def run(quick: bool) -> CaseResult:
     data = pmb.default_beam_data()
-    n_all = data.n_modes
-    t_end = 0.03 if quick else T_END
-    ref_dt = 5e-6 if quick else REF_DT
-    for contour in ("2s", "band"):                                     # compile the kernels
+    warm_up(data)
+    return sweeps(data, 0.03 if quick else T_END, 5e-6 if quick else REF_DT, quick)
+
+
+def warm_up(data):
+    """Compile (or load) the kernels of every contour and residual flexibility setting: a
+    run of each to just past the contact's closing, so the sweeps' CPU times hold no
+    compilation."""
+    for contour in ("2s", "band"):
         for on_off in ("off", "on"):
             _simulate(data, contour=contour, t_end=0.0102, residual_flexibility=on_off)
+
+
+def sweeps(data, t_end, ref_dt, quick) -> CaseResult:
+    """The rows, notes and figure of :func:`run`: every run simulated to ``t_end`` [s], the
+    references with all modes of ``data`` at Δt = ``ref_dt`` [s]; ``quick`` picks the
+    short sweeps."""
+    n_all = data.n_modes
     result = CaseResult(plot_groups=("sweep", "error_kind"))
     refs = {}
 
