@@ -66,21 +66,14 @@ DASK = "dask"
 def pytest_collection_modifyitems(config, items):
     """The ``xdist_group`` of every test without one (given before xdist reads the marks for
     ``--dist loadgroup``): ``dask`` for the modules of the tests that use the session's
-    Dask cluster (:func:`dask_client`, one per worker process), else the test's module.
-    The groups that hold a ``slow`` test go first (xdist hands groups out in this order),
-    so the long ones do not start last and leave one worker alone at the end."""
+    Dask cluster (:func:`dask_client`, one per worker process), else the test's module."""
     def module(item):
         return item.nodeid.split("::")[0]
-
-    def group(item):
-        return item.get_closest_marker("xdist_group").args[0]
 
     on_dask = {module(item) for item in items if "dask_client" in item.fixturenames}
     for item in items:
         if item.get_closest_marker("xdist_group") is None:
             item.add_marker(pytest.mark.xdist_group(DASK if module(item) in on_dask else module(item)))
-    slow = {group(item) for item in items if item.get_closest_marker("slow")}
-    items.sort(key=lambda item: group(item) not in slow)
 
 
 @pytest.fixture(scope="session")
