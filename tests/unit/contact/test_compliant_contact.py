@@ -324,8 +324,7 @@ def test_a_face_of_compliant_contacts_creates_no_energy():
     0.2 m/s, the 25 end-face nodes of one against the other's face with residual
     flexibility, e = 0, Δt = 4 µs: when the face contacts close one after another, a
     closing contact starts with the deflection its neighbours' forces already cause at its
-    point (contact.compliance); with δ = 0 there the rods gained 8.7 % of their energy.
-    After the rods part (t = 1.2 ms, the springs relaxed) their energy is at most E₀.
+    point (contact.compliance). After the rods part (t = 1.2 ms, the springs relaxed) their energy is at most E₀.
     (Measured: the last contact opens at 0.93 ms, E/E₀ − 1 = −5.9 % as at Δt = 2 µs; with
     δ = 0 at a closing contact the face is still closed at 1.2 ms, at Δt = 2 and 4 µs,
     not at 8 µs.)"""
