@@ -207,8 +207,9 @@ def _fresh_clone(tmp):
     """A directory laid out like a fresh clone: the repository's tracked top-level entries
     (all non-hidden ones without git) as symlinks — copies for those the README's commands
     write into — so outputs land in tmp. The commands import the code from the repository
-    itself (``PYTHONPATH``, and ``PYTHONSAFEPATH`` keeps the working directory off
-    ``sys.path``), whose kernels are in numba's cache, keyed by the source's directory."""
+    itself (first on ``PYTHONPATH`` by tests/conftest.py; ``PYTHONSAFEPATH`` keeps the
+    working directory off ``sys.path``), whose kernels are in numba's cache, keyed by the
+    source's directory."""
     try:
         tracked = subprocess.run(["git", "ls-files"], cwd=REPO, capture_output=True, text=True, check=True).stdout
         names = {path.split("/")[0] for path in tracked.splitlines()}
@@ -246,8 +247,7 @@ def test_commands_run_as_written(document, tmp_path):
     (one xdist group per document: they share nothing, so the workers can split them)."""
     items = _to_run(document)
     work = _fresh_clone(tmp_path / "clone")
-    env = {**os.environ, "FFRMBS_PROGRESS": "0", "PYTHONSAFEPATH": "1",
-           "PYTHONPATH": os.pathsep.join(filter(None, [str(REPO), os.environ.get("PYTHONPATH")]))}
+    env = {**os.environ, "FFRMBS_PROGRESS": "0", "PYTHONSAFEPATH": "1"}     # PYTHONPATH: tests/conftest.py
     failures = []
     for item in items:
         if isinstance(item, rc.Snippet):
