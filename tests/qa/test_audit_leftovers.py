@@ -6,8 +6,6 @@ stopped leaves no temporary directory for good."""
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 import os
 import re
@@ -25,17 +23,11 @@ from ffrmbs_app import cli
 from qa.fixtures import edited, fixture_text
 
 import paths
+from cli_in_process import run_cli
 from damage_places import damage_places, damaged as damaged_bytes
 
 REPO = str(paths.REPO)
 
-
-def run_cli(*argv) -> tuple[int, str, str]:
-    """ffrmbs_app.cli.main(argv) in this process: (exit code, stdout, stderr)."""
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = cli.main([str(a) for a in argv])
-    return code, out.getvalue(), err.getvalue()
 
 
 # --- damaged result files under plot and export --------------------------------------------------

@@ -8,9 +8,7 @@ file bytes before and after; the errno's own text; the file read back with h5py.
 
 from __future__ import annotations
 
-import contextlib
 import errno
-import io
 import os
 import random
 import re
@@ -24,7 +22,6 @@ import meshio
 import numpy as np
 import pytest
 
-from ffrmbs_app import cli
 from ffrmbs_app.export import export_paraview
 from mbs import FlexibleBodyFFR, PointMass, System
 from mbs.integrators.moreau import TRACE_KEYS
@@ -33,6 +30,7 @@ from preprocess import Material, build_body
 from preprocess.geometry import box
 
 import paths
+from cli_in_process import run_cli
 from damage_places import damage_places, damaged as damaged_bytes
 
 ENV = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
@@ -83,13 +81,6 @@ README_PLOT = ["y", "vy", "energy", "contact:impact"]      # README: ffrmbs plot
 EXAMPLE = paths.EXAMPLES / "scenes" / "point_mass_beam.toml"
 PNG = b"\x89PNG\r\n\x1a\n"
 
-
-def run_cli(*argv) -> tuple[int, str, str]:
-    """ffrmbs_app.cli.main(argv) in this process: (exit code, stdout, stderr)."""
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = cli.main(list(argv))
-    return code, out.getvalue(), err.getvalue()
 
 
 @pytest.fixture(scope="module")

@@ -5,8 +5,6 @@ kept inside --out, short quotations of file contents."""
 
 from __future__ import annotations
 
-import contextlib
-import io
 import os
 import pickle
 import subprocess
@@ -17,6 +15,7 @@ import h5py
 import pytest
 
 from mbs.checkpoint import read_checkpoint
+from cli_in_process import run_cli
 from qa.fixtures import edited, fixture_text
 
 ENV = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
@@ -42,16 +41,10 @@ def ffrmbs(*args, cwd=None):
 
 
 def ffrmbs_in_process(*args):
-    """``ffrmbs_app.cli.main(ARGS)`` in this process, its output captured, as a
-    CompletedProcess (a command refused up front costs no interpreter start; an exception
-    that escapes main, which would be a traceback, fails the test).
+    """:func:`cli_in_process.run_cli` as a CompletedProcess, like :func:`ffrmbs` (a command
+    refused up front costs no interpreter start);
     test_a_refusal_is_the_same_in_its_own_process checks that the process adds nothing."""
-    from ffrmbs_app import cli
-
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = cli.main([str(a) for a in args])
-    return subprocess.CompletedProcess(["ffrmbs", *map(str, args)], code, out.getvalue(), err.getvalue())
+    return subprocess.CompletedProcess(["ffrmbs", *map(str, args)], *run_cli(*args))
 
 
 def one_clear_line(res, *fragments):
