@@ -28,6 +28,7 @@ once) and the tests marked ``xdist_group(name)`` of all modules on one worker (t
 tests: ``dask``); the addopts' ``--dist loadgroup`` does this.
 """
 
+import contextlib
 import os
 import sys
 from pathlib import Path
@@ -119,12 +120,25 @@ def thesis_centre_line(thesis_beam):
     return Contour1sNeutralFFR.along_line(thesis_beam, (0, 0.025, 0.025), (1, 0, 0), normal=(0, 1, 0), degree=4)
 
 
+_DASK_CLUSTER = contextlib.ExitStack()
+
+
 @pytest.fixture(scope="session")
 def dask_client():
     """One Dask LocalCluster for the session's sweep and validate tests: two single-threaded
-    worker processes (as ``ffrmbs sweep --workers 2`` makes), and its client."""
+    worker processes (as ``ffrmbs sweep --workers 2`` makes), and its client. It is shut
+    down after the session's last test that uses it (:func:`pytest_runtest_teardown`): an
+    idle cluster costs about 0.1 CPU s per second."""
     from distributed import Client, LocalCluster
 
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
-            Client(cluster) as client:
-        yield client
+    with _DASK_CLUSTER:
+        cluster = _DASK_CLUSTER.enter_context(
+            LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None))
+        yield _DASK_CLUSTER.enter_context(Client(cluster))
+
+
+def pytest_runtest_teardown(item, nextitem):
+    """Shut the Dask cluster down after the last test (in the session's order) that uses it."""
+    if "dask_client" in item.fixturenames and not any(
+            "dask_client" in later.fixturenames for later in item.session.items[item.session.items.index(item) + 1:]):
+        _DASK_CLUSTER.close()
