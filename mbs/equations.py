@@ -15,9 +15,23 @@ the in-place body stage of a step is :mod:`mbs.body_stage`.
 from __future__ import annotations
 
 import numpy as np
-import scipy.linalg
+from scipy.linalg import lapack
 
 from .link import add_point_force, body_q
+
+
+def solve_spd(M, b):
+    """x = M⁻¹ b for a symmetric positive definite M (n, n), b (n,): LAPACK's ``dposv``
+    (Cholesky), the routine ``scipy.linalg.solve(M, b, assume_a="pos")`` calls, without
+    that function's argument checks and condition estimate (~15 times its cost at n ~ 10;
+    an explicit step solves once per stage). Same result to the bit; ``LinAlgError`` if M
+    is not positive definite."""
+    _, x, info = lapack.dposv(M, b)
+    if info > 0:
+        raise np.linalg.LinAlgError(f"the mass matrix is not positive definite (leading minor {info})")
+    if info < 0:
+        raise ValueError(f"dposv: argument {-info} is invalid")
+    return x
 
 
 class Equations:
@@ -157,7 +171,7 @@ class Equations:
         Sign convention: reaction forces W λ = C_qᵀ λ enter as M u̇ = h + W λ."""
         M, h = self.mass_and_h(t, q, u)
         if not self.n_c:
-            return scipy.linalg.solve(M, h, assume_a="pos", check_finite=False), np.zeros(0)
+            return solve_spd(M, h), np.zeros(0)
         C = self.constraint_jacobian(t, q)
         a, b = baumgarte
         rhs_c = -self.constraint_bias(t, q, u)

@@ -17,7 +17,8 @@ each check against something independent of the ANCF model:
    (ρA(v̈ − θ̇² v) + EI v'''' − (T v')' = −ρA θ̈ x, T = ρA θ̇² (L² − x²)/2, integrated by
    scipy's DOP853), which for these small deflections must agree closely;
 
-plus the cache (atomic npz in $FFRMBS_CACHE, read back) and the convergence table rows.
+plus the cache (atomic npz in $FFRMBS_CACHE, read back; the reference comes from the
+session's cache) and the convergence table rows.
 """
 
 import math
@@ -167,8 +168,9 @@ def test_centrifugal_stiffening(ritz):
 
 
 # -------------------------------------------------------------------------- 6. spin-up
-def test_spin_up_against_reference_and_stiffened_linear_model(ritz, tmp_path, monkeypatch):
-    monkeypatch.setenv("FFRMBS_CACHE", str(tmp_path))
+def test_spin_up_against_reference_and_stiffened_linear_model(ritz):
+    """The reference from the session's cache (computed once, shared with
+    tests/integration/test_spin_up_beam.py; the cache itself: :func:`test_runs_are_cached_atomically`)."""
     t, v = sb.simulate(8, 0.01)
     tr, vr = sb.reference()
     assert np.array_equal(t, tr) and t.shape == (2001,) and t[1] == pytest.approx(0.01)
@@ -176,11 +178,6 @@ def test_spin_up_against_reference_and_stiffened_linear_model(ritz, tmp_path, mo
     assert np.min(v[: int(sb.T_S / 0.01)]) == pytest.approx(np.min(vr), rel=1e-2)
     assert np.min(vr) < 0 and np.max(vr[: int(sb.T_S / 0.01)]) < 0.02 * abs(np.min(vr))   # lags while spun up
     assert np.sqrt(np.mean((v - vr) ** 2)) < 2e-3 * np.max(np.abs(vr))
-
-    key = sb.recipe(*sb.REFERENCE_SETTINGS)
-    assert sb.cache_path(key).exists() and sb.cache_path(key).parent == tmp_path
-    assert not list(tmp_path.glob("*.tmp"))
-    assert np.array_equal(sb.reference()[1], vr)                    # read back from the file
 
     f, ke, kgm, tip = ritz["f0"], ritz["ke"], ritz["kgm"], ritz["tip"]
     n = f.size
@@ -194,6 +191,20 @@ def test_spin_up_against_reference_and_stiffened_linear_model(ritz, tmp_path, mo
     scale = np.max(np.abs(vr))
     assert np.min(vl) == pytest.approx(np.min(vr), rel=3e-3)
     assert np.sqrt(np.mean((vl - vr) ** 2)) < 2e-3 * scale
+
+
+def test_runs_are_cached_atomically(tmp_path, monkeypatch):
+    """A run (2 elements: the same code path as the reference's 32) stored in
+    $FFRMBS_CACHE, no temporary file left, read back equal to a fresh simulation; the
+    reference is a cached run under its own key."""
+    monkeypatch.setenv("FFRMBS_CACHE", str(tmp_path))
+    t, v = sb.cached_run(2, 0.01)
+    key = sb.recipe(2, 0.01)
+    assert sb.cache_path(key).exists() and sb.cache_path(key).parent == tmp_path
+    assert not list(tmp_path.glob("*.tmp"))
+    assert np.array_equal(sb.cached_run(2, 0.01)[1], v)              # read back from the file
+    assert np.array_equal(sb.simulate(2, 0.01)[1], v) and np.array_equal(t, sb.simulate(2, 0.01)[0])
+    assert sb.cache_path(sb.recipe(*sb.REFERENCE_SETTINGS)) != sb.cache_path(key)
 
 
 def test_convergence_table_rows(tmp_path, monkeypatch):

@@ -235,13 +235,14 @@ def test_ball_falls_through_the_hole_and_rests_beside_it(plate_data):
 
 
 @pytest.mark.slow
-def test_hole_case_rows(tmp_path):
-    """The validation case contact_hole, quick mode: the fit on the material as without the
+def test_hole_case_rows():
+    """The validation case contact_hole, quick mode (its rows as the harness runs it, no
+    plot or report: this test reads the rows): the fit on the material as without the
     hole (rounding), the rest height within its bound, the free fall through the hole, the
     rim's normal from the edge to the centre as the exact circle's and the ball in the hole."""
-    from case_rows import quick_rows_by_case, select
+    from case_rows import quick_rows_without_files, select
 
-    rows = quick_rows_by_case(tmp_path, [case])[case.NAME]
+    rows = quick_rows_without_files([case])[case.NAME]
     for row in select(rows, check="fit"):
         assert row["error"] < 1e-12 and row["node_max_m"] < 1e-12
     (rest,) = select(rows, check="rest beside the hole")

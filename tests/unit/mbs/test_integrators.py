@@ -153,3 +153,25 @@ def test_simulate_rejects_bad_requests(clamped_data):
         system.simulate(1.0, 1e-3, t_out=[0.5, 0.2])
     with pytest.raises(ModelError, match="dt"):
         system.simulate(1.0, 0.0)
+
+
+def test_unconstrained_accelerations_are_scipys_cholesky_solve(free_data):
+    """u̇ = M⁻¹ h of a free flexible body in motion (the explicit integrators' right-hand
+    side) by :func:`mbs.equations.solve_spd`: the same bits as
+    ``scipy.linalg.solve(M, h, assume_a="pos")``; a mass matrix that is not positive
+    definite is a LinAlgError, as there."""
+    import scipy.linalg
+
+    from mbs.equations import Equations, solve_spd
+
+    system = System()
+    body = system.add(FlexibleBodyFFR(free_data, 4))
+    body.set_initial(A=Rotation.from_euler("XYZ", [0.2, -0.3, 0.1]).as_matrix(), v=[0.1, 0.0, 0.2],
+                     omega=[0.3, 0.2, 0.5], q_f=[1e-3, -2e-3, 0.0, 5e-4], qdot_f=[0.02, 0.01, 0.0, 0.01])
+    equations = Equations(system)
+    q, u = system.initial_state()
+    M, h = equations.mass_and_h(0.0, q, u)
+    a, lam = equations.accelerations(0.0, q, u)
+    assert lam.size == 0 and np.array_equal(a, scipy.linalg.solve(M, h, assume_a="pos", check_finite=False))
+    with pytest.raises(np.linalg.LinAlgError, match="not positive definite"):
+        solve_spd(np.diag([1.0, -1.0, 2.0]), np.ones(3))
