@@ -53,7 +53,7 @@ def reference(tmp_path_factory):
 def start_and_wait_for_a_checkpoint(out):
     """Start the run; return the process once a checkpoint was (re)written and no flush
     or checkpoint is due for a while (they come every 0.1 s of wall time; the 10 000 steps
-    take over 1 s on a fast machine)."""
+    take about 2 CPU s here)."""
     proc = subprocess.Popen(RUN + ["--out", str(out), "--checkpoint-every", "0.1"], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True, env=ENV)
     ckpt = out / "point_mass_beam.h5.ckpt"
