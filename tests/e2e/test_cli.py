@@ -1,4 +1,9 @@
-"""The command line: preprocess -> files -> info, clear one-line errors, the main job."""
+"""The command line: preprocess -> files -> info, clear one-line errors, the main job.
+
+``ffrmbs preprocess`` (the module's body) and the main job run as the user runs them, a
+process each; the other commands run through ``main`` in the test's process
+(:func:`cli_in_process.run_cli`: an exception escaping it, which would be a traceback, fails
+the test)."""
 
 import json
 import subprocess
@@ -9,6 +14,8 @@ import pytest
 
 from preprocess import read_body
 from preprocess.textfiles import TEXT_FILES, read_text_body
+
+from cli_in_process import run_cli
 
 
 def ffrmbs(*args, cwd=None):
@@ -43,12 +50,12 @@ def test_preprocess_writes_body_files_and_prints_statistics(preprocessed):
 def test_info_reads_directory_and_hdf5(preprocessed):
     out, _ = preprocessed
     for path in (out, out / "body.h5"):
-        res = ffrmbs("info", str(path))
-        assert res.returncode == 0, res.stderr
-        assert "nodes:          579" in res.stdout
-        assert "total mass:     40000 kg" in res.stdout
-        assert "centre of mass: (0.5, 0.5, 2.5) m" in res.stdout
-    assert "surface nodes:  426" in ffrmbs("info", str(out / "body.h5")).stdout
+        code, stdout, stderr = run_cli("info", path)
+        assert code == 0, stderr
+        assert "nodes:          579" in stdout
+        assert "total mass:     40000 kg" in stdout
+        assert "centre of mass: (0.5, 0.5, 2.5) m" in stdout
+    assert "surface nodes:  426" in run_cli("info", out / "body.h5")[1]
 
 
 def test_bad_body_file_is_one_clear_line(preprocessed, tmp_path):
@@ -58,25 +65,25 @@ def test_bad_body_file_is_one_clear_line(preprocessed, tmp_path):
     lines = (tmp_path / "mij.dat").read_text().splitlines()
     lines[2] = "-1.0\t% node: 3"
     (tmp_path / "mij.dat").write_text("\n".join(lines) + "\n")
-    res = ffrmbs("info", str(tmp_path))
-    assert res.returncode == 2
-    assert "Traceback" not in res.stderr
-    assert "mij.dat, line 3" in res.stderr and "mass" in res.stderr
+    code, _, stderr = run_cli("info", tmp_path)
+    assert code == 2
+    assert "Traceback" not in stderr and stderr.count("\n") == 1
+    assert "mij.dat, line 3" in stderr and "mass" in stderr
 
 
 def test_preprocess_unknown_group_writes_nothing(tmp_path):
     out = tmp_path / "out"
-    res = ffrmbs("preprocess", "box:1,1,2", "--modes", "2", "--clamp", "left", "--density", "1000",
-                 "--young", "1e9", "--poisson", "0.3", "--out", str(out))
-    assert res.returncode == 2 and "Traceback" not in res.stderr
-    assert "unknown node group 'left'" in res.stderr and "z0" in res.stderr
+    code, _, stderr = run_cli("preprocess", "box:1,1,2", "--modes", "2", "--clamp", "left", "--density", "1000",
+                              "--young", "1e9", "--poisson", "0.3", "--out", out)
+    assert code == 2 and "Traceback" not in stderr
+    assert "unknown node group 'left'" in stderr and "z0" in stderr
     assert not out.exists() or not any(out.iterdir())
 
 
 def test_preprocess_missing_mesh_file(tmp_path):
-    res = ffrmbs("preprocess", str(tmp_path / "none.msh"), "--modes", "2", "--free", "--density", "1",
-                 "--young", "1", "--poisson", "0.3", "--out", str(tmp_path / "o"))
-    assert res.returncode == 2 and "none.msh" in res.stderr and "not found" in res.stderr
+    code, _, stderr = run_cli("preprocess", tmp_path / "none.msh", "--modes", "2", "--free", "--density", "1",
+                              "--young", "1", "--poisson", "0.3", "--out", tmp_path / "o")
+    assert code == 2 and "none.msh" in stderr and "not found" in stderr
 
 
 SOFT = ["--density", "1000", "--young", "1e9", "--poisson", "0.3"]

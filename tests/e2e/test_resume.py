@@ -19,7 +19,7 @@ from mbs.result_file import load_result
 
 pytestmark = pytest.mark.slow   # seconds each: left out of the fast subset (-m "not slow")
 
-RUN = [sys.executable, "-m", "ffrmbs_app.cli", "run", "--no-check", "--no-export", "--t-end", "0.5"]
+RUN = [sys.executable, "-m", "ffrmbs_app.cli", "run", "--no-check", "--no-export", "--t-end", "0.1"]
 ENV = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
 
 
@@ -52,9 +52,9 @@ def reference(tmp_path_factory):
 
 def start_and_wait_for_a_checkpoint(out):
     """Start the run; return the process once a checkpoint was (re)written and no flush
-    or checkpoint is due for a while (they come every 0.2 s of wall time; the 50 000 steps
-    take over 3 s)."""
-    proc = subprocess.Popen(RUN + ["--out", str(out), "--checkpoint-every", "0.2"], stdout=subprocess.PIPE,
+    or checkpoint is due for a while (they come every 0.1 s of wall time; the 10 000 steps
+    take about 2 CPU s here)."""
+    proc = subprocess.Popen(RUN + ["--out", str(out), "--checkpoint-every", "0.1"], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True, env=ENV)
     ckpt = out / "point_mass_beam.h5.ckpt"
     deadline, seen = time.time() + 300, None

@@ -19,11 +19,14 @@ from pathlib import Path
 import h5py
 import pytest
 
+from ffrmbs.errors import InputFileError
 from ffrmbs_app import cli
+from mbs.result_file import load_result
 from qa.fixtures import edited, fixture_text
 
 import paths
 from cli_in_process import run_cli
+from fifo_watch import watched
 from damage_places import damage_places, damaged as damaged_bytes
 
 REPO = str(paths.REPO)
@@ -126,29 +129,26 @@ def test_a_directory_as_the_result_file_is_named(tmp_path, command):
 @pytest.mark.parametrize("command", ["plot", "export"])
 def test_a_fifo_as_the_result_file_is_named_and_not_opened(tmp_path, command):
     """A FIFO given as the result file said "no such result file"; it is named, and never
-    opened (a child process with a time limit: opening it would block)."""
+    opened (watched: :mod:`fifo_watch`)."""
     fifo = tmp_path / "run.h5"
     os.mkfifo(fifo)
-    res = subprocess.run([sys.executable, "-m", "ffrmbs_app.cli", command, str(fifo), "--out", str(tmp_path / "out")],
-                         capture_output=True, text=True, timeout=120, env=os.environ | {"PYTHONPATH": REPO})
-    assert res.returncode == 2 and res.stderr == f"ffrmbs: error: {fifo}: not a regular file (a FIFO)\n", res.stderr
+    with watched(fifo) as watch:
+        code, _, stderr = run_cli(command, fifo, "--out", tmp_path / "out")
+    assert not watch.opened
+    assert code == 2 and stderr == f"ffrmbs: error: {fifo}: not a regular file (a FIFO)\n", stderr
     assert not (tmp_path / "out").exists()
 
 
 @pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no FIFOs on this platform")
 def test_load_result_of_a_fifo_is_refused_without_opening_it(tmp_path):
     """mbs.result_file.load_result handed the FIFO to HDF5, whose open blocks without a
-    writer (a child process with a time limit)."""
+    writer (watched: :mod:`fifo_watch`)."""
     fifo = tmp_path / "run.h5"
     os.mkfifo(fifo)
-    code = ("from ffrmbs.errors import InputFileError\nfrom mbs.result_file import load_result\n"
-            f"try:\n    load_result({str(fifo)!r})\nexcept InputFileError as exc:\n    print(exc)\n")
-    try:
-        res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60,
-                             env=os.environ | {"PYTHONPATH": REPO})
-    except subprocess.TimeoutExpired:
-        pytest.fail("load_result opened the FIFO and blocked")
-    assert res.stdout == f"{fifo}: not a regular file (a FIFO)\n", res.stderr
+    with watched(fifo) as watch, pytest.raises(InputFileError) as err:
+        load_result(fifo)
+    assert not watch.opened, "load_result opened the FIFO"
+    assert str(err.value) == f"{fifo}: not a regular file (a FIFO)"
 
 
 # --- outputs of another scene, of the run before, of an export killed (issue 30) --------------------
@@ -364,14 +364,14 @@ def test_the_order_help_says_what_it_applies_to(capsys):
 @pytest.mark.parametrize("name", ["scene.toml", "model.py"])
 def test_a_fifo_as_the_scene_file_is_named_and_not_opened(tmp_path, name):
     """`ffrmbs run FIFO` said "no such scene file"; it says what the path is, and never
-    opens it (opening a FIFO without a writer blocks: the command runs in a child process
-    with a time limit)."""
+    opens it (opening a FIFO without a writer blocks; watched: :mod:`fifo_watch`)."""
     fifo = tmp_path / name
     os.mkfifo(fifo)
-    res = subprocess.run([sys.executable, "-m", "ffrmbs_app.cli", "run", str(fifo), "--out", str(tmp_path / "out")],
-                         capture_output=True, text=True, timeout=120, env=os.environ | {"PYTHONPATH": REPO})
-    assert res.returncode == 2, res.stderr
-    assert res.stderr == f"ffrmbs: error: {fifo}: not a regular file (a FIFO)\n"
+    with watched(fifo) as watch:
+        code, _, stderr = run_cli("run", fifo, "--out", tmp_path / "out")
+    assert not watch.opened
+    assert code == 2, stderr
+    assert stderr == f"ffrmbs: error: {fifo}: not a regular file (a FIFO)\n"
     assert not (tmp_path / "out").exists()
 
 
@@ -387,9 +387,11 @@ def test_a_directory_as_the_scene_file_is_named(tmp_path, name):
 def test_read_scene_refuses_a_fifo_without_opening_it(tmp_path):
     """ffrmbs_app.scene_file.read_scene called from Python (not through load_scene) on a
     FIFO: refused at once (it blocked in read_bytes)."""
+    from ffrmbs_app.scene_file import read_scene
+
     fifo = tmp_path / "scene.toml"
     os.mkfifo(fifo)
-    code = ("import sys\nfrom ffrmbs.errors import InputFileError\nfrom ffrmbs_app.scene_file import read_scene\n"
-            "try:\n    read_scene(sys.argv[1])\nexcept InputFileError as exc:\n    print(exc)\n")
-    res = subprocess.run([sys.executable, "-c", code, str(fifo)], capture_output=True, text=True, timeout=60)
-    assert "not a regular file (a FIFO)" in res.stdout, res.stdout + res.stderr
+    with watched(fifo) as watch, pytest.raises(InputFileError) as err:
+        read_scene(fifo)
+    assert not watch.opened
+    assert "not a regular file (a FIFO)" in str(err.value)

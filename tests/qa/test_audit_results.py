@@ -95,9 +95,11 @@ def default_run(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def example_run(tmp_path_factory):
-    """`ffrmbs run examples/scenes/point_mass_beam.toml` (the whole 0.1 s, no check)."""
+    """`ffrmbs run examples/scenes/point_mass_beam.toml` for 15 ms as the default run (free
+    flight and the impact; the file's 1001 samples), no check."""
     out = tmp_path_factory.mktemp("example")
-    code, _, stderr = run_cli("run", str(EXAMPLE), "--no-check", "--no-export", "--out", str(out))
+    code, _, stderr = run_cli("run", str(EXAMPLE), "--no-check", "--no-export", "--set", "scene.t_end=0.015",
+                              "--out", str(out))
     assert code == 0, stderr
     return out
 

@@ -233,7 +233,7 @@ def test_a_second_run_into_the_same_output_is_refused_with_the_pid(tmp_path):
         res = ffrmbs("run", scene, "--out", out, "--no-check", "--no-export")
         one_clear_line(res, f"{out / 'fall.h5'} is in use by another run (pid {os.getpid()})")
     assert not (out / "fall.h5").exists()
-    res = ffrmbs("run", scene, "--out", out, "--no-check", "--no-export")   # once it ended: runs
+    res = ffrmbs_in_process("run", scene, "--out", out, "--no-check", "--no-export")   # once it ended: runs
     assert res.returncode == 0, res.stderr
     assert sorted(p.name for p in out.iterdir()) == ["fall.h5", "fall.png"]   # the lock file is gone
 
@@ -243,15 +243,16 @@ def test_a_reader_holding_the_result_file_does_not_stop_a_new_run(tmp_path, monk
     same --out is not blocked (the new file is built under a temporary name and renamed
     into place), and the reader keeps reading the complete old file."""
     scene, out = scene_file(tmp_path), tmp_path / "out"
-    assert ffrmbs("run", scene, "--out", out, "--no-check", "--no-export").returncode == 0
-    monkeypatch.setitem(ENV, "HDF5_USE_FILE_LOCKING", "TRUE")        # HDF5's default, whatever the caller set
+    monkeypatch.setitem(ENV, "HDF5_USE_FILE_LOCKING", "TRUE")        # HDF5's default, whatever the caller set,
+    monkeypatch.setenv("HDF5_USE_FILE_LOCKING", "TRUE")              # for the reader and for the runs here
+    assert ffrmbs_in_process("run", scene, "--out", out, "--no-check", "--no-export").returncode == 0
     reader = subprocess.Popen([sys.executable, "-c", "import h5py, sys; f = h5py.File(sys.argv[1], 'r'); "
                                "print('open', flush=True); sys.stdin.read(); print(f.attrs['status'], len(f['t']))",
                                str(out / "fall.h5")],
                               stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, env=ENV)
     try:
         assert reader.stdout.readline().strip() == "open"
-        res = ffrmbs("run", scene, "--out", out, "--no-check", "--no-export")
+        res = ffrmbs_in_process("run", scene, "--out", out, "--no-check", "--no-export")
     finally:
         seen, _ = reader.communicate("", timeout=60)
     assert res.returncode == 0, res.stderr
@@ -324,7 +325,7 @@ def test_a_model_script_scene_name_and_times_are_checked(tmp_path):
 
 def test_every_output_of_a_run_stays_inside_out(tmp_path):
     scene, out = scene_file(tmp_path, name="run-1.v2_b"), tmp_path / "out"
-    res = ffrmbs("run", scene, "--out", out, "--no-check")
+    res = ffrmbs_in_process("run", scene, "--out", out, "--no-check")
     assert res.returncode == 0, res.stderr
     outside = [p for p in tmp_path.rglob("*") if p != scene and out not in p.parents and p != out]
     assert outside == [] and (out / "run-1.v2_b.h5").is_file() and (out / "run-1.v2_b.png").is_file()

@@ -16,6 +16,8 @@ datasets, attributes and groups, wrong dtypes and shapes.
 
 from __future__ import annotations
 
+import copy
+import functools
 import json
 import math
 import re
@@ -31,6 +33,7 @@ from hypothesis import strategies as st
 
 from ffrmbs.errors import InputFileError
 from ffrmbs_app.scene import Scene
+from ffrmbs_app.scene_file import bodies as scene_bodies
 from ffrmbs_app.scene_file import read_scene
 from preprocess import Material, bodyfiles, build_body, read_body, write_body
 from preprocess.bodyfiles import HDF5_FILE, TEXT_FILES
@@ -86,8 +89,10 @@ NON_FINITE = st.sampled_from(["nan", "NaN", "inf", "-inf", "+Infinity", "1e999",
 NUMBER = st.one_of(st.floats(allow_nan=False, allow_infinity=False).map(repr), st.integers(-5, 60).map(str))
 
 
+@functools.lru_cache(maxsize=len(TEXT_FILES))
 def data_lines(text):
-    """Indices of the lines holding data, with their token spans (before any comment)."""
+    """Indices of the lines holding data, with their token spans (before any comment);
+    computed once per file text (the mutations start from the original files)."""
     out = []
     for i, line in enumerate(text.split("\n")):
         data = line.split("%", 1)[0].split("#", 1)[0]
@@ -152,9 +157,8 @@ def mutate_text(text: str, op, argument, draw_index):
 def test_text_body_files_read_or_fail_with_file_and_line(originals, mutation, data):
     files, work = originals
     directory = work / "text"
-    shutil.rmtree(directory, ignore_errors=True)
-    directory.mkdir()
-    for name in TEXT_FILES:
+    directory.mkdir(exist_ok=True)
+    for name in TEXT_FILES:             # every file back to the original (one was mutated or removed)
         (directory / name).write_bytes(files[name])
     name, op, argument = mutation
     path = directory / name
@@ -341,10 +345,16 @@ spin = { body = "block", quantity = "angular_velocity" }
 """
 
 
+@functools.cache
+def _parsed_base_scene() -> dict:
+    return tomllib.loads(fixture_text("scenes/beam_block_bob.toml")) | tomllib.loads(FUZZ_TABLES)
+
+
 def base_scene() -> dict:
     """The fuzzing base, parsed: the three bodies of scenes/beam_block_bob.toml with every
-    key of [scene] and the links, loads, contacts and outputs of :data:`FUZZ_TABLES`."""
-    return tomllib.loads(fixture_text("scenes/beam_block_bob.toml")) | tomllib.loads(FUZZ_TABLES)
+    key of [scene] and the links, loads, contacts and outputs of :data:`FUZZ_TABLES` (a
+    fresh copy to mutate; the texts are parsed once)."""
+    return copy.deepcopy(_parsed_base_scene())
 
 
 BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
@@ -439,6 +449,16 @@ def scene_dir(originals):
     return directory
 
 
+@pytest.fixture
+def body_read_once(monkeypatch):
+    """The scene reader's ``read_body`` remembering what it read, by (path, units): the
+    fuzz never changes the body file, so every scene that names it gets the BodyData read
+    the first time (as scenes sharing a built-in beam share its BodyData); a source that
+    fails to read is read, and fails, every time. The body file's own reader is fuzzed
+    above."""
+    monkeypatch.setattr(scene_bodies, "read_body", functools.lru_cache(maxsize=None)(scene_bodies.read_body))
+
+
 def test_the_fuzzing_base_scene_is_valid(scene_dir):
     path = scene_dir / "base.toml"
     path.write_text(toml_document(base_scene()))
@@ -451,7 +471,7 @@ def test_the_fuzzing_base_scene_is_valid(scene_dir):
 @pytest.mark.slow
 @fuzz(400)
 @given(data=st.data())
-def test_scene_files_read_or_fail_naming_file_line_and_key(scene_dir, data):
+def test_scene_files_read_or_fail_naming_file_line_and_key(scene_dir, body_read_once, data):
     doc = base_scene()
     op = data.draw(st.sampled_from(["delete", "replace", "extra-key", "text"]))
     key = None

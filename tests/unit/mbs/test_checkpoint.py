@@ -57,7 +57,7 @@ CASES = {   # name: (scene, integrator options, t_end [s], dt [s], samples, stop
     "moreau-adaptive": (beam_on_mass, dict(integrator="moreau-adaptive", trace=True, atol=1e-7),
                         0.016, 1e-4, 161, 0.0125, True),
     "generalized-alpha": (pendulum, dict(integrator="generalized-alpha"), 0.02, 1e-3, 21, 0.01, False),
-    "rk4": (pendulum, dict(integrator="rk4"), 0.004, 2e-5, 21, 0.002, False),
+    "rk4": (pendulum, dict(integrator="rk4"), 0.002, 2e-5, 11, 0.001, False),
 }
 
 
