@@ -172,19 +172,21 @@ def test_preprocess_curved_builtins_name_their_exact_surfaces(tmp_path, capsys, 
 
 @pytest.mark.slow
 def test_main_job_runs_the_point_mass_on_the_beam(tmp_path):
-    """``ffrmbs run`` with no scene argument: setup A of thesis Sec. 5.2. Independent
-    checks: the point mass falls 2 mm at 0.2 m/s, so the contact closes at 10 ms; before
-    it the mass moves uniformly; the energy balance closes; files are written."""
+    """``ffrmbs run`` with no argument, as the README shows it (tests/e2e/test_readme.py
+    leaves it to this test): setup A of thesis Sec. 5.2. Independent checks: the point mass
+    falls 2 mm at 0.2 m/s, so the contact closes at 10 ms; before it the mass moves
+    uniformly; the energy balance closes; files are written into ``ffrmbs-run/``."""
     import h5py
 
-    res = ffrmbs("run", "--out", str(tmp_path / "out"))
+    res = ffrmbs("run", cwd=tmp_path)
     assert res.returncode == 0, res.stderr
+    out = tmp_path / "ffrmbs-run"
     text = res.stdout
     for key in ("contact: force transmitted in", "maximum penetration",
                 "energy balance [J]: E(t) - E(0) = W_loads - D_damping + W_impulses + residual", "accuracy (time step",
                 "accuracy (modal truncation: max |run - run with 40 modes|)", "cost:"):
         assert key in text
-    with h5py.File(tmp_path / "out" / "point_mass_beam.h5") as f:
+    with h5py.File(out / "point_mass_beam.h5") as f:
         t, y, vy = f["t"][()], f["outputs/y"][()], f["outputs/vy"][()]
         summary = json.loads(f.attrs["summary"])
         assert f["outputs/node19"].shape == (t.size, 3) and f["trace/closed"].size == 10000
@@ -202,8 +204,8 @@ def test_main_job_runs_the_point_mass_on_the_beam(tmp_path):
     # largest penetration of the effective gap g_N + δ: the closing step's 0.2 m/s · Δt, plus
     # the change of δ between the step's start (δ_k) and its midpoint (g_N(q_m))
     assert abs(e["impulse_work"]) < 1e-2 * e["initial"] and 0 < summary["max_penetration_m"] <= 1.5 * 0.2 * 1e-5
-    assert (tmp_path / "out" / "point_mass_beam.png").stat().st_size > 10_000
-    pvd = tmp_path / "out" / "point_mass_beam-paraview" / "point_mass_beam.pvd"
+    assert (out / "point_mass_beam.png").stat().st_size > 10_000
+    pvd = out / "point_mass_beam-paraview" / "point_mass_beam.pvd"
     assert pvd.is_file() and pvd.read_text().count("<DataSet") >= 1001
 
 

@@ -6,8 +6,8 @@ Every shell command they show must parse: ffrmbs arguments by the CLI's own pars
 modules and example scripts must exist, pip extras must be in setup.cfg. The fenced
 commands of each document are then run as written, in its order, in a temporary
 directory laid out like a fresh clone (so that a plot finds the run before it), except
-usage synopses and the commands listed in NOT_RUN with the reason. Self-contained Python
-snippets run there too; the others must compile and their imports must exist. The runs
+usage synopses, the commands listed in NOT_RUN with the reason, and those that another
+test runs as written and checks (RUN_BY). Self-contained Python snippets run there too; the others must compile and their imports must exist. The runs
 use the caller's body cache ($FFRMBS_CACHE or ~/.cache/ffrmbs): the first-run path with an
 empty cache is another test's.
 """
@@ -48,6 +48,12 @@ NOT_RUN = {
 }
 
 
+# command, as written -> the test that runs it so and checks what it prints and writes
+RUN_BY = {
+    "ffrmbs run": "tests/e2e/test_cli.py::test_main_job_runs_the_point_mass_on_the_beam",
+}
+
+
 def _text(document):
     return document.read_text(encoding="utf-8")
 
@@ -68,6 +74,8 @@ def _all_commands():
 
 
 def _not_run_reason(command):
+    if command.text in RUN_BY:
+        return f"run as written by {RUN_BY[command.text]}"
     return next((why for prefix, why in NOT_RUN.items() if command.text.startswith(prefix)), None)
 
 
@@ -160,14 +168,21 @@ def test_every_command_parses():
 
 
 def test_every_command_is_run_or_says_why_not():
-    """A fenced command is run unless it is a synopsis or NOT_RUN says why not; an entry
-    of NOT_RUN that no longer matches a command of any document is stale."""
+    """A fenced command is run unless it is a synopsis, NOT_RUN says why not or RUN_BY names
+    the test that runs it as written; an entry of either that no longer matches a command
+    of any document (or a test) is stale."""
     commands = _commands()
     unknown = [_where(d, c) for d, c in commands
                if not c.synopsis and not _not_run_reason(c) and _argv(c.forms()[0][1]) is None]
     stale = [prefix for prefix in NOT_RUN if not any(c.text.startswith(prefix) for _, c in commands)]
     problems = [f"{where}: this test cannot run it; teach _argv to, or list it in NOT_RUN" for where in unknown]
     problems += [f"NOT_RUN entry {prefix!r} matches no command" for prefix in stale]
+    problems += [f"RUN_BY entry {text!r} is no command of any document" for text in RUN_BY
+                 if not any(c.text == text for _, c in commands)]
+    for text, test in RUN_BY.items():
+        path, name = test.split("::")
+        if f"def {name}(" not in (REPO / path).read_text(encoding="utf-8"):
+            problems.append(f"RUN_BY entry {text!r}: no test {test}")
     if problems:
         pytest.fail("\n".join(problems), pytrace=False)
 
@@ -226,7 +241,7 @@ def _fresh_clone(tmp):
 
 def _to_run(document):
     """The items of ``document`` this test runs: its snippets and its fenced commands but
-    synopses, NOT_RUN and — on the getting-started page — the README's own commands,
+    synopses, NOT_RUN, RUN_BY and — on the getting-started page — the README's own commands,
     which the README's run covers."""
     shown_in_readme = {c.text for _, c in _commands([README])} if document == GETTING_STARTED else set()
     return [item for _, item in _items(document)
