@@ -5,7 +5,8 @@ an unstructured and a fitted structured mesh against the structured mesh's exact
 interpolated contour.
 
 The case's simulations (settle, slide, point_on_beam) run once per module for their
-arguments (:func:`each_run_once`): the harness's quick run at the end reports on the runs
+arguments (:func:`each_run_once`): the case's quick run at the end (as the harness runs
+it, without the plots and report of tests/integration/test_harness.py) reports on the runs
 the tests before it made, as a deterministic run gives the same result twice."""
 
 import hashlib
@@ -14,9 +15,9 @@ import inspect
 import numpy as np
 import pytest
 
+from case_rows import quick_rows_without_files
 from contours.fitting import fit_report
 from validation.cases import contact_unstructured as case
-from validation.harness import run_validation
 
 
 @pytest.fixture(scope="module", autouse=True)
@@ -208,8 +209,8 @@ def test_an_unstructured_beam_follows_the_structured_contact_kinematics(beams, r
 # --- the case through the harness ---------------------------------------------------------
 
 @pytest.mark.slow
-def test_the_quick_case_reports_every_scene(tmp_path):
-    rows = run_validation(tmp_path, quick=True, cases=[case], progress=None)
+def test_the_quick_case_reports_every_scene():
+    rows = quick_rows_without_files([case])[case.NAME]
     scenes = {r["config"]["scene"] for r in rows}
     assert scenes == {"ball on plate", "ball in tube", "point mass on beam"}
     assert all(set(r["config"]) == {"setup", "scene", "dt", "mesh"} and r["cpu_s"] > 0 for r in rows)
