@@ -4,10 +4,11 @@ sliding inside a tube against the rigid pendulum (solve_ivp), the point mass on 
 an unstructured and a fitted structured mesh against the structured mesh's exactly
 interpolated contour.
 
-The case's simulations (settle, slide, point_on_beam) run once per module for their
-arguments (:func:`each_run_once`): the case's quick run at the end (as the harness runs
-it, without the plots and report of tests/integration/test_harness.py) reports on the runs
-the tests before it made, as a deterministic run gives the same result twice."""
+The case's simulations (settle, slide, point_on_beam), the tube's body and the plate's
+static deflections are computed once per module for their arguments (:func:`each_run_once`):
+the case's quick run at the end (as the harness runs it, without the plots and report of
+tests/integration/test_harness.py) reports on what the tests before it computed, as a
+deterministic computation gives the same result twice."""
 
 import hashlib
 import inspect
@@ -22,31 +23,33 @@ from validation.cases import contact_unstructured as case
 
 @pytest.fixture(scope="module", autouse=True)
 def each_run_once():
-    """Memoize the case's simulations for this module by their arguments, a body by the
-    bytes of its nodes, modes and eigenvalues (the harness loads its bodies anew). A run
-    whose CPU time was all numba compiling (reported as 0 s) is run again when asked again,
-    so that the harness's rows carry the runs' costs."""
+    """Memoize the case's simulations, tube body and static deflections for this module by
+    their arguments, a body by the bytes of its nodes, modes and eigenvalues (the harness
+    loads its bodies anew). A run whose CPU time was all numba compiling (reported as 0 s)
+    is run again when asked again, so that the harness's rows carry the runs' costs."""
     def key(value):
         if hasattr(value, "phi"):
             arrays = (a for a in (value.u0, value.phi, value.eigenvalues) if a is not None)
             return hashlib.sha1(b"".join(np.ascontiguousarray(a).tobytes() for a in arrays)).hexdigest()
         return value
 
-    def once(run):
+    def once(run, timed):
         runs, signature = {}, inspect.signature(run)
 
         def memoized(*args, **kwargs):
             bound = signature.bind(*args, **kwargs)
             bound.apply_defaults()
             k = tuple((name, key(v)) for name, v in bound.arguments.items())
-            if k not in runs or runs[k][-1] <= 0.0:       # last: its CPU [s], 0 if all compiling
+            if k not in runs or (timed and runs[k][-1] <= 0.0):      # last: its CPU [s], 0 if all compiling
                 runs[k] = run(*args, **kwargs)
             return runs[k]
         return memoized
 
     with pytest.MonkeyPatch.context() as mp:
         for name in ("settle", "slide", "point_on_beam"):
-            mp.setattr(case, name, once(getattr(case, name)))
+            mp.setattr(case, name, once(getattr(case, name), timed=True))
+        for name in ("tube_body", "static_deflection"):                 # gmsh's tube, full FE statics
+            mp.setattr(case, name, once(getattr(case, name), timed=False))
         yield
 
 
