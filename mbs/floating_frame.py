@@ -32,6 +32,7 @@ from typing import Callable
 
 import numpy as np
 
+from contours.rigid import cross3
 from ffrmbs.errors import ModelError
 
 from ._kernels import add_free_point_force, free_quat_increment, normalize_quaternion, point_jacobian_T
@@ -230,7 +231,7 @@ class FloatingFrameBody(Body):
 
     def point_velocity(self, q, u, frame, t=0.0):
         R, A, v, w, *_ = self._frame(q, u, t)
-        rel = np.cross(w, self._u_bar(q, frame))
+        rel = cross3(w, self._u_bar(q, frame))
         if self.n_modes:
             rel += frame.phi @ u[self._fu]
         return v + A @ rel
@@ -263,12 +264,12 @@ class FloatingFrameBody(Body):
     def point_bias_T(self, q, u, frame, t=0.0):
         R, A, v, w, T, Tdu, a, wd = self._frame(q, u, t)
         ub = self._u_bar(q, frame)
-        acc = np.cross(w, np.cross(w, ub))
+        acc = cross3(w, cross3(w, ub))
         if self.n_modes:
-            acc += 2.0 * np.cross(w, frame.phi @ u[self._fu])
+            acc += 2.0 * cross3(w, frame.phi @ u[self._fu])
         if self.motion is None:
-            return A @ (acc + np.cross(Tdu, ub))
-        return a + A @ (acc + np.cross(wd, ub))
+            return A @ (acc + cross3(Tdu, ub))
+        return a + A @ (acc + cross3(wd, ub))
 
     def bias_R(self, q, u, t=0.0):
         _, A, _, _, _, Tdu, _, wd = self._frame(q, u, t)

@@ -53,6 +53,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from contours.rigid import cross3
 from ffrmbs.errors import ModelError
 from ffrmbs.registry import Registry
 
@@ -67,6 +68,12 @@ JOINTS.register("spherical", (True, (), ()))
 JOINTS.register("revolute", (True, (), ((0, 1), (0, 2))))
 JOINTS.register("prismatic", (False, (1, 2), ((0, 1), (0, 2), (1, 2))))
 AXIS_KINDS = ("revolute", "prismatic")      # the kinds that take an axis
+
+
+def _cross_rows(a, b):
+    """a × b row by row, ``a`` and ``b`` (k, 3) or (3,): np.cross(a, b) to the bit,
+    without its overhead on such small arrays (:func:`contours.rigid.cross3`)."""
+    return cross3(np.transpose(a), np.transpose(b)).T
 
 
 def _triad(axis):
@@ -186,8 +193,8 @@ class Joint(Constraint):
         k = len(O)
         G[i:i + k, 0:3] = -O
         G[i:i + k, 6:9] = O
-        G[i:i + k, 3:6] = np.cross(O, d)
-        n = np.cross(E, F)
+        G[i:i + k, 3:6] = _cross_rows(O, d)
+        n = _cross_rows(E, F)
         G[i + k:, 3:6] = n
         G[i + k:, 9:12] = -n
         return G, pose
@@ -231,10 +238,10 @@ class Joint(Constraint):
         d, dd = r2 - r1, v2 - v1
         i = 3 * self._point
         k = len(O)
-        Od = np.cross(w1, O)
-        gamma[i:i + k] += 2.0 * Od @ dd + np.cross(w1, Od) @ d
-        Ed, Fd = np.cross(w1, E), np.cross(w2, F)
-        gamma[i + k:] += (np.cross(Ed, F) + np.cross(E, Fd)) @ (w1 - w2)
+        Od = _cross_rows(w1, O)
+        gamma[i:i + k] += 2.0 * Od @ dd + _cross_rows(w1, Od) @ d
+        Ed, Fd = _cross_rows(w1, E), _cross_rows(w2, F)
+        gamma[i + k:] += (_cross_rows(Ed, F) + _cross_rows(E, Fd)) @ (w1 - w2)
         return gamma
 
     def reaction(self, t, q, lam):

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from contours.rigid import cross3
 from ffrmbs.errors import ModelError
 
 from ._kernels import rigid_free_mass_and_h
@@ -46,8 +47,8 @@ class RigidBody(FloatingFrameBody):
         M[:3, 3:] = -self.mass * A @ skew(self.com)
         M[3:, :3] = M[:3, 3:].T
         M[3:, 3:] = self.inertia_origin
-        Q = np.concatenate((-self.mass * A @ np.cross(w, np.cross(w, self.com)),
-                            -np.cross(w, self.inertia_origin @ w)))
+        Q = np.concatenate((-self.mass * A @ cross3(w, cross3(w, self.com)),
+                            -cross3(w, self.inertia_origin @ w)))
         return M, Q
 
     def mass_and_h_into(self, q, u, t, M, h, work=None):

@@ -4,7 +4,9 @@ with the CLI, then ``ffrmbs run`` — and obey the physics their headers state: 
 onto the plate's top face, the plate at rest in its static deflection until the ball
 arrives, a frictionless ball whose centre stays on the cylinder of radius R − r inside the
 channel while it moves along the channel at constant speed, and a ball sliding on a
-trimmed face into its hole over the rim."""
+trimmed face into its hole over the rim. The preprocess step's body comes from the
+session's body cache (tests/conftest.py) when built before: the same mesh, material and
+options give the same body bit for bit."""
 
 import shutil
 
@@ -13,11 +15,24 @@ import pytest
 
 from ffrmbs_app.cli import main
 from mbs.result_file import load_result
+from preprocess import pipeline
 
 import paths
 
 EXAMPLES = paths.EXAMPLES
 G = 9.81
+
+
+@pytest.fixture(autouse=True)
+def cached_bodies(monkeypatch):
+    """``ffrmbs preprocess`` builds its body through the body cache, which builds anew
+    for a call that watches the building (log and progress given, as the CLI does): the
+    tests read the run, not the preprocess step's progress lines."""
+    cached = pipeline.build_body
+
+    def unwatched(*args, log=None, progress=None, **kwargs):
+        return cached(*args, **kwargs)
+    monkeypatch.setattr(pipeline, "build_body", unwatched)
 
 
 def run_example(tmp_path, part, preprocess_args, scene, body_dir, capsys):
