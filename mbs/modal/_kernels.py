@@ -92,6 +92,15 @@ def _accelerations(R, Om, F_B, T_B, F_G, B_G, mass, I, Iinv, acc, alpha, T):
 
 
 @njit(cache=True)
+def _copy_into(src, dst):
+    """dst[...] = src for arrays of the same shape, element by element: an array slice
+    assignment makes numba compile its shape-mismatch error message (seconds per kernel)."""
+    s, d = src.reshape(-1), dst.reshape(-1)
+    for i in range(s.shape[0]):
+        d[i] = s[i]
+
+
+@njit(cache=True)
 def _matmul3(A, B, out):
     for i in range(3):
         for j in range(3):
@@ -113,7 +122,7 @@ def report_step(h, rho, v, R, Om, F_B, T_B, F_G, B_G, mass, I, Iinv, alpha, ws):
         Om[i] += h * alpha[i]
     so3_exp(dth, E)
     _matmul3(R, E, R2)
-    R[:, :] = R2
+    _copy_into(R2, R)
 
 
 @njit(cache=True)
@@ -158,7 +167,7 @@ def _step_rkmk4(h, rho, v, R, Om, F_B, T_B, F_G, B_G, mass, I, Iinv, ws, ys):
     E, R2 = ws[4], ws[5]
     so3_exp(y[6:9], E)
     _matmul3(R, E, R2)
-    R[:, :] = R2
+    _copy_into(R2, R)
 
 
 @njit(cache=True)
@@ -174,10 +183,10 @@ def rigid_motion(grid, F_B, T_B, F_G, B_G, mass, I, Iinv, rho0, v0, R0, Om0, sch
     fills the states at the grid points: ``rho``, ``v``, ``Om`` (n_g, 3), ``R`` (n_g, 3, 3).
     Returns the index of the first non-finite state, or −1. Scratch arrays are allocated
     once here; the steps allocate nothing."""
-    rho[0] = rho0
-    v[0] = v0
-    R[0] = R0
-    Om[0] = Om0
+    _copy_into(rho0, rho[0])
+    _copy_into(v0, v[0])
+    _copy_into(R0, R[0])
+    _copy_into(Om0, Om[0])
     r_ = rho0.copy()
     v_ = v0.copy()
     R_ = R0.copy()
@@ -190,10 +199,10 @@ def rigid_motion(grid, F_B, T_B, F_G, B_G, mass, I, Iinv, rho0, v0, R0, Om0, sch
             report_step(h, r_, v_, R_, O_, F_B[k], T_B[k], F_G[k], B_G[k], mass, I, Iinv, ws[1], ws)
         else:
             _step_rkmk4(h, r_, v_, R_, O_, F_B[k], T_B[k], F_G[k], B_G[k], mass, I, Iinv, ws, ys)
-        rho[k + 1] = r_
-        v[k + 1] = v_
-        R[k + 1] = R_
-        Om[k + 1] = O_
+        _copy_into(r_, rho[k + 1])
+        _copy_into(v_, v[k + 1])
+        _copy_into(R_, R[k + 1])
+        _copy_into(O_, Om[k + 1])
         if not (np.isfinite(R_).all() and np.isfinite(O_).all() and np.isfinite(r_).all()):
             return k + 1
     return -1
