@@ -93,8 +93,9 @@ def _accelerations(R, Om, F_B, T_B, F_G, B_G, mass, I, Iinv, acc, alpha, T):
 
 @njit(cache=True)
 def _copy_into(src, dst):
-    """dst[...] = src for arrays of the same shape, element by element: an array slice
-    assignment makes numba compile its shape-mismatch error message (seconds per kernel)."""
+    """dst[...] = src for C-contiguous arrays of the same shape, element by element (views,
+    no allocation): an array slice assignment makes numba compile its shape-mismatch error
+    message, seconds per kernel."""
     s, d = src.reshape(-1), dst.reshape(-1)
     for i in range(s.shape[0]):
         d[i] = s[i]
