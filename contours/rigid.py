@@ -22,19 +22,13 @@ from __future__ import annotations
 import numpy as np
 
 from ffrmbs.errors import ModelError
+from ffrmbs.vec3 import cross3
 
 from .base import D_ETA, D_ETA_ETA, D_ETA_XI, D_XI, D_XI_XI, VALUE, Contour
 
 
 # layout of _FrameContour.state: r, A (row-major), v, ω, J_T (3, nu), J_R (3, nu)
 R_AT, A_AT, V_AT, W_AT, J_AT = 0, 3, 12, 15, 18
-
-
-def cross3(a, b):
-    """a × b of a 3-vector ``a`` and ``b`` (3,) or (3, n) (column by column): component
-    by component, as ``np.cross(a, b, axis=0)`` computes it (the same roundings), without
-    its overhead on such small arrays (it dominated the rigid contours' evaluation)."""
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
 
 
 class _FrameContour(Contour):

@@ -32,8 +32,8 @@ from typing import Callable
 
 import numpy as np
 
-from contours.rigid import cross3
 from ffrmbs.errors import ModelError
+from ffrmbs.vec3 import cross3
 
 from ._kernels import add_free_point_force, free_quat_increment, normalize_quaternion, point_jacobian_T
 from .body import Body, Frame

@@ -53,8 +53,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from contours.rigid import cross3
 from ffrmbs.errors import ModelError
+from ffrmbs.vec3 import cross3
 from ffrmbs.registry import Registry
 
 from .body import Frame
@@ -72,7 +72,7 @@ AXIS_KINDS = ("revolute", "prismatic")      # the kinds that take an axis
 
 def _cross_rows(a, b):
     """a × b row by row, ``a`` and ``b`` (k, 3) or (3,): np.cross(a, b) to the bit,
-    without its overhead on such small arrays (:func:`contours.rigid.cross3`)."""
+    without its overhead on such small arrays (:func:`ffrmbs.vec3.cross3`)."""
     return cross3(np.transpose(a), np.transpose(b)).T
 
 

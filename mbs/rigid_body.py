@@ -15,8 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from contours.rigid import cross3
 from ffrmbs.errors import ModelError
+from ffrmbs.vec3 import cross3
 
 from ._kernels import rigid_free_mass_and_h
 from .body import Body, Frame

@@ -26,7 +26,7 @@ from qa.fixtures import edited, fixture_text
 
 import paths
 from cli_in_process import run_cli
-from fifo_watch import watched
+from fifo_watch import FifoWatch
 from damage_places import damage_places, damaged as damaged_bytes
 
 REPO = str(paths.REPO)
@@ -132,7 +132,7 @@ def test_a_fifo_as_the_result_file_is_named_and_not_opened(tmp_path, command):
     opened (watched: :mod:`fifo_watch`)."""
     fifo = tmp_path / "run.h5"
     os.mkfifo(fifo)
-    with watched(fifo) as watch:
+    with FifoWatch(fifo) as watch:
         code, _, stderr = run_cli(command, fifo, "--out", tmp_path / "out")
     assert not watch.opened
     assert code == 2 and stderr == f"ffrmbs: error: {fifo}: not a regular file (a FIFO)\n", stderr
@@ -145,7 +145,7 @@ def test_load_result_of_a_fifo_is_refused_without_opening_it(tmp_path):
     writer (watched: :mod:`fifo_watch`)."""
     fifo = tmp_path / "run.h5"
     os.mkfifo(fifo)
-    with watched(fifo) as watch, pytest.raises(InputFileError) as err:
+    with FifoWatch(fifo) as watch, pytest.raises(InputFileError) as err:
         load_result(fifo)
     assert not watch.opened, "load_result opened the FIFO"
     assert str(err.value) == f"{fifo}: not a regular file (a FIFO)"
@@ -367,7 +367,7 @@ def test_a_fifo_as_the_scene_file_is_named_and_not_opened(tmp_path, name):
     opens it (opening a FIFO without a writer blocks; watched: :mod:`fifo_watch`)."""
     fifo = tmp_path / name
     os.mkfifo(fifo)
-    with watched(fifo) as watch:
+    with FifoWatch(fifo) as watch:
         code, _, stderr = run_cli("run", fifo, "--out", tmp_path / "out")
     assert not watch.opened
     assert code == 2, stderr
@@ -391,7 +391,7 @@ def test_read_scene_refuses_a_fifo_without_opening_it(tmp_path):
 
     fifo = tmp_path / "scene.toml"
     os.mkfifo(fifo)
-    with watched(fifo) as watch, pytest.raises(InputFileError) as err:
+    with FifoWatch(fifo) as watch, pytest.raises(InputFileError) as err:
         read_scene(fifo)
     assert not watch.opened
     assert "not a regular file (a FIFO)" in str(err.value)

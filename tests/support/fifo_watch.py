@@ -5,19 +5,27 @@ child process with a time limit): a writer can open a FIFO without blocking
 
 from __future__ import annotations
 
-import contextlib
 import errno
 import os
 import threading
 
 
 class FifoWatch:
-    """``opened``: a reader had ``path`` open while watched (polled every 0.2 ms)."""
+    """Watch the FIFO ``path`` inside a ``with`` block; ``opened``: a reader had it open
+    meanwhile (polled every 0.2 ms from a thread)."""
 
     def __init__(self, path):
         self.path, self.opened = os.fspath(path), False
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._watch, daemon=True)
+
+    def __enter__(self):
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc):
+        self._stop.set()
+        self._thread.join()
 
     def _watch(self):
         while not self._stop.is_set():
@@ -30,15 +38,3 @@ class FifoWatch:
                 self.opened = True
                 os.close(fd)
             self._stop.wait(0.0002)
-
-
-@contextlib.contextmanager
-def watched(path):
-    """Watch the FIFO ``path`` while the block runs; yields the :class:`FifoWatch`."""
-    watch = FifoWatch(path)
-    watch._thread.start()
-    try:
-        yield watch
-    finally:
-        watch._stop.set()
-        watch._thread.join()

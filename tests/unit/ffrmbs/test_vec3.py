@@ -1,9 +1,9 @@
-"""contours.rigid.cross3 against numpy's cross product: the same bits for a vector and,
+"""ffrmbs.vec3.cross3 against numpy's cross product: the same bits for a vector and,
 column by column, for a (3, n) Jacobian and two (3, n) arrays (mbs.joints' rows)."""
 
 import numpy as np
 
-from contours.rigid import cross3
+from ffrmbs.vec3 import cross3
 
 
 def test_cross3_equals_numpy_cross_to_the_bit():
