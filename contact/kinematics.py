@@ -37,7 +37,7 @@ import numpy as np
 
 from ffrmbs.errors import ModelError
 
-from contours.rigid import PlaneContour, PointContour, SphereContour
+from contours.rigid import PlaneContour, PointContour, SphereContour, sphere_angles
 
 from . import _detection_kernels as K
 from .search import Contact1sSearch, Contact2sSearch
@@ -203,28 +203,24 @@ def _require_dim(contour, dim):
     return contour
 
 
-def _sphere_angles(A, m):
-    """Surface coordinates (η, ξ) [rad] of a SphereContour with axes A (3, 3) at the point
-    in the unit direction m (3,) from its centre."""
-    x, y, z = A.T @ m
-    return float(np.arctan2(y, x)) % (2.0 * np.pi), float(np.arcsin(min(1.0, max(-1.0, z))))
-
-
 class _CentreContact(ContactKinematics):
     """Contour 1 is a point (``side1 = PointContour``, radius 0) or a sphere
     (``side1 = SphereContour``): its centre c is projected onto contour 2
-    (``_project``), g_N = nᵀ (c − r_C2) − ρ and C1 = c − ρ n."""
+    (``_project``), g_N = nᵀ (c − r_C2) − ρ and C1 = c − ρ n.
+
+    Attributes (besides :class:`ContactKinematics`'): ``radius`` ρ [m] (0 for a point),
+    ``centre`` c (3,) [m] at the last update (a view of point1's position for a point),
+    ``axes1`` the sphere's axes (3, 3) at the last update (identity for a point)."""
 
     side1: type
-    run_state = ContactKinematics.run_state + ("_centre", "_A1")
+    run_state = ContactKinematics.run_state + ("centre", "axes1")
 
     def __init__(self, contour1, contour2, nu_total):
         _require(contour1, self.side1, f"a {self.side1.__name__}")
         super().__init__(contour1, contour2, nu_total)
         self.radius = contour1.radius if self.side1 is SphereContour else 0.0
-        # the point's position (a view of point1's) or a copy of the sphere's centre
-        self._centre = self.point1.r if self.side1 is PointContour else np.zeros(3)
-        self._A1 = np.eye(3)
+        self.centre = self.point1.r if self.side1 is PointContour else np.zeros(3)
+        self.axes1 = np.eye(3)
 
     @abstractmethod
     def _project(self, c, velocity, jacobians) -> bool:
@@ -235,14 +231,14 @@ class _CentreContact(ContactKinematics):
         if self.side1 is PointContour:
             c1.evaluate(p1, velocity=velocity, jacobians=jacobians)
         else:
-            self._A1[:] = c1.axes
-            self._centre[:] = c1.centre
-        if not self._project(self._centre, velocity, jacobians):
+            self.axes1[:] = c1.axes
+            self.centre[:] = c1.centre
+        if not self._project(self.centre, velocity, jacobians):
             return False
         p2 = self.point2
-        self.g_N = K.normal_gap(p2.frame, self._centre, p2.derivs, self.radius)
+        self.g_N = K.normal_gap(p2.frame, self.centre, p2.derivs, self.radius)
         if self.side1 is SphereContour:
-            c1.evaluate(p1, *_sphere_angles(self._A1, -p2.n), velocity=velocity, jacobians=jacobians)
+            c1.evaluate(p1, *sphere_angles(self.axes1, -p2.n), velocity=velocity, jacobians=jacobians)
         return True
 
 
@@ -383,20 +379,20 @@ class ContactKinematicsSphereSphere(_CentreContact):
     2's frame at C2, ġ by eq. 3.8. Inactive when the centres coincide (no normal)."""
 
     side1 = SphereContour
-    run_state = _CentreContact.run_state + ("_A2",)
+    run_state = _CentreContact.run_state + ("axes2",)
 
     def __init__(self, sphere1, sphere2, nu_total=None):
         super().__init__(sphere1, _require(sphere2, SphereContour, "a SphereContour"), nu_total)
-        self._A2 = np.eye(3)
+        self.axes2 = np.eye(3)
 
     def _project(self, c, velocity, jacobians):
         p2 = self.point2
-        self._A2[:] = self.contour2.axes
+        self.axes2[:] = self.contour2.axes
         d = c - self.contour2.centre
         dist = np.linalg.norm(d)
         if dist == 0.0:
             return False
-        self.contour2.evaluate(p2, *_sphere_angles(self._A2, d / dist), velocity=velocity, jacobians=jacobians)
+        self.contour2.evaluate(p2, *sphere_angles(self.axes2, d / dist), velocity=velocity, jacobians=jacobians)
         return True
 
 

@@ -24,11 +24,9 @@ import numpy as np
 from ffrmbs.errors import ModelError
 from ffrmbs.vec3 import cross3
 
-from .base import D_ETA, D_ETA_ETA, D_ETA_XI, D_XI, D_XI_XI, VALUE, Contour
-
-
-# layout of _FrameContour.state: r, A (row-major), v, ω, J_T (3, nu), J_R (3, nu)
-R_AT, A_AT, V_AT, W_AT, J_AT = 0, 3, 12, 15, 18
+from . import _rigid_kernels as K
+from ._rigid_kernels import A_AT, J_AT, R_AT, V_AT, W_AT, sphere_angles  # noqa: F401  (public: η, ξ of a direction)
+from .base import D_ETA, D_XI, VALUE, Contour
 
 
 class _FrameContour(Contour):
@@ -128,21 +126,10 @@ class SphereContour(_FrameContour):
         super().__init__(frame, name)
 
     def evaluate(self, point, eta, xi=0.0, velocity=False, jacobians=False):
-        ce, se, cx, sx = np.cos(eta), np.sin(eta), np.cos(xi), np.sin(xi)
-        A, r = self._A, self.radius
-        n = A @ np.array([cx * ce, cx * se, sx])
-        D = point.derivs
+        """The point at longitude η and latitude ξ [rad] in the frame's axes
+        (:func:`contours._rigid_kernels.sphere_point`)."""
         point.eta, point.xi = eta, xi
-        D[VALUE] = self._r + r * n
-        D[D_ETA] = r * A @ np.array([-cx * se, cx * ce, 0.0])
-        D[D_XI] = r * A @ np.array([-sx * ce, -sx * se, cx])
-        D[D_ETA_ETA] = r * A @ np.array([-cx * ce, -cx * se, 0.0])
-        D[D_ETA_XI] = r * A @ np.array([sx * se, -sx * ce, 0.0])
-        D[D_XI_XI] = -r * n
-        point.frame[:, 2] = n
-        point.frame[:, 0] = A @ np.array([-se, ce, 0.0])  # t_η / |t_η| (undefined at the poles: kept finite)
-        point.frame[:, 1] = cross3(n, point.frame[:, 0])
-        self._fill_offset(point, r * n, velocity, jacobians)
+        K.sphere_point(self.state, self.radius, float(eta), float(xi), bool(velocity), bool(jacobians), point.buffer)
         return point
 
     @property

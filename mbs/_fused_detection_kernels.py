@@ -3,9 +3,11 @@ and the detection stage of one contact in one call, composed of the kernels of t
 contours (:mod:`contours.neutral._kernels`), the contact search and kinematics
 (:mod:`contact._detection_kernels`) and the bodies (:func:`mbs._kernels.point_jacobian_T`).
 
-:func:`point_on_neutral_2s` serves a point on a point mass against a neutral 2s contour
-of a body on a frame fixed in space (a :class:`~contact.kinematics.ContactKinematicsPointContour2s`
-with its compiled :class:`~contact.search.Contact2sSearch`). Its reference is the
+:func:`centre_on_neutral_2s` serves a point or a sphere on a point mass against a
+neutral 2s contour of a body on a frame fixed in space (a
+:class:`~contact.kinematics.ContactKinematicsPointContour2s` or
+:class:`~contact.kinematics.ContactKinematicsSphereContour2s` with its compiled
+:class:`~contact.search.Contact2sSearch`). Its reference is the
 Python path it replaces — ``contour.update`` of both contours, then
 :meth:`contact.Contact.locate` (bounding boxes, ``search.solve`` warm-started,
 ``contour.evaluate``, :func:`~contact._detection_kernels.normal_gap`,
@@ -16,7 +18,7 @@ The kernel takes each object's arrays as the one vector their views share
 (:attr:`contours.base.ContourPoint.buffer`, :attr:`contact.kinematics.ContactKinematics.buffer`,
 the frame contour's ``state``, the neutral contour's state and span cache), the
 constants of the pair as one int table ``itab`` and one float table ``ftab`` (layouts
-below, written by :class:`mbs.fused_detection.PointOnNeutral2s`) and a work vector.
+below, written by :class:`mbs.fused_detection.CentreOnNeutral2s`) and a work vector.
 
 Constant arguments of nested kernel calls are passed as typed values (``np.int64(0)``,
 ``np.bool_(True)``): numba compiles a callee apart for every literal argument, once more
@@ -31,6 +33,8 @@ from numba import njit
 from contact._detection_kernels import boxes_overlap, frame_rates_jacobians, newton_2s, normal_gap
 from contact.search import LAST_ITERATIONS, NEWTON_ITERATIONS, NEWTON_SOLVES
 from contours import rigid
+from contours.rigid import sphere_angles
+from contours._rigid_kernels import sphere_point
 from contours.base import DERIVS_AT, FRAME_AT, J_AT, V_AT
 from contours.neutral._kernels import A_AT, Q_AT, STAMP_AT, bounding_box, contract_surface, frame_2s, point_velocity
 
@@ -48,38 +52,39 @@ ITAB_SIZE = KIN_AT + 8
 # ftab: margin [m], tol2 [m²] (NaN until the search knows its length scale), the largest
 # Newton steps in η and ξ, the normal's sign, edge2 [m²] (contact.search: how far beyond
 # the domain's boundary a point still projects onto it, squared), the point frame's offset ū0 (3) [m], the
-# domain (4), then the knots in η and ξ, the undeformed control points' box (lo (3),
+# domain (4), the sphere's radius ρ [m] (0: a point), then the knots in η and ξ, the undeformed control points' box (lo (3),
 # hi (3)) [m] and the bound of P_Φ (3, n_f) [m] (contours.neutral._kernels.bounding_box)
 MARGIN, TOL2, MAX_STEP_E, MAX_STEP_X, SIGN, EDGE2 = range(6)
-OFFSET_AT, FLOATS_AT, KNOTS_AT = 6, 9, 13
+OFFSET_AT, FLOATS_AT, RADIUS, KNOTS_AT = 6, 9, 13, 14
 
 
 MAX_DEGREE = 7
 # the work vector: basis tables (2, 3, p_max + 1), ū rows (6, 3), r rows (6, 3), g (3,), then
-# from WORK_AT the Φ rows (6, 3 n_f) and two boxes (2, 3)
+# from WORK_AT the Φ rows (6, 3 n_f), two boxes (2, 3) and the direction −n (3,)
 WORK_AT = 6 * (MAX_DEGREE + 1) + 39
 
 
 def work_size(n_f):
     """Length of the work vector of a contour with n_f modes (degrees up to 7)."""
-    return WORK_AT + 18 * n_f + 12
+    return WORK_AT + 18 * n_f + 15
 
 
 @njit(cache=True)
-def point_on_neutral_2s(q, u, itab, ftab, ctrl0, phi, state, span, frame1, point1, point2, kin, start, counts,
-                        work):
+def centre_on_neutral_2s(q, u, itab, ftab, ctrl0, phi, state, span, frame1, point1, point2, kin, centre, axes1,
+                         start, counts, work):
     """Stages 3 and 4 for one contact (module docstring) at the global (q, u) [m, m/s]:
 
     1. the contours' states: the point r = q_P + ū0, ṙ = u_P into ``frame1`` (the
        frame contour's state); q_f, q̇_f and a new stamp into the neutral contour's
        ``state`` (as :func:`~contours.neutral._kernels.store_state`, ``store_velocity``;
        R, A, v, ω̄ of the frame at rest stay);
-    2. broad phase (with ``itab[BOX]``): the point's box and the contour's
-       (:func:`~contours.neutral._kernels.bounding_box`) grown by the margin
-       (:func:`~contact._detection_kernels.boxes_overlap`) — apart: APART;
-    3. the point C1 into ``point1`` (r; frame, J_T = 1, J_R = 0 of a point-mass frame;
-       ṙ with ``itab[VELOCITY]``);
-    4. Newton on eq. 3.31–3.32 from the warm start ``start`` (η, ξ)
+    2. broad phase (with ``itab[BOX]``): the point's box (the sphere's, ``ftab[RADIUS]``
+       around its centre) and the contour's (:func:`~contours.neutral._kernels.bounding_box`)
+       grown by the margin (:func:`~contact._detection_kernels.boxes_overlap`) — apart: APART;
+    3. the centre c into ``centre`` (the kinematics' copy; a point's C1 also into ``point1``:
+       r, frame, J_T = 1, J_R = 0 of a point-mass frame, ṙ with ``itab[VELOCITY]``;
+       a sphere's axes into ``axes1``);
+    4. Newton on eq. 3.31–3.32 for c from the warm start ``start`` (η, ξ)
        (:func:`~contact._detection_kernels.newton_2s`), the search's ``counts`` and
        ``start`` updated — no warm start, no tolerance yet or no root: FALLBACK (the
        caller runs the Python path, which searches the coarse grid);
@@ -88,13 +93,17 @@ def point_on_neutral_2s(q, u, itab, ftab, ctrl0, phi, state, span, frame1, point
        with ``itab[VELOCITY]`` — what :func:`~contours.neutral._kernels.evaluate_2s`
        gives at the root —, J_T = A Φ (eq. 2.70 on a prescribed frame,
        :func:`mbs._kernels.point_jacobian_T`), J_R = 0;
-    6. g_N (eq. 3.4) and n, T, ġ_T, w_N1, w_N2, w_T1, w_T2 (eq. 3.8) into ``kin``.
+    6. g_N = nᵀ (c − r_C2) − ρ (eq. 3.4); a sphere's C1 = c − ρ n into ``point1``
+       (:func:`contours._rigid_kernels.sphere_point` at the coordinates of −n); n, T, ġ_T,
+       w_N1, w_N2, w_T1, w_T2 (eq. 3.8) into ``kin``.
 
-    Returns (outcome, g_N [m], ġ_N [m/s] (NaN without velocity), η, ξ).
+    Returns (outcome, g_N [m], ġ_N [m/s] (NaN without velocity), C2's η, ξ, a sphere's
+    C1 η, ξ [rad] (NaN for a point)).
     """
     nan = np.nan
     n_f, nu1, nu2 = itab[NF], itab[NU1], itab[NU2]
     velocity = itab[VELOCITY] != 0
+    radius = ftab[RADIUS]
 
     # 1. the contours' states (store_state, store_velocity of the neutral contour)
     qp, up, qf, uf = itab[QP], itab[UP], itab[QF], itab[UF]
@@ -112,28 +121,35 @@ def point_on_neutral_2s(q, u, itab, ftab, ctrl0, phi, state, span, frame1, point
     if itab[BOX] != 0:
         box1, box2 = work[work_at:work_at + 6].reshape(2, 3), work[work_at + 6:work_at + 12].reshape(2, 3)
         for c in range(3):
-            box1[0, c] = box1[1, c] = frame1[rigid.R_AT + c]
+            box1[0, c] = frame1[rigid.R_AT + c] - radius
+            box1[1, c] = frame1[rigid.R_AT + c] + radius
         bounding_box(ftab[o:o + 3], ftab[o + 3:o + 6], ftab[o + 6:o + 6 + 3 * n_f].reshape(3, n_f), state, box2)
         if not boxes_overlap(box1, box2, ftab[MARGIN]):
-            return APART, nan, nan, nan, nan
+            return APART, nan, nan, nan, nan, nan, nan
 
-    # 3. the point C1 (PointContour.evaluate)
-    for k in range(V_AT - DERIVS_AT):
-        point1[DERIVS_AT + k] = 0.0
-    for c in range(3):
-        point1[DERIVS_AT + c] = frame1[rigid.R_AT + c]
-    for k in range(9):
-        point1[FRAME_AT + k] = frame1[rigid.A_AT + k]
-    for k in range(6 * nu1):
-        point1[J_AT + k] = frame1[rigid.J_AT + k]
-    if velocity:
+    # 3. the centre; a point's C1 (PointContour.evaluate), a sphere's axes
+    sphere = radius > 0.0
+    if sphere:
+        for k in range(9):
+            axes1[k // 3, k % 3] = frame1[rigid.A_AT + k]
+    else:
+        for k in range(V_AT - DERIVS_AT):
+            point1[DERIVS_AT + k] = 0.0
         for c in range(3):
-            point1[V_AT + c] = frame1[rigid.V_AT + c]
-    centre = point1[DERIVS_AT:DERIVS_AT + 3]
+            point1[DERIVS_AT + c] = frame1[rigid.R_AT + c]
+        for k in range(9):
+            point1[FRAME_AT + k] = frame1[rigid.A_AT + k]
+        for k in range(6 * nu1):
+            point1[J_AT + k] = frame1[rigid.J_AT + k]
+        if velocity:
+            for c in range(3):
+                point1[V_AT + c] = frame1[rigid.V_AT + c]
+    for c in range(3):
+        centre[c] = frame1[rigid.R_AT + c]
 
     # 4. warm-started Newton; its last evaluation, at the root, is C2's r rows
     if np.isnan(start[0]) or np.isnan(ftab[TOL2]):
-        return FALLBACK, nan, nan, nan, nan
+        return FALLBACK, nan, nan, nan, nan, nan, nan
     ints = itab[GEOM_AT:GEOM_AT + 6]
     pm = max(ints[0], ints[3]) + 1
     B = work[:6 * pm].reshape(2, 3, pm)
@@ -147,7 +163,7 @@ def point_on_neutral_2s(q, u, itab, ftab, ctrl0, phi, state, span, frame1, point
                                              ftab[MAX_STEP_X], ftab[TOL2], ftab[EDGE2], itab[MAX_ITER], B, local,
                                              D, g)
     if not found:
-        return FALLBACK, nan, nan, nan, nan
+        return FALLBACK, nan, nan, nan, nan, nan, nan
     counts[NEWTON_SOLVES] += 1
     counts[NEWTON_ITERATIONS] += steps
     counts[LAST_ITERATIONS] = k
@@ -171,8 +187,15 @@ def point_on_neutral_2s(q, u, itab, ftab, ctrl0, phi, state, span, frame1, point
     for k in range(3 * nu2):
         point2[J_AT + 3 * nu2 + k] = 0.0
 
-    # 6. gap, frame, relative velocity, Jacobian pieces
-    g_N = normal_gap(F2, centre, D2, 0.0)
+    # 6. gap, a sphere's C1, frame, relative velocity, Jacobian pieces
+    g_N = normal_gap(F2, centre, D2, radius)
+    eta1 = xi1 = nan
+    if sphere:
+        m = work[work_at + 12:work_at + 15]
+        for c in range(3):
+            m[c] = -F2[c, 2]
+        eta1, xi1 = sphere_angles(axes1, m)
+        sphere_point(frame1, radius, eta1, xi1, velocity, np.bool_(True), point1)
     ko = KIN_AT
     T = kin[itab[ko + 1]:itab[ko + 2]].reshape(3, 2)
     w_T1 = kin[itab[ko + 5]:itab[ko + 6]].reshape(nu1, 2)
@@ -181,4 +204,4 @@ def point_on_neutral_2s(q, u, itab, ftab, ctrl0, phi, state, span, frame1, point
     gd_N = frame_rates_jacobians(F2, point1[V_AT:J_AT], v2, J1, J2, velocity, np.bool_(True), kin[itab[ko]:itab[ko + 1]], T,
                                  kin[itab[ko + 2]:itab[ko + 3]], kin[itab[ko + 3]:itab[ko + 4]],
                                  kin[itab[ko + 4]:itab[ko + 5]], w_T1, w_T2)
-    return LOCATED, g_N, gd_N if velocity else nan, eta, xi
+    return LOCATED, g_N, gd_N if velocity else nan, eta, xi, eta1, xi1

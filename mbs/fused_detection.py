@@ -4,7 +4,7 @@ call per step (stages 3 and 4 of :mod:`mbs.stages` for the pair kinds that have 
 The Python path of a contact is ``contour.update`` of its two contours (contour stage)
 and :meth:`contact.Contact.locate` (detection stage): a dozen numba calls glued by
 Python. For the pair kinds below :func:`fused_detection` gives an object whose
-:meth:`~PointOnNeutral2s.locate` does both in one kernel
+:meth:`~CentreOnNeutral2s.locate` does both in one kernel
 (:mod:`._fused_detection_kernels`), on the same objects' arrays, so that the contours,
 the contact points, the kinematics (g_N, frame, Jacobian pieces), the search's warm
 start and counters hold afterwards what the Python path leaves there. It returns to the
@@ -14,10 +14,11 @@ searches the coarse grid (:mod:`contact.search`).
 
 Kinds with a fused detection:
 
-* :class:`PointOnNeutral2s`: a point on a point mass (``PointContour``) against a
-  compiled neutral 2s contour (:class:`~contours.neutral.factory.Contour2sNeutralFactory`)
-  of a body on a frame fixed in space, ``ContactKinematicsPointContour2s`` with a
-  compiled ``Contact2sSearch``, any law of :class:`contact.Contact`.
+* :class:`CentreOnNeutral2s`: a point (``PointContour``) or a sphere (``SphereContour``)
+  on a point mass against a compiled neutral 2s contour — nodal or fitted,
+  :class:`~contours.neutral.factory.Contour2sNeutralFactory` — of a body on a frame fixed
+  in space, ``ContactKinematicsPointContour2s`` or ``ContactKinematicsSphereContour2s``
+  with a compiled ``Contact2sSearch``, any law of :class:`contact.Contact`.
 
 Every other contact keeps the Python path (which stays the reference of the fused ones,
 ``tests/unit/contact/test_fused_detection.py``).
@@ -28,47 +29,53 @@ from __future__ import annotations
 import numpy as np
 
 from contact.contact import Contact
-from contact.kinematics import ContactKinematicsPointContour2s, buffer_layout
+from contact.kinematics import ContactKinematicsPointContour2s, ContactKinematicsSphereContour2s, buffer_layout
 from contact.search import Contact2sSearch
 from contours.neutral.factory import Contour2sNeutralFactory
-from contours.rigid import PointContour
+from contours.rigid import PointContour, SphereContour
 
 from . import _fused_detection_kernels as K
 
 
 def fused_detection(contact):
-    """The fused detection of ``contact`` (:class:`PointOnNeutral2s`) when its kind has
+    """The fused detection of ``contact`` (:class:`CentreOnNeutral2s`) when its kind has
     one and its bodies belong to a System, else None (the Python path)."""
-    if PointOnNeutral2s.applies(contact):
-        return PointOnNeutral2s(contact)
+    if CentreOnNeutral2s.applies(contact):
+        return CentreOnNeutral2s(contact)
     return None
 
 
-class PointOnNeutral2s:
-    """Stages 3 and 4 of a point on a point mass against a neutral 2s contour on a body
-    at rest (module docstring) in one call of
-    :func:`._fused_detection_kernels.point_on_neutral_2s`.
+CENTRE_KINDS = {ContactKinematicsPointContour2s: PointContour, ContactKinematicsSphereContour2s: SphereContour}
+# ^ the kinematics of a centre searched on a 2s contour and the contour of its side 1
+
+
+class CentreOnNeutral2s:
+    """Stages 3 and 4 of a point or a sphere on a point mass against a neutral 2s contour
+    on a body at rest (module docstring) in one call of
+    :func:`._fused_detection_kernels.centre_on_neutral_2s`.
 
     Parameters
     ----------
     contact : Contact
-        With ``ContactKinematicsPointContour2s`` (:meth:`applies`).
+        With ``ContactKinematicsPointContour2s`` or ``ContactKinematicsSphereContour2s``
+        (:meth:`applies`).
     """
 
     @staticmethod
     def applies(contact) -> bool:
-        """True for a :class:`~contact.Contact` of a point on a point mass against a compiled
-        neutral 2s contour on a body whose frame is fixed in space, not trimmed (a face with
-        holes takes the Python path, whose search tests the trim), searched by a compiled
-        ``Contact2sSearch``, both bodies in a System."""
+        """True for a :class:`~contact.Contact` of a point or a sphere on a point mass
+        against a compiled neutral 2s contour on a body whose frame is fixed in space, not
+        trimmed (a face with holes takes the Python path, whose search tests the trim),
+        searched by a compiled ``Contact2sSearch``, both bodies in a System."""
         if type(contact) is not Contact:
             return False
         k = contact.kinematics
-        if type(k) is not ContactKinematicsPointContour2s:
+        side1 = CENTRE_KINDS.get(type(k))
+        if side1 is None:
             return False
         point, surface = k.contour1, k.contour2
         body1, body2 = point.body, surface.body
-        return (type(point) is PointContour and body1 is not None and body1.translation_only
+        return (type(point) is side1 and body1 is not None and body1.translation_only
                 and isinstance(surface, Contour2sNeutralFactory) and surface.compiled and surface.trim is None
                 and max(surface.space.eta.p, surface.space.xi.p) <= K.MAX_DEGREE
                 and body2 is not None and getattr(body2, "frame_at_rest", False)
@@ -99,12 +106,14 @@ class PointOnNeutral2s:
         ftab[K.MARGIN] = 0.0 if contact.margin is None else contact.margin
         ftab[K.SIGN] = surface.sign
         ftab[K.OFFSET_AT:K.OFFSET_AT + 3] = point.frame_ref.u0
+        ftab[K.RADIUS] = k.radius
         ftab[K.FLOATS_AT:K.FLOATS_AT + 4] = floats
         self._itab, self._ftab = itab, ftab
         self._newton_settings()
         work = np.zeros(K.work_size(n_f))
         self._args = (itab, ftab, ctrl0, phi, state, span, point.state, k.point1.buffer, k.point2.buffer, k.buffer,
-                      k.start, k.search.counts, work)
+                      k.centre, k.axes1, k.start, k.search.counts, work)
+        self.sphere = k.radius > 0.0
         self._updates = [(c, c.body.q_slice, c.body.u_slice) for c in (point, surface)]
 
     def _newton_settings(self):
@@ -121,7 +130,7 @@ class PointOnNeutral2s:
         """Both contours updated at the global (q, u, t) and the contact located, as
         ``contour.update`` then :meth:`Contact.locate` (the Python path when the kernel
         falls back): True when closed (g_N <= closing_tol)."""
-        outcome, g_N, gd_N, eta, xi = K.point_on_neutral_2s(q, u, *self._args)
+        outcome, g_N, gd_N, eta, xi, eta1, xi1 = K.centre_on_neutral_2s(q, u, *self._args)
         self.surface._has_u = True
         if outcome == K.LOCATED:
             k = self.kinematics
@@ -130,6 +139,8 @@ class PointOnNeutral2s:
             if self.velocity:
                 k.gd_N = gd_N
             k.point2.eta, k.point2.xi = eta, xi
+            if self.sphere:
+                k.point1.eta, k.point1.xi = eta1, xi1
             return g_N <= self.closing_tol
         if outcome == K.APART:
             return False

@@ -1,23 +1,37 @@
 """The fused detection (mbs.fused_detection) against the Python path it replaces:
 ``contour.update`` of both contours, then ``Contact.locate`` — on two copies of the
-default scene driven through the same random deformed states (warm and cold starts,
-open, closed, apart by the broad phase, outside the contour), and the choice of the
-path per contact in the Model."""
+default scene (its point, or a sphere on the same point mass) driven through the same
+random deformed states (warm and cold starts, open, closed, apart by the broad phase,
+outside the contour), and the choice of the path per contact in the Model."""
+
+import dataclasses
 
 import numpy as np
 import pytest
 
+from contact import Contact, ContactKinematicsSphereContour2s
+from contours import SphereContour
 from contours.neutral import _kernels as NK
-from mbs.fused_detection import PointOnNeutral2s, fused_detection
+from mbs.fused_detection import CentreOnNeutral2s, fused_detection
 from mbs.model import compile_model
 
 LAWS = ("impact", "penalty")
+RADIUS = 0.01       # [m], the sphere on the point mass
 
 
-def _scene(law):
+def _scene(law, side="point"):
+    """The default scene; with ``side="sphere"`` its contact made of a sphere of RADIUS
+    about the point mass's point against the same surface, with the same law."""
     from ffrmbs_app.scenes import point_mass_beam as pmb
 
-    return pmb.build("A", modes=20, law=law)
+    scene = pmb.build("A", modes=20, law=law)
+    if side == "point":
+        return scene
+    old = scene.contact
+    contact = Contact(ContactKinematicsSphereContour2s(SphereContour(scene.mass.point, RADIUS),
+                                                        old.kinematics.contour2), old.law, name="sphere")
+    scene.system.contacts[scene.system.contacts.index(old)] = contact
+    return dataclasses.replace(scene, contact=contact)
 
 
 def _python_locate(scene, q, u, t):
@@ -31,11 +45,13 @@ def _python_locate(scene, q, u, t):
 
 def _states(scene, rng, n):
     """n global states (q, u): the beam deformed at random (nodal displacements up to
-    ~1 mm) and the point near a random point of the top surface — above it, pressed into
-    it, high above (apart), beyond its edge — with random velocities; runs of small moves
-    between jumps, so that Newton starts warm from the last contact point."""
+    ~1 mm) and the point (a sphere's surface) near a random point of the top surface —
+    above it, pressed into it, high above (apart), beyond its edge — with random
+    velocities; runs of small moves between jumps, so that Newton starts warm from the
+    last contact point."""
     system, beam, mass = scene.system, scene.beam, scene.mass
     surface = scene.contact.kinematics.contour2
+    radius = scene.contact.kinematics.radius
     q0, u0 = system.initial_state()
     (a, b), (c, d) = surface.domain
     scale = 1e-3 / np.abs(beam.phi_nodes).max() / beam.n_modes
@@ -62,7 +78,7 @@ def _states(scene, rng, n):
             r = p.r + 1.0 * p.n
         else:
             r = p.r + (b - a) * p.t1 + 1e-3 * p.n
-        q[mass.q_slice] = r - mass.point.u0
+        q[mass.q_slice] = r + radius * p.n - mass.point.u0
         states.append((q, u, 1e-3 * k))
     return states
 
@@ -80,6 +96,9 @@ def _assert_same(fused_scene, python_scene, closed_f, closed_p):
         np.testing.assert_allclose(kf.point1.buffer, kp.point1.buffer, **same)
         np.testing.assert_allclose(kf.point2.buffer, kp.point2.buffer, **same)
         assert (kf.point2.eta, kf.point2.xi) == pytest.approx((kp.point2.eta, kp.point2.xi), rel=1e-12, abs=1e-15)
+        assert (kf.point1.eta, kf.point1.xi) == pytest.approx((kp.point1.eta, kp.point1.xi), rel=1e-12, abs=1e-15)
+        np.testing.assert_allclose(kf.centre, kp.centre, **same)
+        np.testing.assert_array_equal(kf.axes1, kp.axes1)
     np.testing.assert_array_equal(np.isnan(kf.start), np.isnan(kp.start))
     np.testing.assert_allclose(kf.start, kp.start, rtol=1e-12, atol=1e-15)
     np.testing.assert_array_equal(kf.search.counts, kp.search.counts)
@@ -89,14 +108,16 @@ def _assert_same(fused_scene, python_scene, closed_f, closed_p):
     np.testing.assert_array_equal(kf.contour1.state, kp.contour1.state)
 
 
-@pytest.mark.parametrize("law", LAWS)
-def test_fused_detection_is_the_python_path(law):
+@pytest.mark.parametrize("law, side", [("impact", "point"), ("penalty", "point"), ("impact", "sphere"),
+                                       ("penalty", "sphere")])
+def test_fused_detection_is_the_python_path(law, side):
     """Warm and cold starts, open, closed, apart and outside the contour: the fused path
-    leaves the same kinematics, contact points, warm start, search counters and contour
-    states as the Python path (to 1e-12), and says closed when it does."""
-    fused_scene, python_scene = _scene(law), _scene(law)
+    leaves the same kinematics, contact points (a sphere's C1 with its coordinates),
+    warm start, search counters and contour states as the Python path (to 1e-12), and
+    says closed when it does."""
+    fused_scene, python_scene = _scene(law, side), _scene(law, side)
     fused = fused_detection(fused_scene.contact)
-    assert isinstance(fused, PointOnNeutral2s)
+    assert isinstance(fused, CentreOnNeutral2s)
     rng = np.random.default_rng(19)
     outcomes = set()
     fallbacks = []
@@ -134,7 +155,7 @@ def test_the_model_fuses_the_default_pair_only():
 
     scene = _scene("impact")
     model = compile_model(scene.system, scene.system.plan(0.01))
-    assert isinstance(model.fused[0], PointOnNeutral2s)
+    assert isinstance(model.fused[0], CentreOnNeutral2s)
     assert model.owners.size == 0 and np.all(model.owner_at == 0)
     band = pmb.build("A", modes=5, contour="band")
     model = compile_model(band.system, band.system.plan(0.01))
