@@ -9,7 +9,7 @@ t̄2 = n̄ × t̄). With a = ū_η and G = ∂d̄/∂a = α ∂n̄/∂a + β ∂
     J_T = [1, −A (ū + d̄)~ T, A Φ_P],   Φ_P = Φ + G Φ_η,
     ṙ = v + A (ω̄ × (ū + d̄) + Φ_P q̇_f).
 
-G is never formed: :func:`_offset_derivative` applies it to a vector through
+G is never formed: :func:`offset_derivative` applies it to a vector through
 ∂t̄/∂a x = (x − t̄ (t̄ᵀ x))/|a|, c = n̄0 − (n̄0ᵀ t̄) t̄, ∂c/∂a = −(t̄ n̄0ᵀ + (n̄0ᵀ t̄) 1) ∂t̄/∂a,
 ∂n̄/∂a = (1 − n̄ n̄ᵀ) ∂c/∂a / |c|, ∂t̄2/∂a = −t̄~ ∂n̄/∂a + n̄~ ∂t̄/∂a (the matrices of
 :func:`contours.derived.offset_frame`, the numpy reference). The offsets (α, β) and their
@@ -38,7 +38,7 @@ def offsets(law, size, xi):
 
 
 @numba.njit(cache=True)
-def _offset_derivative(t, n, n0, la, lc, al, be, x0, x1, x2):
+def offset_derivative(t, n, n0, la, lc, al, be, x0, x1, x2):
     """(α ∂n̄/∂a + β ∂t̄2/∂a) x (3 floats) for the frame t̄, n̄ (3,) of the tangent a
     (|a| = ``la``, |c| = ``lc``) and the body-frame reference normal n0 (3,)."""
     tx = t[0] * x0 + t[1] * x1 + t[2] * x2
@@ -90,8 +90,8 @@ def offset_fields(eta, knots, ints, floats, ctrl0, phi, state, span, n0, al, be,
     la, lc = neutral_frame(local[1], n0, frame)
     t, n, t2 = frame[0], frame[1], frame[2]
     uee = local[3]
-    g0, g1, g2 = _offset_derivative(t, n, n0, la, lc, al, be, uee[0], uee[1], uee[2])
-    h0, h1, h2 = _offset_derivative(t, n, n0, la, lc, al1, be1, uee[0], uee[1], uee[2])
+    g0, g1, g2 = offset_derivative(t, n, n0, la, lc, al, be, uee[0], uee[1], uee[2])
+    h0, h1, h2 = offset_derivative(t, n, n0, la, lc, al1, be1, uee[0], uee[1], uee[2])
     rows[1, 0], rows[1, 1], rows[1, 2] = local[1, 0] + g0, local[1, 1] + g1, local[1, 2] + g2
     rows[4, 0], rows[4, 1], rows[4, 2] = h0, h1, h2
     for c in range(3):
@@ -119,7 +119,7 @@ def evaluate_offset(eta, knots, ints, floats, ctrl0, phi, state, span, n0, al, b
         contract_curve(B, s, ints[0], phi, np.int64(3), phi_rows)
         t, n = frame[0], frame[1]
         for k in range(n_f):
-            g0, g1, g2 = _offset_derivative(t, n, n0, la, lc, al, be, phi_rows[1, k], phi_rows[1, n_f + k],
+            g0, g1, g2 = offset_derivative(t, n, n0, la, lc, al, be, phi_rows[1, k], phi_rows[1, n_f + k],
                                             phi_rows[1, 2 * n_f + k])
             phi_point[k] = phi_rows[0, k] + g0
             phi_point[n_f + k] = phi_rows[0, n_f + k] + g1

@@ -1,13 +1,16 @@
 """numba kernels of the residual compliance (:mod:`contours.residual`, eq. C1–C2) and of
 a contact's compliance block in its frame (:mod:`mbs.residual_contact`); the numpy
 references are :func:`compliance_between_reference` and the blocks route of
-:meth:`contours.residual.ResidualCompliance.weights`."""
+:meth:`contours.residual.ResidualCompliance.weights` for neutral contours. The blocks of a
+derived contour (:func:`offset_weights`) are checked against the full FE static solution
+(``tests/unit/preprocess/test_residual_flexibility.py``)."""
 
 from __future__ import annotations
 
 import numba
 import numpy as np
 
+from ._offset_kernels import neutral_frame, offset_derivative
 from .neutral import _kernels as NK
 
 
@@ -67,6 +70,31 @@ def neutral_weights(dim, knots_e, ints, dom, knots_x, eta, xi, Be, Bx, offset, w
             _diagonal(w[k], Be[0, a] * Bx[0, b])
             index[k] = offset + (se - pe + a) * nx + (sx - px + b)
             k += 1
+    return k
+
+
+@numba.njit(cache=True)
+def offset_weights(knots, ints, dom, eta, al, be, ctrl0, n0, offset, B, work, w, index):
+    """The blocks B_i = N_i I + N'_i Ğ (k, 3, 3) of eq. C1 on a derived contour at the
+    offsets (α, β) [m] from a 1s neutral curve into ``w`` and the control points' indices
+    in G_P (their ``offset`` added) into ``index``; returns k. Ğ = α ∂n̄/∂ū_η + β ∂t̄2/∂ū_η
+    at the undeformed tangent ū_η = Σ N'_i P_i (P = ``ctrl0`` (n_P, 3) [m], the neutral's
+    undeformed control points; ``n0`` its reference normal (3,)), applied column by column
+    (:func:`contours._offset_kernels.offset_derivative`). B (3, p + 1) and work (4, 3)."""
+    k = neutral_weights(np.int64(1), knots, ints, dom, knots, eta, eta, B, B, offset, w, index)
+    a, frame = work[0], work[1:4]
+    for c in range(3):
+        a[c] = 0.0
+    for j in range(k):
+        for c in range(3):
+            a[c] += B[1, j] * ctrl0[index[j] - offset, c]
+    la, lc = neutral_frame(a, n0, frame)
+    for col in range(3):                      # Ğ e_col
+        g = offset_derivative(frame[0], frame[1], n0, la, lc, al, be, 1.0 if col == 0 else 0.0,
+                              1.0 if col == 1 else 0.0, 1.0 if col == 2 else 0.0)
+        for j in range(k):
+            for r in range(3):
+                w[j, r, col] += B[1, j] * g[r]
     return k
 
 

@@ -44,7 +44,7 @@ from preprocess.residual import (StaticFlexibility, clamped_nodes_of, clamped_pr
 
 from . import _offset_kernels as OK
 from . import _residual_kernels as RK
-from .derived import OffsetContour, offset_frame
+from .derived import OffsetContour
 from .neutral import _kernels as NK
 from .neutral.factory import NeutralContour
 
@@ -85,6 +85,7 @@ class ResidualCompliance:
         derived = isinstance(contour, OffsetContour)
         self._offset = contour.offset_law if derived else None        # (law, size) of the offsets
         self._ctrl0 = self.neutral._local_position.ctrl0.reshape(self.n_P, 3) if derived else None
+        self._offset_work = np.zeros((4, 3))
         # the compiled route of a neutral contour (B_i = N_i I): knots η, ints, domains,
         # knots ξ (η's again on a curve), bases, weights
         g = space.geometry
@@ -103,19 +104,22 @@ class ResidualCompliance:
 
     def weights(self, eta, xi, blocks, index) -> int:
         """The blocks B_i (k, 3, 3) of eq. C1 and their control points' indices (k,) in
-        G_P at (η, ξ) into ``blocks``, ``index``; returns k."""
+        G_P at (η, ξ) into ``blocks``, ``index``; returns k. A derived contour's in one
+        kernel (:func:`._residual_kernels.offset_weights`)."""
+        if self._offset is not None:
+            al, be = OK.offsets(*self._offset, float(xi))[:2]
+            g = self._kernel_geometry
+            return RK.offset_weights(g[0], g[1], g[2], float(eta), al, be, self._ctrl0, self.neutral.normal_ref,
+                                     self.offset, self._B[0], self._offset_work, blocks, index)
         k = 0
         if len(self._dirs) == 1:
             d = self._dirs[0]
             B = self._B[0]
             s = NK.locate(d.knots, d.p, d.n_ctrl, d.closed, d.a, d.b, eta, B)
             for a in range(d.p + 1):
-                index[k] = s - d.p + a
+                index[k] = self.offset + s - d.p + a
                 blocks[k] = B[0, a] * np.eye(3)
                 k += 1
-            if self._offset is not None:
-                self._offset_blocks(xi, B, index[:k], blocks[:k])
-            index[:k] += self.offset
             return k
         e, x = self._dirs
         Be, Bx = self._B
@@ -127,15 +131,6 @@ class ResidualCompliance:
                 blocks[k] = Be[0, a] * Bx[0, b] * np.eye(3)
                 k += 1
         return k
-
-    def _offset_blocks(self, xi, B, index, blocks):
-        """B_i += N'_i Ğ of a point at offset (α, β)(ξ) from the undeformed neutral curve."""
-        al, be = OK.offsets(*self._offset, float(xi))[:2]
-        u_eta = B[1] @ self._ctrl0[index]
-        _, _, _, Dt2, Dn = offset_frame(u_eta, self.neutral.normal_ref)
-        G = al * Dn + be * Dt2
-        for k in range(len(index)):
-            blocks[k] += B[1, k] * G
 
     def between(self, eta_a, xi_a, eta_b, xi_b, other=None, out=None) -> np.ndarray:
         """c(a, b) (3, 3) [m/N] in body axes (eq. C2): the displacement at (η_a, ξ_a) of this
