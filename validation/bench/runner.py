@@ -38,6 +38,7 @@ BENCHES = {
     "ffr_evaluation": "validation.bench.ffr_evaluation",
     "contour_evaluation": "validation.bench.contour_evaluation",
     "step_cost": "validation.bench.step_cost",
+    "scene_cost": "validation.bench.scene_cost",
     "geometric_stiffness_cost": "validation.bench.geometric_stiffness_cost",
 }
 
