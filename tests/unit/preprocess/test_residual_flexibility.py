@@ -19,7 +19,10 @@ import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as sla
 
-from contours import Contour1sNeutralFFR, Contour2sNeutralFFR, FlexibleBand
+from contours import Contour1sNeutralFFR, Contour2sNeutralFFR, FlexibleBand, FlexibleCylinder
+from contours._offset_kernels import offsets
+from contours.derived import offset_frame
+from contours.neutral import _kernels as NK
 from contours._residual_kernels import compliance_between, compliance_between_reference
 from contours.residual import residual_compliance, residual_compliances, transfer_matrix
 from ffrmbs.errors import ModelError
@@ -189,6 +192,44 @@ def test_compiled_route_matches_blocks(clamped_data):
         ka, kb = rc.weights(a, b, blocks[0], index[0]), rc.weights(c, d, blocks[1], index[1])
         ref = compliance_between_reference(rc.G_P, blocks[0], index[0], ka, blocks[1], index[1], kb)
         assert np.allclose(rc.between(a, b, c, d), ref, rtol=1e-13, atol=1e-13 * np.abs(ref).max())
+
+
+@pytest.mark.parametrize("kind", ["band", "cylinder"])
+def test_derived_blocks_equal_finite_differences_of_the_offset_point(clamped_data, kind):
+    """The blocks B_i = N_i I + N'_i Ğ of a derived contour (eq. C1) — a band 3 mm off its
+    curve, a cylinder of radius 4 mm — equal the change of the undeformed offset point
+    ū(η) + α n̄ + β t̄2 when control point i moves: central differences in P_i, with the
+    frame t̄, n̄, t̄2 of :func:`contours.derived.offset_frame` at ū_η = Σ N'_k P_k (not its
+    derivatives)."""
+    beam = FlexibleBodyFFR(clamped_data, modes=5, frame=PrescribedFrameMotion.fixed())
+    axis = Contour1sNeutralFFR.along_line(beam, (0.0, 0.02, 0.01), (1, 0, 0), normal=(0, 1, 0), degree=4)
+    contour = (FlexibleBand(axis, width=0.02, offset=0.003) if kind == "band"
+               else FlexibleCylinder(axis, radius=0.004))
+    rc = residual_compliance(contour)
+    P0 = axis.kernel_data[-4].reshape(-1, 3)                 # the undeformed control points [m]
+    d = axis.space.eta
+    B = np.zeros((3, d.p + 1))
+    blocks, index = np.zeros((16, 3, 3)), np.zeros(16, dtype=np.int64)
+    (a, b), (c, e) = contour.domain
+    h = 1e-7 * np.abs(P0).max()
+    for eta, xi in [(a + 0.37 * (b - a), c + 0.2 * (e - c)), (a + 0.81 * (b - a), c + 0.9 * (e - c))]:
+        k = rc.weights(eta, xi, blocks, index)
+        NK.locate(d.knots, d.p, d.n_ctrl, d.closed, d.a, d.b, eta, B)
+        al, be = offsets(*contour.offset_law, xi)[:2]
+        points = index[:k] - rc.offset
+
+        def offset(P):
+            t, t2, n = offset_frame(B[1] @ P[points], axis.normal_ref)[:3]
+            return al * n + be * t2
+
+        assert abs(al) + abs(be) > 1e-3                      # an offset that makes Ğ matter
+        for j in range(k):
+            for col in range(3):
+                Pp, Pm = P0.copy(), P0.copy()
+                Pp[points[j], col] += h
+                Pm[points[j], col] -= h
+                expected = B[0, j] * np.eye(3)[col] + (offset(Pp) - offset(Pm)) / (2 * h)
+                np.testing.assert_allclose(blocks[j][:, col], expected, rtol=0, atol=1e-6 * max(1.0, abs(B[1, j])))
 
 
 def test_cache_is_reused_and_keyed(clamped_data, tmp_path):
