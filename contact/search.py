@@ -217,6 +217,13 @@ class _Search:
         """|g_η|, |g_ξ| [m] that count as zero at the coarse grid's nodes."""
         return np.sqrt(max(self._tol2(), self._edge2()))
 
+    @property
+    def newton_work(self):
+        """The compiled Newton's work arrays (the contour's ``kernel_workspace()`` and
+        g (3,)), for a fused detection (:mod:`mbs.fused_detection`); None on the
+        reference route."""
+        return self._work
+
     def newton_settings(self):
         """(largest step per surface coordinate (tuple), (tol · length scale)² [m²],
         (edge_tol · length scale)² [m²], iterations) of Newton, as the kernels take them;

@@ -97,6 +97,14 @@ class OffsetContour(Contour):
         return self.neutral.kernel_workspace()[0], rows[0], rows[1], np.zeros((3, 3)), rows[2]
 
     @property
+    def evaluate_work(self):
+        """The work arrays :meth:`evaluate` fills (the neutral's basis table, its ū rows,
+        the offset point's rows, the neutral frame, the Φ rows, Φ_P), as
+        :func:`._offset_kernels.evaluate_offset` takes them (a fused detection,
+        :mod:`mbs.fused_detection`, fills them as :meth:`evaluate` does)."""
+        return self._B, self._local_rows, self._rows, self._frame, self._phi_rows, self._phi_point
+
+    @property
     @abstractmethod
     def offset_law(self):
         """(law, size) of :func:`._offset_kernels.offsets`: the offsets (α, β)(ξ), one

@@ -4,10 +4,12 @@ contours (:mod:`contours.neutral._kernels`), the contact search and kinematics
 (:mod:`contact._detection_kernels`) and the bodies (:func:`mbs._kernels.point_jacobian_T`).
 
 :func:`centre_on_neutral_2s` serves a point or a sphere on a point mass against a
-neutral 2s contour of a body on a frame fixed in space (a
+neutral 2s contour of a body on a frame fixed in space, :func:`centre_on_offset` the same
+against an offset contour (band, cylinder: :mod:`contours.derived`) of such a body (a
 :class:`~contact.kinematics.ContactKinematicsPointContour2s` or
 :class:`~contact.kinematics.ContactKinematicsSphereContour2s` with its compiled
-:class:`~contact.search.Contact2sSearch`). Its reference is the
+:class:`~contact.search.Contact2sSearch`). Both share the states and broad phase
+(:func:`_begin`) and the gap, the sphere's point and the frame's pieces (:func:`_finish`). Its reference is the
 Python path it replaces — ``contour.update`` of both contours, then
 :meth:`contact.Contact.locate` (bounding boxes, ``search.solve`` warm-started,
 ``contour.evaluate``, :func:`~contact._detection_kernels.normal_gap`,
@@ -30,11 +32,12 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from contact._detection_kernels import boxes_overlap, frame_rates_jacobians, newton_2s, normal_gap
+from contact._detection_kernels import boxes_overlap, frame_rates_jacobians, newton_2s, newton_offset, normal_gap
 from contact.search import LAST_ITERATIONS, NEWTON_ITERATIONS, NEWTON_SOLVES
 from contours import rigid
-from contours.rigid import sphere_angles
+from contours._offset_kernels import evaluate_offset, offsets
 from contours._rigid_kernels import sphere_point
+from contours.rigid import sphere_angles
 from contours.base import DERIVS_AT, FRAME_AT, J_AT, V_AT
 from contours.neutral._kernels import A_AT, Q_AT, STAMP_AT, bounding_box, contract_surface, frame_2s, point_velocity
 
@@ -56,6 +59,13 @@ ITAB_SIZE = KIN_AT + 8
 # hi (3)) [m] and the bound of P_Φ (3, n_f) [m] (contours.neutral._kernels.bounding_box)
 MARGIN, TOL2, MAX_STEP_E, MAX_STEP_X, SIGN, EDGE2 = range(6)
 OFFSET_AT, FLOATS_AT, RADIUS, KNOTS_AT = 6, 9, 13, 14
+# an offset contour's tables: in itab its offset law (contours._offset_kernels.offsets) at
+# LAW and whether ξ is closed at XI_CLOSED (no knots: the neutral curve's kernel data are
+# arguments); in ftab at FLOATS_AT the law's size [m], the ξ domain (2) and the reach
+# (the largest offset [m], which grows the neutral curve's box), then from KNOTS_AT the box
+# constants as above
+LAW, XI_CLOSED = GEOM_AT, GEOM_AT + 1
+SIZE, XI_A, XI_B, REACH = FLOATS_AT, FLOATS_AT + 1, FLOATS_AT + 2, FLOATS_AT + 3
 
 
 MAX_DEGREE = 7
@@ -67,6 +77,107 @@ WORK_AT = 6 * (MAX_DEGREE + 1) + 39
 def work_size(n_f):
     """Length of the work vector of a contour with n_f modes (degrees up to 7)."""
     return WORK_AT + 18 * n_f + 15
+
+
+@njit(cache=True)
+def _begin(q, u, itab, ftab, box0, reach, state, frame1, point1, centre, axes1, work):
+    """Steps 1–3 of a fused detection (:func:`centre_on_neutral_2s`): the contours'
+    states, the broad phase against the surface's box (``box0``: its undeformed control
+    points' lo (3), hi (3) and the bound of P_Φ (3, n_f); grown by ``reach`` [m]), the
+    centre, a point's C1 or a sphere's axes. False when the boxes are apart."""
+    n_f, nu1 = itab[NF], itab[NU1]
+    velocity = itab[VELOCITY] != 0
+    radius = ftab[RADIUS]
+    qp, up, qf, uf = itab[QP], itab[UP], itab[QF], itab[UF]
+    for c in range(3):
+        frame1[rigid.R_AT + c] = q[qp + c] + ftab[OFFSET_AT + c]
+        frame1[rigid.V_AT + c] = u[up + c]
+    for k in range(n_f):
+        state[Q_AT + k] = q[qf + k]
+        state[Q_AT + n_f + k] = u[uf + k]
+    state[STAMP_AT] += 1.0
+    if itab[BOX] != 0:
+        work_at = WORK_AT + 18 * n_f
+        box1, box2 = work[work_at:work_at + 6].reshape(2, 3), work[work_at + 6:work_at + 12].reshape(2, 3)
+        for c in range(3):
+            box1[0, c] = frame1[rigid.R_AT + c] - radius
+            box1[1, c] = frame1[rigid.R_AT + c] + radius
+        bounding_box(box0[0:3], box0[3:6], box0[6:6 + 3 * n_f].reshape(3, n_f), state, box2)
+        for c in range(3):
+            box2[0, c] -= reach
+            box2[1, c] += reach
+        if not boxes_overlap(box1, box2, ftab[MARGIN]):
+            return False
+    if radius > 0.0:
+        for k in range(9):
+            axes1[k // 3, k % 3] = frame1[rigid.A_AT + k]
+    else:
+        for k in range(V_AT - DERIVS_AT):
+            point1[DERIVS_AT + k] = 0.0
+        for c in range(3):
+            point1[DERIVS_AT + c] = frame1[rigid.R_AT + c]
+        for k in range(9):
+            point1[FRAME_AT + k] = frame1[rigid.A_AT + k]
+        for k in range(6 * nu1):
+            point1[J_AT + k] = frame1[rigid.J_AT + k]
+        if velocity:
+            for c in range(3):
+                point1[V_AT + c] = frame1[rigid.V_AT + c]
+    for c in range(3):
+        centre[c] = frame1[rigid.R_AT + c]
+    return True
+
+
+@njit(cache=True)
+def _finish(itab, ftab, frame1, point1, point2, kin, centre, axes1, work):
+    """Step 6 of a fused detection (:func:`centre_on_neutral_2s`) once C2 is in ``point2``:
+    g_N, a sphere's C1, the frame's pieces into ``kin``. Returns (g_N [m], ġ_N [m/s],
+    the sphere's C1 η, ξ [rad] (NaN for a point))."""
+    nan = np.nan
+    n_f, nu1, nu2 = itab[NF], itab[NU1], itab[NU2]
+    velocity = itab[VELOCITY] != 0
+    radius = ftab[RADIUS]
+    D2 = point2[DERIVS_AT:FRAME_AT].reshape(6, 3)
+    F2 = point2[FRAME_AT:V_AT].reshape(3, 3)
+    g_N = normal_gap(F2, centre, D2, radius)
+    eta1 = xi1 = nan
+    if radius > 0.0:
+        work_at = WORK_AT + 18 * n_f
+        m = work[work_at + 12:work_at + 15]
+        for c in range(3):
+            m[c] = -F2[c, 2]
+        eta1, xi1 = sphere_angles(axes1, m)
+        sphere_point(frame1, radius, eta1, xi1, velocity, np.bool_(True), point1)
+    ko = KIN_AT
+    T = kin[itab[ko + 1]:itab[ko + 2]].reshape(3, 2)
+    w_T1 = kin[itab[ko + 5]:itab[ko + 6]].reshape(nu1, 2)
+    w_T2 = kin[itab[ko + 6]:itab[ko + 7]].reshape(nu2, 2)
+    J1 = point1[J_AT:J_AT + 3 * nu1].reshape(3, nu1)
+    J2 = point2[J_AT:J_AT + 3 * nu2].reshape(3, nu2)
+    gd_N = frame_rates_jacobians(F2, point1[V_AT:J_AT], point2[V_AT:J_AT], J1, J2, velocity, np.bool_(True),
+                                 kin[itab[ko]:itab[ko + 1]], T, kin[itab[ko + 2]:itab[ko + 3]],
+                                 kin[itab[ko + 3]:itab[ko + 4]], kin[itab[ko + 4]:itab[ko + 5]], w_T1, w_T2)
+    return g_N, gd_N if velocity else nan, eta1, xi1
+
+
+@njit(cache=True)
+def _count(counts, start, eta, xi, k, steps):
+    """A converged Newton's counters and the next warm start (as Contact2sSearch keeps them)."""
+    counts[NEWTON_SOLVES] += 1
+    counts[NEWTON_ITERATIONS] += steps
+    counts[LAST_ITERATIONS] = k
+    start[0], start[1] = eta, xi
+
+
+@njit(cache=True)
+def _jacobian_at_rest(state, local, phi_point, n_f, point2, nu2):
+    """C2's J_T = A Φ_P of a body on a frame at rest (eq. 2.70 on a prescribed frame,
+    :func:`mbs._kernels.point_jacobian_T`) and J_R = 0 into ``point2``."""
+    A = state[A_AT:A_AT + 9].reshape(3, 3)
+    J2 = point2[J_AT:J_AT + 3 * nu2].reshape(3, nu2)
+    point_jacobian_T(A, A, local, phi_point.reshape(3, n_f), np.bool_(False), np.int64(0), J2)
+    for k in range(3 * nu2):
+        point2[J_AT + 3 * nu2 + k] = 0.0
 
 
 @njit(cache=True)
@@ -101,53 +212,10 @@ def centre_on_neutral_2s(q, u, itab, ftab, ctrl0, phi, state, span, frame1, poin
     C1 η, ξ [rad] (NaN for a point)).
     """
     nan = np.nan
-    n_f, nu1, nu2 = itab[NF], itab[NU1], itab[NU2]
-    velocity = itab[VELOCITY] != 0
-    radius = ftab[RADIUS]
-
-    # 1. the contours' states (store_state, store_velocity of the neutral contour)
-    qp, up, qf, uf = itab[QP], itab[UP], itab[QF], itab[UF]
-    for c in range(3):
-        frame1[rigid.R_AT + c] = q[qp + c] + ftab[OFFSET_AT + c]
-        frame1[rigid.V_AT + c] = u[up + c]
-    for k in range(n_f):
-        state[Q_AT + k] = q[qf + k]
-        state[Q_AT + n_f + k] = u[uf + k]
-    state[STAMP_AT] += 1.0
-
-    # 2. broad phase
+    n_f = itab[NF]
     o = KNOTS_AT + itab[KNOTS_E_N] + itab[KNOTS_X_N]
-    work_at = WORK_AT + 18 * n_f
-    if itab[BOX] != 0:
-        box1, box2 = work[work_at:work_at + 6].reshape(2, 3), work[work_at + 6:work_at + 12].reshape(2, 3)
-        for c in range(3):
-            box1[0, c] = frame1[rigid.R_AT + c] - radius
-            box1[1, c] = frame1[rigid.R_AT + c] + radius
-        bounding_box(ftab[o:o + 3], ftab[o + 3:o + 6], ftab[o + 6:o + 6 + 3 * n_f].reshape(3, n_f), state, box2)
-        if not boxes_overlap(box1, box2, ftab[MARGIN]):
-            return APART, nan, nan, nan, nan, nan, nan
-
-    # 3. the centre; a point's C1 (PointContour.evaluate), a sphere's axes
-    sphere = radius > 0.0
-    if sphere:
-        for k in range(9):
-            axes1[k // 3, k % 3] = frame1[rigid.A_AT + k]
-    else:
-        for k in range(V_AT - DERIVS_AT):
-            point1[DERIVS_AT + k] = 0.0
-        for c in range(3):
-            point1[DERIVS_AT + c] = frame1[rigid.R_AT + c]
-        for k in range(9):
-            point1[FRAME_AT + k] = frame1[rigid.A_AT + k]
-        for k in range(6 * nu1):
-            point1[J_AT + k] = frame1[rigid.J_AT + k]
-        if velocity:
-            for c in range(3):
-                point1[V_AT + c] = frame1[rigid.V_AT + c]
-    for c in range(3):
-        centre[c] = frame1[rigid.R_AT + c]
-
-    # 4. warm-started Newton; its last evaluation, at the root, is C2's r rows
+    if not _begin(q, u, itab, ftab, ftab[o:o + 6 + 3 * n_f], 0.0, state, frame1, point1, centre, axes1, work):
+        return APART, nan, nan, nan, nan, nan, nan
     if np.isnan(start[0]) or np.isnan(ftab[TOL2]):
         return FALLBACK, nan, nan, nan, nan, nan, nan
     ints = itab[GEOM_AT:GEOM_AT + 6]
@@ -164,44 +232,53 @@ def centre_on_neutral_2s(q, u, itab, ftab, ctrl0, phi, state, span, frame1, poin
                                              D, g)
     if not found:
         return FALLBACK, nan, nan, nan, nan, nan, nan
-    counts[NEWTON_SOLVES] += 1
-    counts[NEWTON_ITERATIONS] += steps
-    counts[LAST_ITERATIONS] = k
-    start[0], start[1] = eta, xi
-
-    # 5. the point C2 (the r rows of Newton's last evaluation, then the rest of evaluate_2s
-    # at the root: frame, Φ rows, ṙ; J_T, J_R)
+    _count(counts, start, eta, xi, k, steps)
+    # C2: the r rows of Newton's last evaluation, then the rest of evaluate_2s at the root
     for k in range(18):
-        point2[DERIVS_AT + k] = work[6 * pm + 18 + k]
-    D2 = point2[DERIVS_AT:FRAME_AT].reshape(6, 3)
-    F2 = point2[FRAME_AT:V_AT].reshape(3, 3)
-    v2 = point2[V_AT:J_AT]
-    J2 = point2[J_AT:J_AT + 3 * nu2].reshape(3, nu2)
-    frame_2s(D2, ftab[SIGN], F2)
+        point2[DERIVS_AT + k] = D[k // 3, k % 3]
+    frame_2s(point2[DERIVS_AT:FRAME_AT].reshape(6, 3), ftab[SIGN], point2[FRAME_AT:V_AT].reshape(3, 3))
     phi_rows = work[WORK_AT:WORK_AT + 18 * n_f].reshape(6, 3 * n_f)
     contract_surface(B[0], int(span[1]), ints[0], B[1], int(span[2]), ints[3], phi, np.int64(1), phi_rows)
-    if velocity:
-        point_velocity(state, local[0], phi_rows[0], v2)
-    A = state[A_AT:A_AT + 9].reshape(3, 3)
-    point_jacobian_T(A, A, local[0], phi_rows[0].reshape(3, n_f), np.bool_(False), np.int64(0), J2)   # prescribed frame: A Φ
-    for k in range(3 * nu2):
-        point2[J_AT + 3 * nu2 + k] = 0.0
+    if itab[VELOCITY] != 0:
+        point_velocity(state, local[0], phi_rows[0], point2[V_AT:J_AT])
+    _jacobian_at_rest(state, local[0], phi_rows[0], n_f, point2, itab[NU2])
+    g_N, gd_N, eta1, xi1 = _finish(itab, ftab, frame1, point1, point2, kin, centre, axes1, work)
+    return LOCATED, g_N, gd_N, eta, xi, eta1, xi1
 
-    # 6. gap, a sphere's C1, frame, relative velocity, Jacobian pieces
-    g_N = normal_gap(F2, centre, D2, radius)
-    eta1 = xi1 = nan
-    if sphere:
-        m = work[work_at + 12:work_at + 15]
-        for c in range(3):
-            m[c] = -F2[c, 2]
-        eta1, xi1 = sphere_angles(axes1, m)
-        sphere_point(frame1, radius, eta1, xi1, velocity, np.bool_(True), point1)
-    ko = KIN_AT
-    T = kin[itab[ko + 1]:itab[ko + 2]].reshape(3, 2)
-    w_T1 = kin[itab[ko + 5]:itab[ko + 6]].reshape(nu1, 2)
-    w_T2 = kin[itab[ko + 6]:itab[ko + 7]].reshape(nu2, 2)
-    J1 = point1[J_AT:J_AT + 3 * nu1].reshape(3, nu1)
-    gd_N = frame_rates_jacobians(F2, point1[V_AT:J_AT], v2, J1, J2, velocity, np.bool_(True), kin[itab[ko]:itab[ko + 1]], T,
-                                 kin[itab[ko + 2]:itab[ko + 3]], kin[itab[ko + 3]:itab[ko + 4]],
-                                 kin[itab[ko + 4]:itab[ko + 5]], w_T1, w_T2)
-    return LOCATED, g_N, gd_N if velocity else nan, eta, xi, eta1, xi1
+
+@njit(cache=True)
+def centre_on_offset(q, u, itab, ftab, knots, ints, floats, ctrl0, phi, state, span, n0, frame1, point1, point2,
+                     kin, centre, axes1, start, counts, work, newton_work, contour_work):
+    """:func:`centre_on_neutral_2s` against an offset contour (band, cylinder) of a body
+    at rest, from its neutral curve's kernel data (knots … span) and reference normal n0:
+    the broad phase against the curve's box grown by the reach, Newton on the offset
+    surface (:func:`~contact._detection_kernels.newton_offset`, the search's work arrays
+    ``newton_work`` = B, local, rows, frame, D, g), C2 by
+    :func:`~contours._offset_kernels.evaluate_offset` at the root (the contour's own work
+    arrays ``contour_work`` = B, local, rows, frame, Φ rows, Φ_P, as
+    :meth:`contours.derived.OffsetContour.evaluate` fills them) with J_T = A Φ_P, J_R = 0.
+    Returns as :func:`centre_on_neutral_2s`."""
+    nan = np.nan
+    n_f = itab[NF]
+    if not _begin(q, u, itab, ftab, ftab[KNOTS_AT:KNOTS_AT + 6 + 3 * n_f], ftab[REACH], state, frame1, point1, centre,
+                  axes1, work):
+        return APART, nan, nan, nan, nan, nan, nan
+    if np.isnan(start[0]) or np.isnan(ftab[TOL2]):
+        return FALLBACK, nan, nan, nan, nan, nan, nan
+    B, local, rows, frame, D, g = newton_work
+    law, size = itab[LAW], ftab[SIZE]
+    found, eta, xi, gg, k, steps = newton_offset(centre, start[0], start[1], knots, ints, floats, ctrl0, phi, state,
+                                                 span, n0, law, size, ftab[XI_A], ftab[XI_B], itab[XI_CLOSED] != 0,
+                                                 ftab[MAX_STEP_E], ftab[MAX_STEP_X], ftab[TOL2], ftab[EDGE2],
+                                                 itab[MAX_ITER], B, local, rows, frame, D, g)
+    if not found:
+        return FALLBACK, nan, nan, nan, nan, nan, nan
+    _count(counts, start, eta, xi, k, steps)
+    B, local, rows, frame, phi_rows, phi_point = contour_work
+    al, be, al1, be1, al2, be2 = offsets(law, size, xi)
+    evaluate_offset(eta, knots, ints, floats, ctrl0, phi, state, span, n0, al, be, al1, be1, al2, be2,
+                    np.bool_(True), itab[VELOCITY] != 0, B, local, rows, frame, phi_rows, phi_point,
+                    point2[DERIVS_AT:FRAME_AT].reshape(6, 3), point2[FRAME_AT:V_AT].reshape(3, 3), point2[V_AT:J_AT])
+    _jacobian_at_rest(state, rows[0], phi_point, n_f, point2, itab[NU2])
+    g_N, gd_N, eta1, xi1 = _finish(itab, ftab, frame1, point1, point2, kin, centre, axes1, work)
+    return LOCATED, g_N, gd_N, eta, xi, eta1, xi1

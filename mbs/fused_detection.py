@@ -18,7 +18,9 @@ Kinds with a fused detection:
   on a point mass against a compiled neutral 2s contour — nodal or fitted,
   :class:`~contours.neutral.factory.Contour2sNeutralFactory` — of a body on a frame fixed
   in space, ``ContactKinematicsPointContour2s`` or ``ContactKinematicsSphereContour2s``
-  with a compiled ``Contact2sSearch``, any law of :class:`contact.Contact`.
+  with a compiled ``Contact2sSearch``, any law of :class:`contact.Contact`;
+* :class:`CentreOnOffset`: the same against a band or a cylinder
+  (:class:`~contours.derived.OffsetContour`) on a compiled 1s neutral curve.
 
 Every other contact keeps the Python path (which stays the reference of the fused ones,
 ``tests/unit/contact/test_fused_detection.py``).
@@ -31,17 +33,20 @@ import numpy as np
 from contact.contact import Contact
 from contact.kinematics import ContactKinematicsPointContour2s, ContactKinematicsSphereContour2s, buffer_layout
 from contact.search import Contact2sSearch
-from contours.neutral.factory import Contour2sNeutralFactory
+from contours.derived import OffsetContour
+from contours.neutral.factory import Contour1sNeutralFactory, Contour2sNeutralFactory
 from contours.rigid import PointContour, SphereContour
 
 from . import _fused_detection_kernels as K
 
 
 def fused_detection(contact):
-    """The fused detection of ``contact`` (:class:`CentreOnNeutral2s`) when its kind has
-    one and its bodies belong to a System, else None (the Python path)."""
-    if CentreOnNeutral2s.applies(contact):
-        return CentreOnNeutral2s(contact)
+    """The fused detection of ``contact`` (:class:`CentreOnNeutral2s`,
+    :class:`CentreOnOffset`) when its kind has one and its bodies belong to a System,
+    else None (the Python path)."""
+    for kind in (CentreOnNeutral2s, CentreOnOffset):
+        if kind.applies(contact):
+            return kind(contact)
     return None
 
 
@@ -49,24 +54,19 @@ CENTRE_KINDS = {ContactKinematicsPointContour2s: PointContour, ContactKinematics
 # ^ the kinematics of a centre searched on a 2s contour and the contour of its side 1
 
 
-class CentreOnNeutral2s:
-    """Stages 3 and 4 of a point or a sphere on a point mass against a neutral 2s contour
-    on a body at rest (module docstring) in one call of
-    :func:`._fused_detection_kernels.centre_on_neutral_2s`.
+class _FusedCentre:
+    """What the fused detections of a centre (a point or a sphere on a point mass) on a
+    surface of a body at rest share: the tables' common entries (the layouts of
+    :mod:`._fused_detection_kernels`), Newton's settings, and :meth:`locate` around the
+    kernel (:attr:`kernel` with the arguments :attr:`_args` after q and u)."""
 
-    Parameters
-    ----------
-    contact : Contact
-        With ``ContactKinematicsPointContour2s`` or ``ContactKinematicsSphereContour2s``
-        (:meth:`applies`).
-    """
+    kernel = None
 
     @staticmethod
-    def applies(contact) -> bool:
-        """True for a :class:`~contact.Contact` of a point or a sphere on a point mass
-        against a compiled neutral 2s contour on a body whose frame is fixed in space, not
-        trimmed (a face with holes takes the Python path, whose search tests the trim),
-        searched by a compiled ``Contact2sSearch``, both bodies in a System."""
+    def _applies(contact, surface_ok) -> bool:
+        """A :class:`~contact.Contact` of a point or a sphere on a point mass against a
+        surface for which ``surface_ok(surface)`` holds, on a body whose frame is fixed in
+        space, searched by a compiled ``Contact2sSearch``, both bodies in a System."""
         if type(contact) is not Contact:
             return False
         k = contact.kinematics
@@ -75,44 +75,38 @@ class CentreOnNeutral2s:
             return False
         point, surface = k.contour1, k.contour2
         body1, body2 = point.body, surface.body
-        return (type(point) is side1 and body1 is not None and body1.translation_only
-                and isinstance(surface, Contour2sNeutralFactory) and surface.compiled and surface.trim is None
-                and max(surface.space.eta.p, surface.space.xi.p) <= K.MAX_DEGREE
+        return (type(point) is side1 and body1 is not None and body1.translation_only and surface_ok(surface)
                 and body2 is not None and getattr(body2, "frame_at_rest", False)
                 and type(k.search) is Contact2sSearch and k.search.compiled
                 and body1.q_slice is not None and body2.q_slice is not None)
 
-    def __init__(self, contact):
+    def __init__(self, contact, neutral, surface_floats, box_at):
         self.contact = contact
         k = self.kinematics = contact.kinematics
         point, surface = k.contour1, k.contour2
-        self.point, self.surface, self.search = point, surface, k.search
+        self.point, self.surface, self.search, self.neutral = point, surface, k.search, neutral
         self.velocity = not contact.set_valued
         self.closing_tol = contact.closing_tol
         body1, body2 = point.body, surface.body
-        knots_e, knots_x, ints, floats, ctrl0, phi, state, span = surface.kernel_data
-        n_f = surface.n_modes
+        n_f = neutral.n_modes
         itab = np.zeros(K.ITAB_SIZE, dtype=np.int64)
         itab[K.QP], itab[K.UP] = body1.q_slice.start, body1.u_slice.start
         itab[K.QF] = body2.q_slice.start + body2._f.start
         itab[K.UF] = body2.u_slice.start + body2._fu.start
         itab[K.NF], itab[K.NU1], itab[K.NU2] = n_f, point.nu, surface.nu
         itab[K.VELOCITY], itab[K.BOX] = self.velocity, contact.margin is not None
-        itab[K.GEOM_AT:K.GEOM_AT + 6] = ints
-        itab[K.KNOTS_E_N], itab[K.KNOTS_X_N] = knots_e.size, knots_x.size
         itab[K.KIN_AT:K.KIN_AT + 8] = buffer_layout(point.nu, surface.nu)
-        lo0, hi0 = surface._box0
-        ftab = np.concatenate((np.zeros(K.KNOTS_AT), knots_e, knots_x, lo0, hi0, surface._phi_bound.ravel()))
+        lo0, hi0 = neutral._box0
+        ftab = np.concatenate((np.zeros(box_at), lo0, hi0, neutral._phi_bound.ravel()))
         ftab[K.MARGIN] = 0.0 if contact.margin is None else contact.margin
-        ftab[K.SIGN] = surface.sign
         ftab[K.OFFSET_AT:K.OFFSET_AT + 3] = point.frame_ref.u0
         ftab[K.RADIUS] = k.radius
-        ftab[K.FLOATS_AT:K.FLOATS_AT + 4] = floats
+        ftab[K.FLOATS_AT:K.FLOATS_AT + 4] = surface_floats
         self._itab, self._ftab = itab, ftab
         self._newton_settings()
-        work = np.zeros(K.work_size(n_f))
-        self._args = (itab, ftab, ctrl0, phi, state, span, point.state, k.point1.buffer, k.point2.buffer, k.buffer,
-                      k.centre, k.axes1, k.start, k.search.counts, work)
+        self._work = np.zeros(K.work_size(n_f))
+        self._points = (point.state, k.point1.buffer, k.point2.buffer, k.buffer, k.centre, k.axes1, k.start,
+                        k.search.counts)
         self.sphere = k.radius > 0.0
         self._updates = [(c, c.body.q_slice, c.body.u_slice) for c in (point, surface)]
 
@@ -130,8 +124,8 @@ class CentreOnNeutral2s:
         """Both contours updated at the global (q, u, t) and the contact located, as
         ``contour.update`` then :meth:`Contact.locate` (the Python path when the kernel
         falls back): True when closed (g_N <= closing_tol)."""
-        outcome, g_N, gd_N, eta, xi, eta1, xi1 = K.centre_on_neutral_2s(q, u, *self._args)
-        self.surface._has_u = True
+        outcome, g_N, gd_N, eta, xi, eta1, xi1 = type(self).kernel(q, u, *self._args)
+        self.neutral._has_u = True
         if outcome == K.LOCATED:
             k = self.kinematics
             k.active = True
@@ -150,3 +144,66 @@ class CentreOnNeutral2s:
         if np.isnan(self._ftab[K.TOL2]):
             self._newton_settings()
         return closed
+
+
+class CentreOnNeutral2s(_FusedCentre):
+    """Stages 3 and 4 of a point or a sphere on a point mass against a neutral 2s contour
+    on a body at rest (module docstring) in one call of
+    :func:`._fused_detection_kernels.centre_on_neutral_2s`.
+
+    Parameters
+    ----------
+    contact : Contact
+        With ``ContactKinematicsPointContour2s`` or ``ContactKinematicsSphereContour2s``
+        (:meth:`applies`).
+    """
+
+    kernel = K.centre_on_neutral_2s
+
+    @staticmethod
+    def applies(contact) -> bool:
+        """True for a point or a sphere on a point mass against a compiled neutral 2s
+        contour on a body at rest, not trimmed (a face with holes takes the Python path,
+        whose search tests the trim), of degrees up to MAX_DEGREE (:meth:`_FusedCentre._applies`)."""
+        return _FusedCentre._applies(contact, lambda s: isinstance(s, Contour2sNeutralFactory) and s.compiled
+                                     and s.trim is None and max(s.space.eta.p, s.space.xi.p) <= K.MAX_DEGREE)
+
+    def __init__(self, contact):
+        surface = contact.kinematics.contour2
+        knots_e, knots_x, ints, floats, ctrl0, phi, state, span = surface.kernel_data
+        super().__init__(contact, surface, floats, K.KNOTS_AT + knots_e.size + knots_x.size)
+        itab, ftab = self._itab, self._ftab
+        itab[K.GEOM_AT:K.GEOM_AT + 6] = ints
+        itab[K.KNOTS_E_N], itab[K.KNOTS_X_N] = knots_e.size, knots_x.size
+        ftab[K.KNOTS_AT:K.KNOTS_AT + knots_e.size] = knots_e
+        ftab[K.KNOTS_AT + knots_e.size:K.KNOTS_AT + knots_e.size + knots_x.size] = knots_x
+        ftab[K.SIGN] = surface.sign
+        self._args = (itab, ftab, ctrl0, phi, state, span, *self._points, self._work)
+
+
+class CentreOnOffset(_FusedCentre):
+    """Stages 3 and 4 of a point or a sphere on a point mass against a band or a cylinder
+    (:class:`~contours.derived.OffsetContour`) on a compiled 1s neutral curve of a body at
+    rest, in one call of :func:`._fused_detection_kernels.centre_on_offset`."""
+
+    kernel = K.centre_on_offset
+
+    @staticmethod
+    def applies(contact) -> bool:
+        """True for a point or a sphere on a point mass against a compiled offset contour
+        on a compiled 1s neutral curve of degree up to MAX_DEGREE on a body at rest
+        (:meth:`_FusedCentre._applies`)."""
+        return _FusedCentre._applies(contact, lambda s: isinstance(s, OffsetContour) and s.compiled
+                                     and isinstance(s.neutral, Contour1sNeutralFactory) and s.neutral.compiled
+                                     and s.neutral.space.eta.p <= K.MAX_DEGREE)
+
+    def __init__(self, contact):
+        surface = contact.kinematics.contour2
+        neutral = surface.neutral
+        knots, ints, floats, ctrl0, phi, state, span = neutral.kernel_data
+        law, size = surface.offset_law
+        xi_axis = contact.kinematics.search.axes[1]
+        super().__init__(contact, neutral, (size, xi_axis.a, xi_axis.b, surface.reach), K.KNOTS_AT)
+        self._itab[K.LAW], self._itab[K.XI_CLOSED] = law, xi_axis.closed
+        self._args = (self._itab, self._ftab, knots, ints, floats, ctrl0, phi, state, span, neutral.normal_ref,
+                      *self._points, self._work, self.search.newton_work, surface.evaluate_work)
