@@ -24,6 +24,11 @@ masses, a copy from the allocating methods for the rest. Gravity and force eleme
 that are a point force given by a step table (:meth:`mbs.link.ForceElement.point_load`:
 ``Force``, ``DistributedForce`` with constant or step loads) go through the bodies'
 kernels too; other force elements add their forces with their own ``add_forces``.
+When every body's h is linear with constant coefficients (point masses, FFR bodies on
+a frame at rest) and gravity is the only load, h is one kernel
+(:func:`mbs._kernels.linear_bodies_h`): gravity on a body at rest is the constant
+J_Tᵀ m g, taken once from the body's own ``add_point_load_into``, and so is the
+energy (kinetic and potential, :meth:`BodyStage.energies`).
 The results equal :meth:`mbs.system.System.mass_and_h` (the numpy reference) to
 rounding.
 """
