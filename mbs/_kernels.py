@@ -397,7 +397,8 @@ def point_masses_h(u_at, force, h):
             h[u_at[p] + c] = 0.0 + force[p, c]
 
 
-LEFT_OUT, CONSTANT_FORCE, ELASTIC, ELASTIC_DAMPED = 0, 1, 2, 3     # kinds of linear_bodies_h's rows
+LEFT_OUT, CONSTANT_FORCE, ELASTIC, ELASTIC_DAMPED, ELASTIC_LOADED, ELASTIC_DAMPED_LOADED = 0, 1, 2, 3, 4, 5
+# ^ kinds of linear_bodies_h's rows
 
 
 @njit(cache=True)
@@ -409,12 +410,15 @@ def linear_bodies_h(rows, KD, force, q, u, h):
     - ``LEFT_OUT`` (0): h = 0 (a body a planned run solves apart);
     - ``CONSTANT_FORCE`` (1): h = 0 + force (a point mass: its gravity m g [N]);
     - ``ELASTIC`` (2): h = −K q_f (a FFR body on a frame at rest, thesis eq. 2.36);
-    - ``ELASTIC_DAMPED`` (3): h = −(K q_f + D q̇_f),
+    - ``ELASTIC_DAMPED`` (3): h = −(K q_f + D q̇_f);
+    - ``ELASTIC_LOADED`` (4), ``ELASTIC_DAMPED_LOADED`` (5): those plus the constant
+      force (gravity J_Tᵀ m g [N] on a body at rest, thesis eq. 2.76),
 
     with K = KD[0], D = KD[1] (nu, nu), read on each block's diagonal block, force (nu,).
     The rows are :func:`elastic_row`'s, as in :func:`elastic_h_into`, and the constant
-    force is :func:`point_masses_h`'s (the references the tests compare): the same to the
-    bit."""
+    force is :func:`point_masses_h`'s (the references the tests compare); a loaded row
+    adds the force after the elastic one as :meth:`mbs.body.Body.add_point_load_into`
+    adds it after :meth:`~mbs.body.Body.h_into`: the same to the bit."""
     for k in range(rows.shape[0]):
         a, b, kind = rows[k, 0], rows[k, 1], rows[k, 2]
         if kind == 0:
@@ -425,18 +429,24 @@ def linear_bodies_h(rows, KD, force, q, u, h):
                 h[i] = 0.0 + force[i]
         else:
             K_b, D_b, q_b, u_b = KD[0, a:b, a:b], KD[1, a:b, a:b], q[a:b], u[a:b]   # views made once
-            for i in range(b - a):
-                h[a + i] = -elastic_row(K_b, D_b, kind == 3, q_b, u_b, i)
+            damped = kind == 3 or kind == 5
+            if kind >= 4:
+                for i in range(b - a):
+                    h[a + i] = -elastic_row(K_b, D_b, damped, q_b, u_b, i) + force[a + i]
+            else:
+                for i in range(b - a):
+                    h[a + i] = -elastic_row(K_b, D_b, damped, q_b, u_b, i)
 
 
 @njit(cache=True)
-def linear_bodies_energy(rows, M, K, force, q, u):
-    """Kinetic plus potential energy [J] of the bodies of :func:`linear_bodies_h`'s rows
-    (no left-out ones): ½ uᵀ M u over each body's block of the constant mass matrix M
-    (nu, nu) (thesis eq. 2.43 with the frame at rest; ½ m |u|² for a point mass), the
-    elastic energy ½ q_fᵀ K q_f of the ``ELASTIC`` rows and −forceᵀ q (gravity, −m g·r)
-    of the ``CONSTANT_FORCE`` rows. Numpy reference: ``System.kinetic_energy`` plus
-    ``System.potential_energy`` (equal to rounding)."""
+def linear_bodies_energy(rows, M, K, force, V0, q, u):
+    """(kinetic, potential) energy [J] of the bodies of :func:`linear_bodies_h`'s rows
+    (no left-out ones): T = ½ uᵀ M u over each body's block of the constant mass matrix M
+    (nu, nu) (thesis eq. 2.43 with the frame at rest; ½ m |u|² for a point mass);
+    V = ½ q_fᵀ K q_f of the elastic rows, −forceᵀ q of the ``CONSTANT_FORCE`` and loaded
+    rows (gravity, −m g·r = V0_b − (J_Tᵀ m g)·q_f for a body at rest, r linear in q_f)
+    plus V0 (Σ −m g·r_com at q_f = 0 of the loaded bodies). Numpy reference:
+    ``System.kinetic_energy`` and ``System.potential_energy`` (equal to rounding)."""
     kinetic = 0.0
     elastic = 0.0
     gravity = 0.0
@@ -447,14 +457,14 @@ def linear_bodies_energy(rows, M, K, force, q, u):
             for j in range(a, b):
                 s += M[i, j] * u[j]
             kinetic += u[i] * s
-            if kind == CONSTANT_FORCE:
+            if kind == CONSTANT_FORCE or kind >= ELASTIC_LOADED:
                 gravity -= force[i] * q[i]
-            else:
+            if kind != CONSTANT_FORCE:
                 s = 0.0
                 for j in range(a, b):
                     s += K[i, j] * q[j]
                 elastic += q[i] * s
-    return 0.5 * kinetic + 0.5 * elastic + gravity
+    return 0.5 * kinetic, 0.5 * elastic + gravity + V0
 
 
 @njit(cache=True)

@@ -24,6 +24,11 @@ masses, a copy from the allocating methods for the rest. Gravity and force eleme
 that are a point force given by a step table (:meth:`mbs.link.ForceElement.point_load`:
 ``Force``, ``DistributedForce`` with constant or step loads) go through the bodies'
 kernels too; other force elements add their forces with their own ``add_forces``.
+When every body's h is linear with constant coefficients (point masses, FFR bodies on
+a frame at rest) and gravity is the only load, h is one kernel
+(:func:`mbs._kernels.linear_bodies_h`): gravity on a body at rest is the constant
+J_Tᵀ m g, taken once from the body's own ``add_point_load_into``, and so is the
+energy (kinetic and potential, :meth:`BodyStage.energies`).
 The results equal :meth:`mbs.system.System.mass_and_h` (the numpy reference) to
 rounding.
 """
@@ -108,21 +113,25 @@ class BodyStage:
         self._rotating = [(b, b.q_slice) for b in self.active if not b.additive]
         self._one_free = self._one and bool(getattr(self.active[0], "free_quaternion", False))
         self._flat = self.additive and sum(b.nq for b in self.bodies) == self.nu     # q and u row for row
-        self.linear_rows, self.linear_KD, self.linear_force = self._linear_table()
+        self.linear_rows, self.linear_KD, self.linear_force, self.linear_V0 = self._linear_table()
         self.linear = self.linear_rows is not None
         self.linear_M = self._linear_mass() if self.linear and not self.idle else None
 
     def _linear_table(self):
         """The rows (k, 3) (first row, end row, kind), coefficients KD (2, nu, nu) and
-        constant forces (nu,) of :func:`mbs._kernels.linear_bodies_h` when every body's h
-        is linear with constant coefficients — point masses, bodies whose
-        :meth:`~mbs.body.Body.linear_forces` says so, left-out bodies (h = 0) — and no
-        load is added in a step; else (None, None, None)."""
-        if not self._flat or self._loads:
-            return None, None, None
+        constant forces (nu,) of :func:`mbs._kernels.linear_bodies_h`, and V0 [J] of
+        :func:`~mbs._kernels.linear_bodies_energy`, when every body's h is linear with
+        constant coefficients — point masses, bodies whose
+        :meth:`~mbs.body.Body.linear_forces` says so, left-out bodies (h = 0) — and the
+        only loads are gravity on such bodies (:meth:`_constant_loads`); else
+        (None, None, None, 0.0)."""
+        loads = self._constant_loads() if self._flat else None
+        if loads is None:
+            return None, None, None, 0.0
         points = {id(b): k for k, b in enumerate(self.bodies) if type(b) is PointMass}
         rows, KD, force = [], np.zeros((2, self.nu, self.nu)), np.zeros(self.nu)
         active = {id(b) for b in self.active}
+        V0 = 0.0
         for b in self.bodies:
             a, e = b.u_slice.start, b.u_slice.stop
             if id(b) not in active:
@@ -132,31 +141,66 @@ class BodyStage:
                 force[a:e] = b.mass * self.gravity
                 rows.append((a, e, K.CONSTANT_FORCE))
                 continue
+            load = loads.get(id(b))
+            if id(b) in points:                 # a lone point mass: its gravity is its load
+                force[a:e] = load[0] if load is not None else 0.0
+                rows.append((a, e, K.CONSTANT_FORCE))
+                continue
             linear = b.linear_forces()
             if linear is None:
-                return None, None, None
+                return None, None, None, 0.0
             KD[0, a:e, a:e] = linear[0]
             if linear[1] is not None:
                 KD[1, a:e, a:e] = linear[1]
-            rows.append((a, e, K.ELASTIC if linear[1] is None else K.ELASTIC_DAMPED))
-        return np.array(rows, dtype=np.int64).reshape(-1, 3), KD, force
+            kind = K.ELASTIC if linear[1] is None else K.ELASTIC_DAMPED
+            if load is not None:
+                force[a:e], V0 = load[0], V0 + load[1]
+                kind = K.ELASTIC_LOADED if linear[1] is None else K.ELASTIC_DAMPED_LOADED
+            rows.append((a, e, kind))
+        return np.array(rows, dtype=np.int64).reshape(-1, 3), KD, force, V0
+
+    def _constant_loads(self):
+        """{id(body): (Q (nu_b,) [N], V0 [J])}: gravity's generalized force Q = J_Tᵀ m g
+        (thesis eq. 2.76) on each body at rest (constant J_T) and its potential
+        −m g·r_com at q = 0 (r_com is linear in q_f there: −m g·r_com = V0 − Qᵀ q_f) —
+        when gravity is the only load and acts on such bodies; else None. Q is the body's
+        own :meth:`~mbs.body.Body.add_point_load_into` added onto −0.0 (the identity of
+        +), so h = −K q_f + Q is the step's h to the bit."""
+        loads = {}
+        for load in self._loads:
+            if load[0] != "point" or load[5] is not GRAVITY_TABLE:
+                return None
+            _, b, qs, us, frame, times, values, body_axes, work = load
+            if type(b) is not PointMass and b.linear_forces() is None:
+                return None
+            Q = np.full(b.nu, -0.0)
+            b.add_point_load_into(b.q_init, frame, times, values, 0.0, body_axes, Q, work)
+            V0 = 0.0 if type(b) is PointMass else -float(values[0] @ frame.position(np.zeros(b.nq), 0.0))
+            loads[id(b)] = (Q, V0)
+        return loads
 
     def _linear_mass(self):
         """The constant mass matrix (nu, nu) of the linear bodies (their blocks at the
-        initial state), for :meth:`energy`."""
+        initial state), for :meth:`energies`."""
         M = np.zeros((self.nu, self.nu))
         for b in self.bodies:
             M[b.u_slice, b.u_slice] = b.mass_matrix(b.q_init)
         return M
 
-    def energy(self, q, u):
-        """Kinetic plus potential energy [J] in one kernel
+    def energies(self, q, u):
+        """(kinetic, potential) energy [J] in one kernel
         (:func:`mbs._kernels.linear_bodies_energy`) when every body is linear, none is
         left out and no force element acts (then the energy is the bodies' and gravity's
         alone); else None (the caller sums the bodies' and links' own energies)."""
         if self.linear_M is None:
             return None
-        return K.linear_bodies_energy(self.linear_rows, self.linear_M, self.linear_KD[0], self.linear_force, q, u)
+        return K.linear_bodies_energy(self.linear_rows, self.linear_M, self.linear_KD[0], self.linear_force,
+                                      self.linear_V0, q, u)
+
+    def energy(self, q, u):
+        """Kinetic plus potential energy [J] (:meth:`energies`), or None."""
+        energies = self.energies(q, u)
+        return None if energies is None else energies[0] + energies[1]
 
     @classmethod
     def of_equations(cls, equations) -> "BodyStage":

@@ -108,7 +108,9 @@ class StateCopy:
     """A copy of run state kept in memory: :meth:`save` copies it into buffers made on
     the first save (no allocation after that while shapes stay), :meth:`restore` puts it
     back — arrays written into the objects' own arrays (views of them stay valid),
-    scalars, tuples and None set again, a dict (counters) copied.
+    scalars, tuples and None set again, a dict (counters) copied. An attribute still
+    holding the very array of the last save is copied without further checks (its
+    buffer fits it).
 
     ``owners``: [(object, names)] — the attributes ``names`` of each object, or its
     ``run_state`` for names None; an attribute holding an object with its own
@@ -119,6 +121,7 @@ class StateCopy:
         for obj, names in owners:
             self._add(obj, type(obj).run_state if names is None else names)
         self._kept = [None] * len(self._slots)
+        self._arrays = [None] * len(self._slots)    # the array each slot held at the last save
 
     def _add(self, obj, names):
         for name in names:
@@ -130,15 +133,20 @@ class StateCopy:
 
     def save(self) -> None:
         """Copy the state as it is now."""
-        kept = self._kept
+        kept, arrays = self._kept, self._arrays
         for j, (obj, name) in enumerate(self._slots):
-            value = getattr(obj, name)
+            value, array = getattr(obj, name), arrays[j]
+            if array is not None and value is array:    # the array of the last save: its buffer fits
+                kept[j][...] = value
+                continue
+            arrays[j] = None
             if isinstance(value, np.ndarray):
                 buf = kept[j]
                 if isinstance(buf, np.ndarray) and buf.shape == value.shape and buf.dtype == value.dtype:
                     buf[...] = value
                 else:
                     kept[j] = value.copy()
+                arrays[j] = value
             elif isinstance(value, dict):
                 kept[j] = dict(value)
             else:
@@ -146,7 +154,12 @@ class StateCopy:
 
     def restore(self) -> None:
         """Put back the state of the last :meth:`save`."""
-        for (obj, name), value in zip(self._slots, self._kept):
+        for (obj, name), value, array in zip(self._slots, self._kept, self._arrays):
+            if array is not None:
+                current = getattr(obj, name)
+                if current is array:        # still the saved array: written back in place
+                    current[...] = value
+                    continue
             if isinstance(value, np.ndarray):
                 current = getattr(obj, name)
                 if isinstance(current, np.ndarray) and current.shape == value.shape and current.dtype == value.dtype:

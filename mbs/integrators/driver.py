@@ -354,7 +354,7 @@ class Integrator:
         the energy there is NaN or infinite (the steps check only the integrated
         coordinates, and a finite state can have an infinite energy); such a sample is not
         counted, so the result keeps the finite ones before it."""
-        st, sys = self.state, self.system
+        st = self.state
         res, n = st.result, len(st.times)
         res.t[i], res.q[i], res.u[i] = self.t, self.q, self.u
         q, u = res.q[i], res.u[i]
@@ -374,13 +374,24 @@ class Integrator:
             rows[i] = value
         if st.energies:
             for key in ("kinetic", "potential"):
-                res.energy.setdefault(key, np.full(n, np.nan))
-            res.energy["kinetic"][i] = sys.kinetic_energy(self.t, q, u)
-            res.energy["potential"][i] = sys.potential_energy(self.t, q) + self.spring_energy()
-        if st.energies and not math.isfinite(res.energy["kinetic"][i] + res.energy["potential"][i]):
-            raise non_finite(self.t, self.steps, "energy")
+                if key not in res.energy:
+                    res.energy[key] = np.full(n, np.nan)
+            kinetic, potential = self._scene_energies(q, u)
+            res.energy["kinetic"][i], res.energy["potential"][i] = kinetic, potential
+            if not math.isfinite(kinetic + potential):
+                raise non_finite(self.t, self.steps, "energy")
         if st.contacts:
             self.contact_recorder.record(self.data, res.contacts, i, self.t, q, u)
             for j, c in enumerate(self.model.contacts):
                 self.contact_force(j, res.contacts[c.name]["force"][i])
 
+    def _scene_energies(self, q, u):
+        """(kinetic, potential) energy [J] of the whole scene at (``self.t``, q, u): the
+        body stage's one kernel when it holds every body and force element
+        (:meth:`mbs.body_stage.BodyStage.energies`), else the System's sums over bodies
+        and links; the compliant contacts' springs in the potential."""
+        sys, model = self.system, self.model
+        energies = model.body_stage.energies(q, u) if len(model.equations.forces) == len(sys.forces) else None
+        if energies is None:
+            energies = sys.kinetic_energy(self.t, q, u), sys.potential_energy(self.t, q)
+        return energies[0], energies[1] + self.spring_energy()

@@ -101,6 +101,7 @@ from .. import stages, state_arrays
 from ..model import CARRIED, LAST_STEP
 from ..step_work import StepWork
 from .driver import Integrator, StepFailure, non_finite
+from .step_trace import StepTrace
 
 TRACE_KEYS = ("t", "dt", "closed", "penetration", "iterations", "residual", "impulse_work", "pressed", "load_work",
               "damping_loss", "energy", "contact_springs")      # t, dt, Data.last, energies
@@ -125,7 +126,7 @@ class MoreauTimeStepping(Integrator):
             raise ModelError(f"theta must lie in [0.5, 1], got {theta}")
         self.theta = float(theta)
         self.solver = solver if isinstance(solver, ProxSolver) else ProxSolver(solver, tol=tol, max_iter=max_iter)
-        self._trace = {key: [] for key in TRACE_KEYS} if trace else None
+        self._trace = StepTrace(TRACE_KEYS, TRACE_DTYPES) if trace else None
         self._work = None           # the StepWork of the run's Model (trace only)
 
     def options(self):
@@ -169,8 +170,7 @@ class MoreauTimeStepping(Integrator):
             energy = self._bodies_energy() + springs
             if not math.isfinite(energy):
                 raise non_finite(self.t, self.steps, "energy")
-            for key, value in zip(TRACE_KEYS, (self.t, h, *last, energy, springs)):
-                self._trace[key].append(value)
+            self._trace.append((self.t, h, *last, energy, springs))
         last[:] = LAST_STEP
 
     def _step_work(self) -> StepWork:
@@ -189,16 +189,15 @@ class MoreauTimeStepping(Integrator):
     def restore(self, prefix, arrays, kinds):
         super().restore(prefix, arrays, kinds)
         if self._trace is not None:
-            self._trace = {key: state_arrays.take(f"{prefix}/trace/{key}", None, arrays, kinds).tolist()
-                           for key in TRACE_KEYS}
+            self._trace.load({key: state_arrays.take(f"{prefix}/trace/{key}", None, arrays, kinds)
+                              for key in TRACE_KEYS})
         elif any(key.startswith(f"{prefix}/trace/") for key in kinds):
             raise state_arrays.StateMismatch("the checkpoint has a trace, this run keeps none")
 
     def trace(self, start=0):
         if self._trace is None:
             return {}
-        return {key: np.array(values[start:], dtype=TRACE_DTYPES.get(key, np.float64))
-                for key, values in self._trace.items()}
+        return self._trace.columns(start)
 
     def contact_closed(self, i) -> bool:
         return bool(self.data.closed[i])

@@ -245,6 +245,12 @@ def test_linear_bodies_kernel_equals_elastic_and_point_mass_kernels_and_numpy():
     assert rel(h[0:4], -(KD[0, 0:4, 0:4] @ q[0:4] + KD[1, 0:4, 0:4] @ u[0:4])) < 1e-14
     assert rel(h[7:12], -KD[0, 7:12, 7:12] @ q[7:12]) < 1e-14
     np.testing.assert_array_equal(h[4:7], force[4:7])
+    rows[:, 2] = [kern.ELASTIC_DAMPED_LOADED, kern.CONSTANT_FORCE, kern.ELASTIC_LOADED, kern.LEFT_OUT]
+    force[0:4], force[7:12] = rng.normal(size=4), rng.normal(size=5)
+    kern.linear_bodies_h(rows, KD, force, q, u, h)
+    ref[0:4] += force[0:4]                          # the load added after the elastic h
+    ref[7:12] += force[7:12]
+    np.testing.assert_array_equal(h, ref)
 
 
 def test_additive_advance_equals_numpy_bit_for_bit():
@@ -279,10 +285,6 @@ def test_linear_body_stage_equals_system_assembly_with_left_out_bodies(data):
         out = np.full(system.nq, np.nan)
         stage.advance(q, u, 1e-3, np.empty(system.nu), out)
         assert rel(out, eq.increment(q, 1e-3 * u)) < 1e-15
-    system = System(gravity=(0.0, -9.81, 0.0))
-    system.add(FlexibleBodyFFR(data, N_F, frame=PrescribedFrameMotion.fixed()))
-    system.add(PointMass(0.5))
-    assert not BodyStage.of_equations(system.equations()).linear
     system = System()
     beam = system.add(FlexibleBodyFFR(data, N_F, frame=PrescribedFrameMotion.fixed()))
     system.add(Force(beam.node(0), (1.0, 0.0, 0.0)))
@@ -550,7 +552,7 @@ def test_stage_calls_allocate_no_numpy_array(data, data_60):
 def test_linear_energy_is_the_systems_energy(data, damped):
     """Frame-fixed FFR bodies and point masses, no gravity and no links: the one-kernel
     energy equals the System's sum of the bodies' kinetic and elastic energies on random
-    states; with gravity (on the FFR body too) or a link there is no one-kernel energy."""
+    states; with a link there is no one-kernel energy."""
     rng = np.random.default_rng(11)
     options = {"rayleigh": (0.1, 1e-4)} if damped else {}
     system = System()
@@ -562,10 +564,78 @@ def test_linear_energy_is_the_systems_energy(data, damped):
         q, u = rng.normal(size=system.nq), rng.normal(size=system.nu)
         ref = system.kinetic_energy(0.0, q, u) + system.potential_energy(0.0, q)
         assert abs(stage.energy(q, u) - ref) <= 1e-13 * abs(ref)
-    heavy = System(gravity=(0.0, -9.81, 0.0))
-    heavy.add(FlexibleBodyFFR(data, N_F, frame=PrescribedFrameMotion.fixed()))
-    heavy.add(PointMass(1.0))
-    assert BodyStage.of_equations(heavy.equations()).energy(*heavy.initial_state()) is None
+    linked = System()
+    beam = linked.add(FlexibleBodyFFR(data, N_F, frame=PrescribedFrameMotion.fixed()))
+    mass = linked.add(PointMass(1.0, position=(0.0, 0.0, 7.0)))
+    linked.add(SpringDamper(beam.node(0), mass.point, 10.0, free_length=1.0))
+    assert BodyStage.of_equations(linked.equations()).energy(*linked.initial_state()) is None
+
+
+def _heavy_scene(data, n_points, damped=False, lift=(0.0, 0.0, 0.0)):
+    """A frame-fixed FFR body (its frame at ``lift`` [m], turned 0.3 rad about z when
+    lifted) and ``n_points`` point masses under gravity, no links."""
+    system = System(gravity=(0.3, -9.81, 1.0))
+    options = {"rayleigh": (0.1, 1e-4)} if damped else {}
+    c, s = np.cos(0.3), np.sin(0.3)
+    A = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]) if any(lift) else None
+    system.add(FlexibleBodyFFR(data, N_F, frame=PrescribedFrameMotion.fixed(lift, A), **options))
+    for k in range(n_points):
+        system.add(PointMass(0.5 + k, position=(k, 1.0, 0.0)))
+    return system
+
+
+@pytest.mark.parametrize("damped", [False, True])
+@pytest.mark.parametrize("n_points", [0, 1, 2])
+def test_gravity_on_a_body_at_rest_joins_the_linear_h_bit_for_bit(data, damped, n_points):
+    """Gravity on a frame-fixed FFR body is the constant J_Tᵀ m g (thesis eq. 2.76):
+    the one-kernel h equals the body stage's per-body path (elastic h, then the load
+    added) to the bit and the System's numpy assembly to rounding."""
+    rng = np.random.default_rng(21 + n_points)
+    system = _heavy_scene(data, n_points, damped)
+    stage = BodyStage.of_equations(system.equations())
+    assert stage.linear
+    q, u = rng.normal(size=system.nq) * 1e-3, rng.normal(size=system.nu)
+    h = np.full(system.nu, np.nan)
+    stage.h_only(0.2, q, u, h)
+    per_body = BodyStage.of_equations(system.equations())
+    per_body.linear = False                     # the per-body path: h_into, then the gravity loads
+    ref = np.full(system.nu, np.nan)
+    per_body.h_only(0.2, q, u, ref)
+    np.testing.assert_array_equal(h, ref)
+    assert rel(h, system.equations().h(0.2, q, u)) < 1e-12
+
+
+@pytest.mark.parametrize("lift", [(0.0, 0.0, 0.0), (0.4, -2.0, 3.0)])
+@pytest.mark.parametrize("n_points", [0, 1, 3])
+def test_linear_energies_with_gravity_are_the_systems(data, n_points, lift):
+    """Frame-fixed FFR bodies (also lifted off the origin) and point masses under
+    gravity: the one-kernel (kinetic, potential) equal the System's sums over the bodies
+    (½ uᵀ M u; ½ q_fᵀ K q_f − m g·r_com) to 1e-12 on random states."""
+    rng = np.random.default_rng(31 + n_points)
+    system = _heavy_scene(data, n_points, lift=lift)
+    stage = BodyStage.of_equations(system.equations())
+    for _ in range(4):
+        q, u = rng.normal(size=system.nq), rng.normal(size=system.nu)
+        kinetic, potential = stage.energies(q, u)
+        ref_T, ref_V = system.kinetic_energy(0.0, q, u), system.potential_energy(0.0, q)
+        assert abs(kinetic - ref_T) <= 1e-12 * abs(ref_T)
+        assert abs(potential - ref_V) <= 1e-12 * max(abs(ref_V), abs(ref_T))
+
+
+def test_a_lone_point_mass_under_gravity_is_linear():
+    """One point mass alone (the bouncing ball): h = m g in the one kernel, bit for bit as
+    the per-body path adds it, and its energy ½ m |u|² − m g·r."""
+    system = System(gravity=(0.0, 0.0, -9.81))
+    system.add(PointMass(2.0, position=(0.1, 0.2, 0.3), velocity=(1.0, -2.0, 0.5)))
+    stage = BodyStage.of_equations(system.equations())
+    assert stage.linear
+    q, u = system.initial_state()
+    h = np.full(3, np.nan)
+    stage.h_only(0.0, q, u, h)
+    np.testing.assert_array_equal(h, [0.0, 0.0, 2.0 * -9.81])
+    kinetic, potential = stage.energies(q, u)
+    assert kinetic == pytest.approx(0.5 * 2.0 * (1.0 + 4.0 + 0.25), rel=1e-15)
+    assert potential == pytest.approx(2.0 * 9.81 * 0.3, rel=1e-15)
 
 
 def test_linear_energy_of_point_masses_under_gravity():
