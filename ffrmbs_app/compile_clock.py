@@ -10,8 +10,8 @@ or loads it from the cache, and nested compilations are counted once — and to
 
 - tell the user when compilation starts, on its own line (``log``), once;
 - report the seconds spent compiling or loading, and how many kernels were compiled;
-- subtract those seconds from the run's wall and CPU time, so that a reported per-step
-  cost never contains compilation.
+- subtract those wall seconds from the run's wall time and those CPU seconds from its CPU
+  time, so that a reported per-step cost never contains compilation.
 """
 
 from __future__ import annotations
@@ -23,20 +23,21 @@ from numba.core import event
 
 
 class _Listener(event.Listener):
-    """Wall time between the outermost start and end of one event kind; counts starts."""
+    """Wall and CPU time between the outermost start and end of one event kind; counts
+    starts."""
 
     def __init__(self, on_first=None):
-        self.seconds = 0.0
+        self.seconds = self.cpu_seconds = 0.0
         self.count = 0
         self._depth = 0
-        self._t0 = 0.0
+        self._t0 = self._c0 = 0.0
         self._on_first = on_first
 
     def on_start(self, ev):
         if self._depth == 0:
             if self.count == 0 and self._on_first is not None:
                 self._on_first()
-            self._t0 = time.perf_counter()
+            self._t0, self._c0 = time.perf_counter(), time.process_time()
             self.count += 1
         self._depth += 1
 
@@ -44,13 +45,15 @@ class _Listener(event.Listener):
         self._depth -= 1
         if self._depth == 0:
             self.seconds += time.perf_counter() - self._t0
+            self.cpu_seconds += time.process_time() - self._c0
 
 
 class CompileClock:
     """A context manager measuring numba compilation inside its ``with`` block.
 
     Attributes after (or during) the block: ``seconds`` — wall seconds [s] spent
-    compiling kernels or loading them from numba's disk cache; ``compiled`` — kernel
+    compiling kernels or loading them from numba's disk cache; ``cpu_seconds`` — the CPU
+    seconds [s] of this process in that time; ``compiled`` — kernel
     signatures compiled (0 when everything came from the cache). ``log(msg)`` is called
     once, when the first real compilation starts.
     """
@@ -64,6 +67,10 @@ class CompileClock:
     @property
     def seconds(self) -> float:
         return self._lock.seconds
+
+    @property
+    def cpu_seconds(self) -> float:
+        return self._lock.cpu_seconds
 
     @property
     def compiled(self) -> int:

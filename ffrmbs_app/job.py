@@ -247,7 +247,7 @@ def _run(make_scene, scene, path, check, resume, checkpoint_every, flush_every, 
             warm_s = time.perf_counter() - w0
             log(f"warm-up run (compiles the kernels or loads them from numba's cache, then runs {t_w:g} s of "
                 f"simulated time at dt = {dt_w:g} s; not counted in the cost): {warm_s:.2f} s")
-        compiling_before = clock.seconds
+        compiling_before, compiling_cpu_before = clock.seconds, clock.cpu_seconds
         progress = _progress(scene.t_end)
         c0, w0 = time.process_time(), time.perf_counter()
         with _stop_on_signals(log), progress as bar:
@@ -259,7 +259,7 @@ def _run(make_scene, scene, path, check, resume, checkpoint_every, flush_every, 
                 res = _simulate(scene, recorder=recorder, progress=bar.update_to, contacts=True)
         in_run = clock.seconds - compiling_before       # compilation inside the run: not its cost
         wall = max(time.perf_counter() - w0 - in_run, 0.0)
-        cpu = max(time.process_time() - c0 - in_run, 0.0)
+        cpu = max(time.process_time() - c0 - (clock.cpu_seconds - compiling_cpu_before), 0.0)
     log(clock.describe())
     summary = _summary(scene, res, wall, cpu, warm_s)
     summary.update(compile_s=clock.seconds, kernels_compiled=clock.compiled)

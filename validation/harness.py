@@ -103,7 +103,7 @@ def timed(fn, *args, **kw):
         start = time.process_time()
         result = fn(*args, **kw)
         cpu = time.process_time() - start
-    return result, max(cpu - clock.seconds, 0.0)
+    return result, max(cpu - clock.cpu_seconds, 0.0)
 
 
 class CpuTiming(NamedTuple):

@@ -70,6 +70,9 @@ def test_compilation_inside_the_run_is_not_in_the_per_step_cost(tmp_path):
     assert summary["compile_s"] >= SLEEP_S
     # the whole run takes far less than the compilation's SLEEP_S: the cost excludes it
     assert summary["wall_s"] < SLEEP_S / 3, summary["wall_s"]
+    # the compilation's CPU seconds are subtracted from the CPU time, not its wall seconds
+    # (the sleep costs no CPU: subtracting SLEEP_S left 0 s of CPU for a run that used some)
+    assert 0.0 < summary["cpu_s"] < SLEEP_S / 3, summary["cpu_s"]
     assert any("compiling numba kernels" in line for line in lines)
     assert any(line.startswith("kernels: 1 compiled") for line in lines)
 
