@@ -8,7 +8,9 @@ neutral 2s contour of a body on a frame fixed in space, :func:`centre_on_offset`
 against an offset contour (band, cylinder: :mod:`contours.derived`) of such a body (a
 :class:`~contact.kinematics.ContactKinematicsPointContour2s` or
 :class:`~contact.kinematics.ContactKinematicsSphereContour2s` with its compiled
-:class:`~contact.search.Contact2sSearch`). Both share the states and broad phase
+:class:`~contact.search.Contact2sSearch`), :func:`centre_on_neutral_1s` against a neutral
+1s contour (:class:`~contact.kinematics.ContactKinematicsPointContour1s`,
+``ContactKinematicsSphereContour1s`` with a compiled :class:`~contact.search.Contact1sSearch`). Both share the states and broad phase
 (:func:`_begin`) and the gap, the sphere's point and the frame's pieces (:func:`_finish`). Its reference is the
 Python path it replaces — ``contour.update`` of both contours, then
 :meth:`contact.Contact.locate` (bounding boxes, ``search.solve`` warm-started,
@@ -32,14 +34,15 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from contact._detection_kernels import boxes_overlap, frame_rates_jacobians, newton_2s, newton_offset, normal_gap
+from contact._detection_kernels import boxes_overlap, frame_rates_jacobians, newton_1s, newton_2s, newton_offset, normal_gap
 from contact.search import LAST_ITERATIONS, NEWTON_ITERATIONS, NEWTON_SOLVES
 from contours import rigid
 from contours._offset_kernels import evaluate_offset, offsets
 from contours._rigid_kernels import sphere_point
 from contours.rigid import sphere_angles
 from contours.base import DERIVS_AT, FRAME_AT, J_AT, V_AT
-from contours.neutral._kernels import A_AT, Q_AT, STAMP_AT, bounding_box, contract_surface, frame_2s, point_velocity
+from contours.neutral._kernels import (A_AT, Q_AT, STAMP_AT, bounding_box, contract_surface, evaluate_1s, frame_2s,
+                                      point_velocity)
 
 from ._kernels import point_jacobian_T
 
@@ -161,12 +164,11 @@ def _finish(itab, ftab, frame1, point1, point2, kin, centre, axes1, work):
 
 
 @njit(cache=True)
-def _count(counts, start, eta, xi, k, steps):
-    """A converged Newton's counters and the next warm start (as Contact2sSearch keeps them)."""
+def _count(counts, k, steps):
+    """A converged Newton's counters (as the searches of :mod:`contact.search` keep them)."""
     counts[NEWTON_SOLVES] += 1
     counts[NEWTON_ITERATIONS] += steps
     counts[LAST_ITERATIONS] = k
-    start[0], start[1] = eta, xi
 
 
 @njit(cache=True)
@@ -232,7 +234,8 @@ def centre_on_neutral_2s(q, u, itab, ftab, ctrl0, phi, state, span, frame1, poin
                                              D, g)
     if not found:
         return FALLBACK, nan, nan, nan, nan, nan, nan
-    _count(counts, start, eta, xi, k, steps)
+    _count(counts, k, steps)
+    start[0], start[1] = eta, xi
     # C2: the r rows of Newton's last evaluation, then the rest of evaluate_2s at the root
     for k in range(18):
         point2[DERIVS_AT + k] = D[k // 3, k % 3]
@@ -273,7 +276,8 @@ def centre_on_offset(q, u, itab, ftab, knots, ints, floats, ctrl0, phi, state, s
                                                  itab[MAX_ITER], B, local, rows, frame, D, g)
     if not found:
         return FALLBACK, nan, nan, nan, nan, nan, nan
-    _count(counts, start, eta, xi, k, steps)
+    _count(counts, k, steps)
+    start[0], start[1] = eta, xi
     B, local, rows, frame, phi_rows, phi_point = contour_work
     al, be, al1, be1, al2, be2 = offsets(law, size, xi)
     evaluate_offset(eta, knots, ints, floats, ctrl0, phi, state, span, n0, al, be, al1, be1, al2, be2,
@@ -282,3 +286,36 @@ def centre_on_offset(q, u, itab, ftab, knots, ints, floats, ctrl0, phi, state, s
     _jacobian_at_rest(state, rows[0], phi_point, n_f, point2, itab[NU2])
     g_N, gd_N, eta1, xi1 = _finish(itab, ftab, frame1, point1, point2, kin, centre, axes1, work)
     return LOCATED, g_N, gd_N, eta, xi, eta1, xi1
+
+
+@njit(cache=True)
+def centre_on_neutral_1s(q, u, itab, ftab, knots, ints, floats, ctrl0, phi, state, span, n_ref, frame1, point1,
+                         point2, kin, centre, axes1, start, counts, work, newton_work, contour_work):
+    """:func:`centre_on_neutral_2s` against a neutral 1s contour of a body at rest, from its
+    kernel data (knots … span) and its reference normal in world axes ``n_ref`` (A n̄_ref,
+    constant at rest): Newton on t_ηᵀ (c − r(η)) = 0 from the warm start η = ``start[0]``
+    (:func:`~contact._detection_kernels.newton_1s`, the search's work arrays
+    ``newton_work`` = B, local, D, g), C2 by :func:`~contours.neutral._kernels.evaluate_1s`
+    at the root (the contour's work arrays ``contour_work`` = B, ū rows, Φ rows) with
+    J_T = A Φ, J_R = 0. Returns as :func:`centre_on_neutral_2s` (C2's ξ = 0)."""
+    nan = np.nan
+    n_f = itab[NF]
+    if not _begin(q, u, itab, ftab, ftab[KNOTS_AT:KNOTS_AT + 6 + 3 * n_f], 0.0, state, frame1, point1, centre, axes1,
+                  work):
+        return APART, nan, nan, nan, nan, nan, nan
+    if np.isnan(start[0]) or np.isnan(ftab[TOL2]):
+        return FALLBACK, nan, nan, nan, nan, nan, nan
+    B, local, D, g = newton_work
+    found, eta, gg, k, steps = newton_1s(centre, start[0], knots, ints, floats, ctrl0, phi, state, span,
+                                         ftab[MAX_STEP_E], ftab[TOL2], ftab[EDGE2], itab[MAX_ITER], B, local, D, g)
+    if not found:
+        return FALLBACK, nan, nan, nan, nan, nan, nan
+    _count(counts, k, steps)
+    start[0] = eta
+    B, local, phi_rows = contour_work
+    evaluate_1s(eta, knots, ints, floats, ctrl0, phi, state, span, n_ref, np.bool_(True), itab[VELOCITY] != 0, B,
+                local, phi_rows, point2[DERIVS_AT:FRAME_AT].reshape(6, 3), point2[FRAME_AT:V_AT].reshape(3, 3),
+                point2[V_AT:J_AT])
+    _jacobian_at_rest(state, local[0], phi_rows[0], n_f, point2, itab[NU2])
+    g_N, gd_N, eta1, xi1 = _finish(itab, ftab, frame1, point1, point2, kin, centre, axes1, work)
+    return LOCATED, g_N, gd_N, eta, 0.0, eta1, xi1

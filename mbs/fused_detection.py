@@ -20,7 +20,10 @@ Kinds with a fused detection:
   in space, ``ContactKinematicsPointContour2s`` or ``ContactKinematicsSphereContour2s``
   with a compiled ``Contact2sSearch``, any law of :class:`contact.Contact`;
 * :class:`CentreOnOffset`: the same against a band or a cylinder
-  (:class:`~contours.derived.OffsetContour`) on a compiled 1s neutral curve.
+  (:class:`~contours.derived.OffsetContour`) on a compiled 1s neutral curve;
+* :class:`CentreOnNeutral1s`: the same against a compiled neutral 1s contour (a curve),
+  ``ContactKinematicsPointContour1s`` or ``ContactKinematicsSphereContour1s`` with a
+  compiled ``Contact1sSearch``.
 
 Every other contact keeps the Python path (which stays the reference of the fused ones,
 ``tests/unit/contact/test_fused_detection.py``).
@@ -31,8 +34,9 @@ from __future__ import annotations
 import numpy as np
 
 from contact.contact import Contact
-from contact.kinematics import ContactKinematicsPointContour2s, ContactKinematicsSphereContour2s, buffer_layout
-from contact.search import Contact2sSearch
+from contact.kinematics import (ContactKinematicsPointContour1s, ContactKinematicsPointContour2s,
+                                ContactKinematicsSphereContour1s, ContactKinematicsSphereContour2s, buffer_layout)
+from contact.search import Contact1sSearch, Contact2sSearch
 from contours.derived import OffsetContour
 from contours.neutral.factory import Contour1sNeutralFactory, Contour2sNeutralFactory
 from contours.rigid import PointContour, SphereContour
@@ -42,16 +46,17 @@ from . import _fused_detection_kernels as K
 
 def fused_detection(contact):
     """The fused detection of ``contact`` (:class:`CentreOnNeutral2s`,
-    :class:`CentreOnOffset`) when its kind has one and its bodies belong to a System,
+    :class:`CentreOnOffset`, :class:`CentreOnNeutral1s`) when its kind has one and its bodies belong to a System,
     else None (the Python path)."""
-    for kind in (CentreOnNeutral2s, CentreOnOffset):
+    for kind in (CentreOnNeutral2s, CentreOnOffset, CentreOnNeutral1s):
         if kind.applies(contact):
             return kind(contact)
     return None
 
 
-CENTRE_KINDS = {ContactKinematicsPointContour2s: PointContour, ContactKinematicsSphereContour2s: SphereContour}
-# ^ the kinematics of a centre searched on a 2s contour and the contour of its side 1
+ON_SURFACE = {ContactKinematicsPointContour2s: PointContour, ContactKinematicsSphereContour2s: SphereContour}
+ON_CURVE = {ContactKinematicsPointContour1s: PointContour, ContactKinematicsSphereContour1s: SphereContour}
+# ^ the kinematics of a centre searched on a 2s contour / a curve and the contour of its side 1
 
 
 class _FusedCentre:
@@ -63,21 +68,22 @@ class _FusedCentre:
     kernel = None
 
     @staticmethod
-    def _applies(contact, surface_ok) -> bool:
-        """A :class:`~contact.Contact` of a point or a sphere on a point mass against a
-        surface for which ``surface_ok(surface)`` holds, on a body whose frame is fixed in
-        space, searched by a compiled ``Contact2sSearch``, both bodies in a System."""
+    def _applies(contact, surface_ok, kinds=ON_SURFACE, search=Contact2sSearch) -> bool:
+        """A :class:`~contact.Contact` of a point or a sphere on a point mass (``kinds``:
+        {kinematics: side 1's contour}) against a contour for which ``surface_ok(contour)``
+        holds, on a body whose frame is fixed in space, searched by a compiled ``search``,
+        both bodies in a System."""
         if type(contact) is not Contact:
             return False
         k = contact.kinematics
-        side1 = CENTRE_KINDS.get(type(k))
+        side1 = kinds.get(type(k))
         if side1 is None:
             return False
         point, surface = k.contour1, k.contour2
         body1, body2 = point.body, surface.body
         return (type(point) is side1 and body1 is not None and body1.translation_only and surface_ok(surface)
                 and body2 is not None and getattr(body2, "frame_at_rest", False)
-                and type(k.search) is Contact2sSearch and k.search.compiled
+                and type(k.search) is search and k.search.compiled
                 and body1.q_slice is not None and body2.q_slice is not None)
 
     def __init__(self, contact, neutral, surface_floats, box_at):
@@ -118,7 +124,7 @@ class _FusedCentre:
             self._ftab[K.TOL2] = np.nan
             return
         steps, self._ftab[K.TOL2], self._ftab[K.EDGE2], self._itab[K.MAX_ITER] = settings
-        self._ftab[K.MAX_STEP_E], self._ftab[K.MAX_STEP_X] = steps
+        self._ftab[K.MAX_STEP_E:K.MAX_STEP_E + len(steps)] = steps
 
     def locate(self, q, u, t) -> bool:
         """Both contours updated at the global (q, u, t) and the contact located, as
@@ -207,3 +213,24 @@ class CentreOnOffset(_FusedCentre):
         self._itab[K.LAW], self._itab[K.XI_CLOSED] = law, xi_axis.closed
         self._args = (self._itab, self._ftab, knots, ints, floats, ctrl0, phi, state, span, neutral.normal_ref,
                       *self._points, self._work, self.search.newton_work, surface.evaluate_work)
+
+
+class CentreOnNeutral1s(_FusedCentre):
+    """Stages 3 and 4 of a point or a sphere on a point mass against a compiled neutral 1s
+    contour of a body at rest, in one call of :func:`._fused_detection_kernels.centre_on_neutral_1s`."""
+
+    kernel = K.centre_on_neutral_1s
+
+    @staticmethod
+    def applies(contact) -> bool:
+        """True for a point or a sphere on a point mass against a compiled neutral 1s
+        contour of degree up to MAX_DEGREE on a body at rest (:meth:`_FusedCentre._applies`)."""
+        return _FusedCentre._applies(contact, lambda s: isinstance(s, Contour1sNeutralFactory) and s.compiled
+                                     and s.space.eta.p <= K.MAX_DEGREE, ON_CURVE, Contact1sSearch)
+
+    def __init__(self, contact):
+        curve = contact.kinematics.contour2
+        knots, ints, floats, ctrl0, phi, state, span = curve.kernel_data
+        super().__init__(contact, curve, np.zeros(4), K.KNOTS_AT)
+        self._args = (self._itab, self._ftab, knots, ints, floats, ctrl0, phi, state, span, curve.n_ref,
+                      *self._points, self._work, self.search.newton_work, curve.evaluate_work)

@@ -209,6 +209,12 @@ class NeutralContour(Contour):
             self.body.fill_J_R(self.A, self.T, point.J_R)
         return point
 
+    @property
+    def evaluate_work(self):
+        """The work arrays the compiled :meth:`evaluate` fills (the basis table, the ū rows
+        (6, 3), the Φ rows (6, 3 n_f)), for a fused detection (:mod:`mbs.fused_detection`)."""
+        return self._B, self._local_rows, self._phi_rows
+
     def _evaluate_reference(self, point, eta, xi, velocity, jacobians):
         """The reference route of :meth:`evaluate`: contract the products' control points
         (brought up to date in full on first use after an update)."""
@@ -287,6 +293,11 @@ class Contour1sNeutralFactory(NeutralContour):
     def update(self, q, u=None, t=0.0) -> None:
         super().update(q, u, t)
         np.dot(self.A, self.normal_ref, out=self._n_ref)
+
+    @property
+    def n_ref(self) -> np.ndarray:
+        """A n̄_ref (3,), the reference normal in world axes at the last update (a view)."""
+        return self._n_ref
 
     def _fill_frame(self, point):
         K.frame_1s(point.derivs, self._n_ref, point.frame)

@@ -1,7 +1,7 @@
 """The fused detection (mbs.fused_detection) against the Python path it replaces:
 ``contour.update`` of both contours, then ``Contact.locate`` — on two copies of the
-default scene (its point, or a sphere on the same point mass; its 2s contour or its band)
-driven through the same
+default scene (its point, or a sphere on the same point mass; its 2s contour, its band, or
+a curve along the top face's centre line) driven through the same
 random deformed states (warm and cold starts, open, closed, apart by the broad phase,
 outside the contour), and the choice of the path per contact in the Model."""
 
@@ -13,10 +13,11 @@ import pytest
 from contact import Contact, ContactKinematicsSphereContour2s
 from contours import SphereContour
 from contours.neutral import _kernels as NK
-from contact import ContactKinematicsPointPlane, UnilateralNewtonImpact
-from contours import PlaneContour, PointContour
+from contact import (ContactKinematicsPointContour1s, ContactKinematicsPointPlane, ContactKinematicsSphereContour1s,
+                     UnilateralNewtonImpact)
+from contours import Contour1sNeutralFFR, PlaneContour, PointContour
 from mbs import PointMass, System, ground_frame
-from mbs.fused_detection import CentreOnNeutral2s, CentreOnOffset, fused_detection
+from mbs.fused_detection import CentreOnNeutral1s, CentreOnNeutral2s, CentreOnOffset, fused_detection
 from mbs.model import compile_model
 
 LAWS = ("impact", "penalty")
@@ -24,17 +25,23 @@ RADIUS = 0.01       # [m], the sphere on the point mass
 
 
 def _scene(law, side="point", contour="2s"):
-    """The default scene (with its ``contour``, "2s" or "band"); with ``side="sphere"``
-    its contact made of a sphere of RADIUS about the point mass's point against the same
-    surface, with the same law."""
+    """The default scene (with its ``contour``, "2s" or "band", or "1s": a curve along the
+    top face's centre line); with ``side="sphere"`` its contact made of a sphere of RADIUS
+    about the point mass's point against the same contour, with the same law."""
     from ffrmbs_app.scenes import point_mass_beam as pmb
 
-    scene = pmb.build("A", modes=20, law=law, contour=contour)
-    if side == "point":
+    scene = pmb.build("A", modes=20, law=law, contour="2s" if contour == "1s" else contour)
+    if side == "point" and contour != "1s":
         return scene
     old = scene.contact
-    contact = Contact(ContactKinematicsSphereContour2s(SphereContour(scene.mass.point, RADIUS),
-                                                        old.kinematics.contour2), old.law, name="sphere")
+    surface = old.kinematics.contour2
+    if contour == "1s":
+        surface = Contour1sNeutralFFR.along_line(scene.beam, (0.0, pmb.HEIGHT, pmb.WIDTH / 2), (1, 0, 0),
+                                                 normal=(0, 1, 0), degree=4)
+    point = PointContour(scene.mass.point) if side == "point" else SphereContour(scene.mass.point, RADIUS)
+    kinematics = {("point", "1s"): ContactKinematicsPointContour1s, ("sphere", "1s"): ContactKinematicsSphereContour1s}
+    kind = kinematics.get((side, contour), ContactKinematicsSphereContour2s)
+    contact = Contact(kind(point, surface), old.law, name=f"{side} on {contour}")
     scene.system.contacts[scene.system.contacts.index(old)] = contact
     return dataclasses.replace(scene, contact=contact)
 
@@ -58,7 +65,7 @@ def _states(scene, rng, n):
     surface = scene.contact.kinematics.contour2
     radius = scene.contact.kinematics.radius
     q0, u0 = system.initial_state()
-    (a, b), (c, d) = surface.domain
+    (a, b), (c, d) = surface.domain if surface.dim == 2 else (surface.domain, (0.0, 0.0))
     scale = 1e-3 / np.abs(beam.phi_nodes).max() / beam.n_modes
     states = []
     eta, xi = 0.5 * (a + b), 0.5 * (c + d)
@@ -116,7 +123,8 @@ def _assert_same(fused_scene, python_scene, closed_f, closed_p):
 
 @pytest.mark.parametrize("law, side, contour", [("impact", "point", "2s"), ("penalty", "point", "2s"),
                                                 ("impact", "sphere", "2s"), ("penalty", "sphere", "2s"),
-                                                ("penalty", "point", "band"), ("impact", "sphere", "band")])
+                                                ("penalty", "point", "band"), ("impact", "sphere", "band"),
+                                                ("impact", "point", "1s"), ("penalty", "sphere", "1s")])
 def test_fused_detection_is_the_python_path(law, side, contour):
     """Warm and cold starts (a warm start dropped now and then, as a search that found
     nothing leaves it), open, closed, apart and outside the contour: the fused path
@@ -125,7 +133,7 @@ def test_fused_detection_is_the_python_path(law, side, contour):
     says closed when it does."""
     fused_scene, python_scene = _scene(law, side, contour), _scene(law, side, contour)
     fused = fused_detection(fused_scene.contact)
-    assert isinstance(fused, CentreOnNeutral2s if contour == "2s" else CentreOnOffset)
+    assert isinstance(fused, {"2s": CentreOnNeutral2s, "band": CentreOnOffset, "1s": CentreOnNeutral1s}[contour])
     rng = np.random.default_rng(19)
     outcomes = set()
     fallbacks = []
