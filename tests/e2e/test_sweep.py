@@ -57,7 +57,7 @@ def datasets(path) -> dict:
 def alone(scene, overrides, out) -> dict:
     """The datasets of the same run made alone in this process, as ``ffrmbs run`` does."""
     from ffrmbs_app.job import run_scene
-    from ffrmbs_app.scene import load_scene
+    from ffrmbs_app.scene_loader import load_scene
 
     summary = run_scene(lambda: load_scene(scene, overrides=overrides), out, check=False, export=False, plot=False,
                         checkpoint_every=None, log=lambda line: None)
