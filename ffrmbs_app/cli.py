@@ -180,8 +180,8 @@ def cmd_run(args):
 
 
 def cmd_sweep(args):
-    """A parameter sweep of a scene file on a Dask cluster (:mod:`ffrmbs_app.sweep`)."""
-    from ffrmbs_app.sweep import parse_set, sweep
+    """A parameter sweep of a scene file on a Dask cluster (:mod:`ffrmbs_app.sweeps`)."""
+    from ffrmbs_app.sweeps import parse_set, sweep
 
     table = sweep(args.scene, parse_set(args.set), args.out, zip=args.zip, workers=args.workers,
                   scheduler=args.scheduler, check=args.check, progress=_log)

@@ -4,7 +4,7 @@ Each case is one task: the worker imports the case's module by name, runs it on 
 thread (BLAS and numba pools limited to one) and returns the same outcome the serial run
 makes in-process — rows, skipped lines, notes and figures (pickled by Dask's cloudpickle)
 and the CPU time measured inside the task. The harness then writes the same report and
-results.json as a serial run. Clients: :func:`ffrmbs_app.sweep.dask_client` (the caller's
+results.json as a serial run. Clients: :func:`ffrmbs_app.sweeps.dask_client` (the caller's
 client, a running scheduler, or a LocalCluster of single-threaded worker processes).
 
 The cases are submitted longest first (LPT scheduling: the long cases start while the
@@ -26,7 +26,7 @@ TIMES_FILE = "case-times.json"
 def run_cases(registry, names, quick, say, client=None, scheduler=None, workers=None) -> list:
     """The outcomes of the cases ``names`` of ``registry`` (name -> module), in that order,
     each run as one Dask task; ``say`` receives a line as each case finishes."""
-    from ffrmbs_app.sweep import dask_client
+    from ffrmbs_app.sweeps import dask_client
     from validation.harness import outcome_line
 
     done = {}

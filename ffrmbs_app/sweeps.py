@@ -1,4 +1,4 @@
-"""Parameter sweeps of a scene file on a Dask cluster (``ffrmbs sweep``, ``ffrmbs.sweep``).
+"""Parameter sweeps of a scene file on a Dask cluster (``ffrmbs sweep``, :func:`ffrmbs_app.sweep`).
 
 A sweep runs one scene file many times, each run with its own set of overrides
 (``KEY=VALUE``, as :func:`ffrmbs_app.scene_loader.load_scene` takes them: KEY a dotted path into the
