@@ -20,7 +20,7 @@ import traceback
 
 from ffrmbs.errors import FfrmbsError, SimulationError
 from validation.bench.common import machine
-from validation.harness import cell, json_safe, write_atomic
+from validation.report import cell, json_safe, write_atomic
 from validation.stability.core import CASES, StabilityCase, StabilityRow, graceful_row
 
 COLUMNS = ("case", "finished", "stable", "energy drift", "max penetration [m]", "error (reference)", "run time [s]",
@@ -125,5 +125,5 @@ def _num(x) -> str:
 
 
 def _write_text(path, text):
-    """Write ``text`` (UTF-8) to ``path`` atomically (:func:`validation.harness.write_atomic`)."""
+    """Write ``text`` (UTF-8) to ``path`` atomically (:func:`validation.report.write_atomic`)."""
     write_atomic(path, lambda f: f.write(text.encode("utf-8")))
