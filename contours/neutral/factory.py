@@ -195,6 +195,12 @@ class NeutralContour(Contour):
         if self._has_u:
             K.store_velocity(self._state, v, w, body.elastic_velocities(u))
 
+    def kernel_updated(self, velocity=True) -> None:
+        """Note that a compiled kernel wrote the body state into the state vector of
+        :attr:`kernel_data` as :meth:`update` does (R, A, q_f and, with ``velocity``, v, ω̄,
+        q̇_f), e.g. the fused detection of :mod:`mbs.fused_detection`."""
+        self._has_u = bool(velocity)
+
     def evaluate(self, point, eta, xi=0.0, velocity=False, jacobians=False):
         """Fields at (η, ξ) (see :meth:`Contour.evaluate`); J_T = [1, −A ũ T, A Φ] and
         J_R from the body (thesis eq. 2.70, 2.72) with the interpolated ū and Φ."""
