@@ -6,15 +6,14 @@ Public API::
 
 * :mod:`contact.kinematics` — gaps, frames, relative velocities and Jacobians (eq. 3.2–3.8).
 * :mod:`contact.search` — the hierarchical contact search (Sec. 3.3, Alg. 4–6).
-* :mod:`contact.broad_phase` — bounding-box pruning of contact pairs.
 * :mod:`contact.laws` — set-valued and regularized force laws.
 * :mod:`contact.solver` — the contact problem of a Moreau step (prox, semismooth Newton).
-* :mod:`contact.contact` — a contact (kinematics + law) to add to a System; :func:`connect`
-  picks the kinematics from the two contour kinds.
+* :mod:`contact.contact` — a contact (kinematics + law) to add to a System, with its broad
+  phase (the contours' bounding boxes); :func:`connect` picks the kinematics from the two
+  contour kinds.
 * :mod:`contact.registry` — the laws, pair kinematics and solvers by name.
 """
 
-from .broad_phase import BroadPhase, overlapping
 from .contact import Contact, ContactElement, CurveConstraint, connect
 from .kinematics import (ContactKinematics, ContactKinematicsPointContour1s, ContactKinematicsPointContour2s,
                          ContactKinematicsPointPlane, ContactKinematicsSphereContour1s,
@@ -27,10 +26,10 @@ from .registry import BILATERAL_KINEMATICS, LAWS, PAIR_KINEMATICS, SOLVERS, make
 from .search import Contact1sSearch, Contact2sSearch
 from .solver import ContactSolution, ProxSolver
 
-__all__ = ["BILATERAL_KINEMATICS", "Bilateral", "BroadPhase", "Contact", "Contact1sSearch", "Contact2sSearch", "ContactElement", "ContactKinematics",
+__all__ = ["BILATERAL_KINEMATICS", "Bilateral", "Contact", "Contact1sSearch", "Contact2sSearch", "ContactElement", "ContactKinematics",
            "ContactKinematicsPointContour1s", "ContactKinematicsPointContour2s", "ContactKinematicsPointPlane",
            "ContactKinematicsSphereContour1s", "ContactKinematicsSphereContour2s", "ContactKinematicsSphereEdge", "ContactKinematicsSpherePlane",
            "ContactKinematicsSphereSphere", "ContactSolution", "CurveConstraint", "LAWS",
            "LinearRegularizedUnilateralConstraint", "PAIR_KINEMATICS", "PointOnCurveConstraint", "ProxSolver",
            "RegularizedCoulombFriction", "SOLVERS", "SpatialCoulombFriction", "UnilateralCoulombContact",
-           "UnilateralNewtonImpact", "connect", "make_law", "overlapping"]
+           "UnilateralNewtonImpact", "connect", "make_law"]

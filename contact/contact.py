@@ -17,8 +17,10 @@
 The integrator updates every contour once per step before ``locate``
 (:mod:`mbs.stages`).
 
-Broad phase (:mod:`contact.broad_phase`): ``locate`` first compares the two contours'
-bounding boxes, each grown by ``margin`` [m]; only overlapping pairs reach the search.
+Broad phase: ``locate`` first compares the two contours' bounding boxes (each contour's
+``bounding_box()``, a plane's infinite), each grown by ``margin`` [m], in the kernel
+:func:`contact._detection_kernels.boxes_overlap`; only overlapping pairs reach the search.
+A planned run prunes far pairs before that by bounding spheres (:mod:`mbs.bounding_spheres`).
 The margin must exceed the deepest penetration the scene can produce in one step (a
 point below a flat contour lies outside its unpadded box); the default is a tenth of
 the largest edge of contour 2's box at construction (for a plane, whose box is

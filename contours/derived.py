@@ -125,7 +125,7 @@ class OffsetContour(Contour):
             return self._evaluate_reference(point, eta, xi, velocity, jacobians)
         nc = self.neutral
         if velocity:
-            nc._require_velocity()
+            nc.require_velocity()
         (al, be), (al1, be1), (al2, be2) = self._offsets(xi)
         point.eta, point.xi = eta, xi
         OK.evaluate_offset(eta, *nc.kernel_data, nc.normal_ref, al, be, al1, be1, al2, be2, velocity or jacobians,
@@ -159,7 +159,7 @@ class OffsetContour(Contour):
             m = nc.n_modes
             phi_point = phi[VALUE].reshape(3, m) + G @ phi[D_ETA].reshape(3, m)
             if velocity:
-                nc._require_velocity()
+                nc.require_velocity()
                 point.v[:] = nc.v + A @ (np.cross(nc.w, ub[VALUE] + d) + phi_point @ nc.qdot_f)
             if jacobians:
                 nc.body.fill_J_T(A, nc.T, ub[VALUE] + d, phi_point, point.J_T)

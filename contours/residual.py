@@ -84,7 +84,7 @@ class ResidualCompliance:
         self._work = np.zeros((2, n_w, 3, 3)), np.zeros((2, n_w), dtype=np.int64)
         derived = isinstance(contour, OffsetContour)
         self._offset = contour.offset_law if derived else None        # (law, size) of the offsets
-        self._ctrl0 = self.neutral._local_position.ctrl0.reshape(self.n_P, 3) if derived else None
+        self._ctrl0 = self.neutral.local_position.ctrl0.reshape(self.n_P, 3) if derived else None
         self._offset_work = np.zeros((4, 3))
         # the compiled route of a neutral contour (B_i = N_i I): knots η, ints, domains,
         # knots ξ (η's again on a curve), bases, weights

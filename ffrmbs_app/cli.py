@@ -153,7 +153,7 @@ def cmd_validate(args):
 def cmd_run(args):
     """A scene as a job (:mod:`ffrmbs_app.job`): the default scene — the point mass dropped on
     the flexible beam (:mod:`ffrmbs_app.main_job`) — or a TOML scene file / Python model
-    script (:mod:`ffrmbs_app.scene`)."""
+    script (:mod:`ffrmbs_app.scene_loader`)."""
     from ffrmbs_app.job import run_scene
     from ffrmbs_app.main_job import JobSettings, run_job
 
@@ -170,7 +170,7 @@ def cmd_run(args):
         if given:
             raise FfrmbsError(f"--{', --'.join(k.replace('_', '-') for k in given)}: options of the default "
                               f"scene; a scene file sets its own (or --set KEY=VALUE)")
-        from ffrmbs_app.scene import load_scene
+        from ffrmbs_app.scene_loader import load_scene
 
         overrides = tuple(args.set or ())
         summary = run_scene(lambda: load_scene(args.scene, overrides), args.out, check=not args.no_check, log=_say,
@@ -180,8 +180,8 @@ def cmd_run(args):
 
 
 def cmd_sweep(args):
-    """A parameter sweep of a scene file on a Dask cluster (:mod:`ffrmbs_app.sweep`)."""
-    from ffrmbs_app.sweep import parse_set, sweep
+    """A parameter sweep of a scene file on a Dask cluster (:mod:`ffrmbs_app.sweeps`)."""
+    from ffrmbs_app.sweeps import parse_set, sweep
 
     table = sweep(args.scene, parse_set(args.set), args.out, zip=args.zip, workers=args.workers,
                   scheduler=args.scheduler, check=args.check, progress=_log)

@@ -66,55 +66,13 @@ import numpy as np
 
 from ffrmbs.errors import FfrmbsError, InputFileError, OutputFileError, os_reason
 from ffrmbs_app.output_dirs import new_directories, remove_stale, temporary_name, terminate_interrupts
-from mbs.result_file import attribute, damaged_result_file, open_result_file
+from ffrmbs_app.result_reading import check_shape, dataset, group, open_result
+from mbs.result_file import attribute, damaged_result_file
 
 MARKER = ".ffrmbs-export"
 POINT_BODY_VELOCITY = ("PointMass", "RigidBody")   # kinds whose u[:3] is Ṙ (world) [m/s]
 TRIANGLE_CELLS = {3: "triangle", 6: "triangle6"}  # VTK cell type of a surface triangle by its node count
 _CHUNK_VALUES = 3_000_000      # floats per block of samples held at once (~24 MB per array)
-
-
-# --------------------------------------------------------------------------- reading
-
-
-@contextmanager
-def open_result(path):
-    """Open an ffrmbs result file read-only (:func:`mbs.result_file.open_result_file`: a
-    regular HDF5 file of the result format and version, reading faults as
-    InputFileError) that holds samples: a one-dimensional ``/t``. Yields the ``h5py.File``."""
-    with open_result_file(path) as f:
-        if "t" not in f and attribute(f, "status") == "running":
-            raise InputFileError(path, None, "no samples written yet (the run has just started)")
-        t = _dataset(f, "t", path)
-        if t.ndim != 1:
-            raise InputFileError(path, None, f"/t must be one-dimensional, has shape {t.shape}")
-        yield f
-
-
-def _child(group, name, path, cls, kind):
-    """``group[name]`` as an h5py ``cls`` (Dataset or Group), or InputFileError naming it."""
-    obj = group.get(name)
-    if not isinstance(obj, cls):
-        where = f"{group.name.rstrip('/')}/{name}"
-        raise InputFileError(path, None, f"missing {kind} {where}" if obj is None else f"{where} is not a {kind}")
-    return obj
-
-
-def _dataset(group, name, path):
-    """``group[name]`` as an h5py Dataset, or InputFileError naming the missing one."""
-    return _child(group, name, path, h5py.Dataset, "dataset")
-
-
-def _group(group, name, path):
-    """``group[name]`` as an h5py Group, or InputFileError naming the missing one."""
-    return _child(group, name, path, h5py.Group, "group")
-
-
-def _check_shape(ds, shape, path):
-    """Check ``ds.shape`` against ``shape`` (None = any length on that axis)."""
-    if len(ds.shape) != len(shape) or any(s is not None and s != d for s, d in zip(shape, ds.shape)):
-        want = "(" + ", ".join("n" if s is None else str(s) for s in shape) + ")"
-        raise InputFileError(path, None, f"{ds.name} has shape {ds.shape}, expected {want}")
 
 
 # --------------------------------------------------------------------------- writing
@@ -316,7 +274,7 @@ def _plan(f, path, bodies):
     generator of (k, points, cells, point_data) per sample k), ..."""
     t_ds = f["t"]
     lengths = [t_ds.shape[0]]
-    bodies_group = _group(f, "bodies", path)
+    bodies_group = group(f, "bodies", path)
     names = sorted(bodies_group.keys())
     if bodies is not None:
         bodies = [bodies] if isinstance(bodies, str) else list(bodies)
@@ -327,27 +285,27 @@ def _plan(f, path, bodies):
         names = [b for b in names if b in set(bodies)]
     series = []
     for name, safe in zip(names, _series_names(names)):
-        g = _group(bodies_group, name, path)
-        R = _dataset(g, "R", path)
-        _check_shape(R, (None, 3), path)
+        g = group(bodies_group, name, path)
+        R = dataset(g, "R", path)
+        check_shape(R, (None, 3), path)
         lengths.append(R.shape[0])
         entry = dict(name=safe, label=name, group=g)
         if "surface" in g:
-            s = _group(g, "surface", path)
-            u0, phi, tri = (_dataset(s, k, path) for k in ("u0", "phi", "triangles"))
-            _check_shape(u0, (None, 3), path)
+            s = group(g, "surface", path)
+            u0, phi, tri = (dataset(s, k, path) for k in ("u0", "phi", "triangles"))
+            check_shape(u0, (None, 3), path)
             m = u0.shape[0]
-            _check_shape(phi, (m, 3, None), path)
+            check_shape(phi, (m, 3, None), path)
             if tri.ndim != 2 or tri.shape[1] not in TRIANGLE_CELLS:
                 raise InputFileError(path, None, f"{tri.name} has shape {tri.shape}, expected (n, 3) for linear "
                                                  "or (n, 6) for quadratic triangles")
             n_f = phi.shape[2]
-            A = _dataset(g, "A", path)
-            _check_shape(A, (None, 3, 3), path)
+            A = dataset(g, "A", path)
+            check_shape(A, (None, 3, 3), path)
             lengths.append(A.shape[0])
             if n_f or "q_f" in g:
-                q_f = _dataset(g, "q_f", path)
-                _check_shape(q_f, (None, n_f), path)
+                q_f = dataset(g, "q_f", path)
+                check_shape(q_f, (None, n_f), path)
                 lengths.append(q_f.shape[0])
             tri_a = np.asarray(tri[...], dtype=np.int64)
             if tri_a.size and (tri_a.min() < 0 or tri_a.max() >= m):
@@ -366,15 +324,15 @@ def _plan(f, path, bodies):
         series.append(entry)
     contacts = None
     if "contacts" in f:
-        cg_all = _group(f, "contacts", path)
+        cg_all = group(f, "contacts", path)
         contacts = {}
         for c in sorted(cg_all.keys()):
-            cg = _group(cg_all, c, path)
-            ds = {k: _dataset(cg, k, path) for k in ("active", "gap", "point", "normal", "force")}
+            cg = group(cg_all, c, path)
+            ds = {k: dataset(cg, k, path) for k in ("active", "gap", "point", "normal", "force")}
             for k in ("active", "gap"):
-                _check_shape(ds[k], (None,), path)
+                check_shape(ds[k], (None,), path)
             for k in ("point", "normal", "force"):
-                _check_shape(ds[k], (None, 3), path)
+                check_shape(ds[k], (None, 3), path)
             lengths += [d.shape[0] for d in ds.values()]
             contacts[c] = ds
     n = min(lengths)

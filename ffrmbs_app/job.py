@@ -127,6 +127,15 @@ def _simulate(scene, dt=None, t_end=None, n_out=None, **extra):
                                  **extra)
 
 
+def warm_up(scene) -> tuple:
+    """Run ``scene``'s warm-up (``scene.warmup`` = (t_end, dt) [s], two output samples), so
+    that the kernels it calls are compiled or loaded from numba's cache; returns
+    ``scene.warmup``."""
+    t_end, dt = scene.warmup
+    _simulate(scene, dt=dt, t_end=t_end, n_out=2)
+    return scene.warmup
+
+
 @contextlib.contextmanager
 def _stop_on_signals(log):
     """SIGINT/SIGTERM → :func:`mbs.integrators.driver.request_stop` while the run goes
@@ -242,8 +251,7 @@ def _run(make_scene, scene, path, check, resume, checkpoint_every, flush_every, 
     with CompileClock(log) as clock:
         if scene.warmup is not None:
             w0 = time.perf_counter()
-            t_w, dt_w = scene.warmup
-            _simulate(make_scene(), dt=dt_w, t_end=t_w, n_out=2)
+            t_w, dt_w = warm_up(make_scene())
             warm_s = time.perf_counter() - w0
             log(f"warm-up run (compiles the kernels or loads them from numba's cache, then runs {t_w:g} s of "
                 f"simulated time at dt = {dt_w:g} s; not counted in the cost): {warm_s:.2f} s")

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from ffrmbs.errors import FfrmbsError, InputFileError, OutputFileError, os_reason
-from ffrmbs_app.export import _check_shape, _dataset, _group, open_result
+from ffrmbs_app.result_reading import check_shape, dataset, group, open_result
 from ffrmbs_app.ticks import plain_axis
 from ffrmbs_app.output_dirs import remove_stale
 from mbs.result_file import attribute
@@ -111,8 +111,8 @@ def _plot_energy(ax, f, t, n):
     total, unit = np.zeros(n), " [J]"
     for key in ("kinetic", "potential"):
         if key in e:
-            ds = _dataset(e, key, f.filename)
-            _check_shape(ds, (None,), f.filename)
+            ds = dataset(e, key, f.filename)
+            check_shape(ds, (None,), f.filename)
             y = np.asarray(ds[:n], dtype=float)
             ax.plot(t, y, label=key)
             total, unit = total + y, _unit(ds, "J")
@@ -123,11 +123,11 @@ def _plot_energy(ax, f, t, n):
 
 
 def _plot_contact(ax, f, name, t, n):
-    c = _group(f["contacts"], name, f.filename)
-    gap = _dataset(c, "gap", f.filename)
-    force = _dataset(c, "force", f.filename)
-    _check_shape(gap, (None,), f.filename)
-    _check_shape(force, (None, 3), f.filename)
+    c = group(f["contacts"], name, f.filename)
+    gap = dataset(c, "gap", f.filename)
+    force = dataset(c, "force", f.filename)
+    check_shape(gap, (None,), f.filename)
+    check_shape(force, (None, 3), f.filename)
     g = np.asarray(gap[:n], dtype=float)
     fv = np.asarray(force[:n], dtype=float)
     if "normal" in c:

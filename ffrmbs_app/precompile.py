@@ -3,9 +3,10 @@
 A cold first ``ffrmbs run`` spends most of its time compiling numba kernels (about 40 CPU
 s on a 2-core machine) and preprocessing the beam (its modes, some 5 s). Both are
 single-threaded, so on two cores they can run side by side: :func:`start` launches
-``python -m ffrmbs_app.precompile SETTINGS`` that builds the default scene on the 25 mm
-mesh (:data:`~ffrmbs_app.scenes.point_mass_beam.TET10_COARSE`, the job's mesh check,
-cached for it) and runs its warm-up, which compiles every kernel the scene calls with the
+``python -m ffrmbs_app.precompile_child SETTINGS`` (:mod:`ffrmbs_app.precompile_child`)
+that builds the default scene on the 25 mm mesh
+(:data:`~ffrmbs_app.scenes.point_mass_beam.TET10_COARSE`, the job's mesh check, cached
+for it) and runs its warm-up, which compiles every kernel the scene calls with the
 argument types of the 12.5 mm mesh's scene (the same arrays, other sizes) into numba's
 disk cache (``cache=True``; ``$NUMBA_CACHE_DIR``, inherited). The job preprocesses the
 12.5 mm beam meanwhile and :meth:`Precompiler.wait`\\ s for the child before it calls a
@@ -20,6 +21,8 @@ import subprocess
 import sys
 import time
 from dataclasses import asdict
+
+CHILD = "ffrmbs_app.precompile_child"     # the module the second process runs
 
 
 class Precompiler:
@@ -52,25 +55,6 @@ def start(settings, log) -> Precompiler:
     :class:`~ffrmbs_app.main_job.JobSettings`); its output is discarded."""
     log("compiling numba kernels in a second process while preprocessing (first run; cached on disk for the "
         "next) ...")
-    process = subprocess.Popen([sys.executable, "-m", "ffrmbs_app.precompile", json.dumps(asdict(settings))],
+    process = subprocess.Popen([sys.executable, "-m", CHILD, json.dumps(asdict(settings))],
                                stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     return Precompiler(process)
-
-
-def compile_kernels(settings) -> None:
-    """Run the warm-up of the default scene with ``settings`` on the 25 mm mesh: every
-    kernel it calls is compiled into numba's disk cache."""
-    from ffrmbs_app.job import _simulate
-    from ffrmbs_app.main_job import default_scene
-    from ffrmbs_app.scenes import point_mass_beam as pmb
-
-    coarse = pmb.TET10_COARSE
-    scene = default_scene(settings, coarse.default_beam_data(), coarse)
-    t_w, dt_w = scene.warmup
-    _simulate(scene, dt=dt_w, t_end=t_w, n_out=2)
-
-
-if __name__ == "__main__":
-    from ffrmbs_app.main_job import JobSettings
-
-    compile_kernels(JobSettings(**json.loads(sys.argv[1])))

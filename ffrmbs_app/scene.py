@@ -1,21 +1,16 @@
 """A scene: one simulation job — a System with its initial state set, how to integrate it
 and what to record — as built by the default scene, a TOML scene file
-(:mod:`ffrmbs_app.scene_file`) or a Python model script.
-
-A model script is a Python file defining ``scene() -> Scene``; ``ffrmbs run model.py``
-calls it. :func:`load_scene` dispatches on the file's suffix.
+(:mod:`ffrmbs_app.scene_file`) or a Python model script (:mod:`ffrmbs_app.scene_loader`).
 """
 
 from __future__ import annotations
 
 import re
-import runpy
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
-from ffrmbs.errors import InputFileError, ModelError, quote
+from ffrmbs.errors import ModelError, quote
 
 NAME_CHARS, NAME_MAX = "A-Za-z0-9._-", 100
 _NAME = re.compile(rf"[{NAME_CHARS}]{{1,{NAME_MAX}}}")
@@ -104,39 +99,3 @@ class Scene:
     def t_out(self) -> np.ndarray:
         """The output times [s], (n_out,)."""
         return np.linspace(0.0, self.t_end, self.n_out)
-
-
-def load_scene(path, overrides=()) -> Scene:
-    """The scene of a TOML scene file (``.toml``) or a Python model script (``.py``
-    defining ``scene()``); a path that is missing or not a regular file (a directory, a
-    FIFO, ...) is an InputFileError saying so, and is never opened. ``overrides``:
-    ``"KEY=VALUE"`` texts set in a scene file (:mod:`ffrmbs_app.scene_file.overrides`);
-    a model script takes none."""
-    from preprocess.inputfiles import regular_file
-
-    path = regular_file(path)
-    if path.suffix == ".toml":
-        from ffrmbs_app.scene_file import read_scene
-
-        return read_scene(path, overrides)
-    if path.suffix == ".py":
-        if overrides:
-            raise InputFileError(path, None, "--set sets values of a scene file (.toml); a model script "
-                                             "takes its values from its own code")
-        return _from_script(path)
-    raise InputFileError(path, None, "a scene is a .toml scene file or a .py model script")
-
-
-def _from_script(path: Path) -> Scene:
-    namespace = runpy.run_path(str(path), run_name="ffrmbs_model")
-    build = namespace.get("scene")
-    if not callable(build):
-        raise InputFileError(path, None, "a model script must define a function scene() returning an ffrmbs Scene")
-    try:
-        scene = build()
-    except ModelError as exc:
-        raise ModelError(f"{path}: scene(): {exc}") from None
-    if not isinstance(scene, Scene):
-        raise InputFileError(path, None, f"scene() returned {type(scene).__name__}, not an ffrmbs_app.scene.Scene")
-    scene.inputs.setdefault("model script", str(path))
-    return scene

@@ -17,7 +17,8 @@ from .body import Body, Frame, ground_frame
 from .flexible_body import FlexibleBodyFFR
 from .floating_frame import PrescribedFrameMotion
 from .joints import Joint
-from .loads import DistributedForce, Force, NodalForces, Tabulated, Torque, read_force_file, write_force_file
+from .force_file import read_force_file, write_force_file
+from .loads import DistributedForce, Force, NodalForces, Tabulated, Torque
 from .moving_force import MovingContourForce
 from .registry import BODIES, INTEGRATORS, JOINTS, LOADS, ROTATIONS
 from .result import Result

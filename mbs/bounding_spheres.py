@@ -50,18 +50,20 @@ class FlexibleBodySphere:
 
     def __init__(self, body):
         self.body = body
-        self._f = slice(body.q_slice.start + body._f.start, body.q_slice.start + body._f.stop)
+        f = body.q_f_slice
+        self._f = slice(body.q_slice.start + f.start, body.q_slice.start + f.stop)
         self._abs = np.zeros(body.n_modes)
+        self._rest_centre = None        # the constant centre of a body at rest, once known
 
     def __call__(self, q, t):
         b = self.body
         if not b.frame_at_rest:
             return b.bounding_sphere(q[b.q_slice], t)
         np.abs(q[self._f], out=self._abs)
-        radius = b._box_radius + b._phi_reach @ self._abs
-        if b._rest_centre is None:
-            b.bounding_sphere(q[b.q_slice], t)        # fixes the constant centre once
-        return b._rest_centre, radius
+        radius = b.rest_radius + b.mode_reach @ self._abs
+        if self._rest_centre is None:
+            self._rest_centre = b.bounding_sphere(q[b.q_slice], t)[0]
+        return self._rest_centre, radius
 
 
 def contour_sphere(contour):
@@ -142,8 +144,8 @@ class SphereTable:
             elif isinstance(sphere, FlexibleBodySphere) and sphere.body.frame_at_rest:
                 b = sphere.body
                 self.kind[s], self.at[s] = K.AT_REST, sphere._f.start
-                self.radius0[s], self.n_reach[s] = b._box_radius, b.n_modes
-                self.reach[s, :b.n_modes] = b._phi_reach
+                self.radius0[s], self.n_reach[s] = b.rest_radius, b.n_modes
+                self.reach[s, :b.n_modes] = b.mode_reach
         self.called = [s for s in range(n) if self.kind[s] == K.CALLED]
         self.at_rest = [s for s in range(n) if self.kind[s] == K.AT_REST]
         for p, (i, s1, s2, margin) in enumerate(pairs):

@@ -188,13 +188,9 @@ class Checkpoint:
         for name, rec in res.contacts.items():
             for key, rows in rec.items():
                 _rows(f"result/contacts/{name}/{key}", take(f"result/contacts/{name}/{key}"), rows, n)
-        monitor = integ.monitor
-        monitor.events = [(float(t), str(b), float(w), float(w1)) for t, b, w, w1 in
-                          zip(take("monitor/t"), take("monitor/body"), take("monitor/spin"), take("monitor/omega1"))]
-        warned = {e[1] for e in monitor.events}
-        for entry in monitor._watch:
-            if entry[0].name in warned:
-                entry[2] = None                 # warned once: not checked again
+        integ.monitor.restore([(float(t), str(b), float(w), float(w1)) for t, b, w, w1 in
+                               zip(take("monitor/t"), take("monitor/body"), take("monitor/spin"),
+                                   take("monitor/omega1"))])
 
 
 def _rows(key, saved, rows, n):

@@ -273,9 +273,24 @@ class FlexibleBodyFFR(FloatingFrameBody):
         D[self._fu, self._fu] = self.D_ff
         return D
 
+    @property
+    def rest_radius(self) -> float:
+        """max_j |ū0_j − c| [m]: the radius about the centre c of the nodes' box (body
+        frame) that holds every undeformed node; the constant part of
+        :meth:`bounding_sphere`'s radius."""
+        return self._box_radius
+
+    @property
+    def mode_reach(self) -> np.ndarray:
+        """max_j |Φ_jk| (n_f,) [m per unit q_f,k]: how far mode k moves the node it moves
+        most; :meth:`bounding_sphere`'s radius grows by Σ_k mode_reach[k] |q_f,k|."""
+        return self._phi_reach
+
     def bounding_sphere(self, q, t=0.0):
-        """Centre R + A c and radius max_j |ū0_j − c| + Σ_k max_j |Φ_jk| |q_f,k| (c the
-        centre of the nodes' box): holds every node whatever the deformation, O(n_f)."""
+        """Centre R + A c and radius :attr:`rest_radius` + Σ_k mode_reach[k] |q_f,k| (c the
+        centre of the nodes' box, :attr:`mode_reach`): holds every node whatever the
+        deformation, O(n_f).
+        On a frame at rest the centre is computed once and the same array returned."""
         radius = self._box_radius + self._phi_reach @ np.abs(q[self._f])
         if self.frame_at_rest:
             if self._rest_centre is None:

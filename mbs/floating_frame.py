@@ -214,6 +214,23 @@ class FloatingFrameBody(Body):
         _, A, _, w, *_ = self._frame(q, u, t)
         return A @ w
 
+    @property
+    def q_f_slice(self) -> slice:
+        """Where the elastic coordinates q_f (n_f,) [-] sit in the body's own q."""
+        return self._f
+
+    @property
+    def u_f_slice(self) -> slice:
+        """Where the elastic velocities q̇_f (n_f,) [1/s] sit in the body's own u."""
+        return self._fu
+
+    @property
+    def q_r_slice(self) -> slice:
+        """Where the rotation coordinates of a free frame (quaternion p (4,) [-] or Cardan
+        angles (3,) [rad], :attr:`param`) sit in the body's own q; AttributeError on a
+        prescribed frame, which has none."""
+        return self._r
+
     def elastic_coordinates(self, q):
         """q_f (n_f,) of the body's own q (empty for rigid bodies)."""
         return q[self._f]

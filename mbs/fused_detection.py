@@ -97,13 +97,13 @@ class _FusedCentre:
         n_f = neutral.n_modes
         itab = np.zeros(K.ITAB_SIZE, dtype=np.int64)
         itab[K.QP], itab[K.UP] = body1.q_slice.start, body1.u_slice.start
-        itab[K.QF] = body2.q_slice.start + body2._f.start
-        itab[K.UF] = body2.u_slice.start + body2._fu.start
+        itab[K.QF] = body2.q_slice.start + body2.q_f_slice.start
+        itab[K.UF] = body2.u_slice.start + body2.u_f_slice.start
         itab[K.NF], itab[K.NU1], itab[K.NU2] = n_f, point.nu, surface.nu
         itab[K.VELOCITY], itab[K.BOX] = self.velocity, contact.margin is not None
         itab[K.KIN_AT:K.KIN_AT + 8] = buffer_layout(point.nu, surface.nu)
-        lo0, hi0 = neutral._box0
-        ftab = np.concatenate((np.zeros(box_at), lo0, hi0, neutral._phi_bound.ravel()))
+        lo0, hi0 = neutral.rest_box
+        ftab = np.concatenate((np.zeros(box_at), lo0, hi0, neutral.mode_box_growth.ravel()))
         ftab[K.MARGIN] = 0.0 if contact.margin is None else contact.margin
         ftab[K.OFFSET_AT:K.OFFSET_AT + 3] = point.frame_ref.u0
         ftab[K.RADIUS] = k.radius
@@ -131,7 +131,7 @@ class _FusedCentre:
         ``contour.update`` then :meth:`Contact.locate` (the Python path when the kernel
         falls back): True when closed (g_N <= closing_tol)."""
         outcome, g_N, gd_N, eta, xi, eta1, xi1 = type(self).kernel(q, u, *self._args)
-        self.neutral._has_u = True
+        self.neutral.kernel_updated(velocity=True)
         if outcome == K.LOCATED:
             k = self.kinematics
             k.active = True

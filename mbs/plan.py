@@ -227,13 +227,13 @@ def _modes(body, loads, tolerance):
         f[:, ld.nodes] = ld.forces
         a = (f.reshape(ld.times.size, -1) @ body.phi) / omega2
         bound += 2.0 * np.abs(np.diff(a, axis=0, prepend=0.0)).sum(axis=0)
-    bound *= body._phi_reach
+    bound *= body.mode_reach
     ranked = np.argsort(-bound, kind="stable")
     tail = np.cumsum(bound[ranked][::-1])[::-1]          # what dropping ranked[k:] costs
     keep = int(np.argmax(np.append(tail, 0.0) <= tolerance))
     chosen = set(ranked[:keep].tolist())
-    chosen |= set(np.flatnonzero(body.q_init[body._f] != 0).tolist())
-    chosen |= set(np.flatnonzero(body.u_init[body._fu] != 0).tolist())
+    chosen |= set(np.flatnonzero(body.q_init[body.q_f_slice] != 0).tolist())
+    chosen |= set(np.flatnonzero(body.u_init[body.u_f_slice] != 0).tolist())
     idx = np.array(sorted(chosen), dtype=int)
     if idx.size == n:
         return idx, None
@@ -288,7 +288,7 @@ def _history(bp, system, times, q0, u0, dt):
     zeta = body.modal_damping
     if zeta is not None and np.ndim(zeta):
         zeta = np.asarray(zeta, dtype=float)[idx]
-    f, fu = body._f, body._fu
+    f, fu = body.q_f_slice, body.u_f_slice
     common = dict(loads=bp.loads, rayleigh=body.rayleigh, zeta=zeta, r0=q0[f][idx], rdot0=u0[fu][idx])
     q, u = np.zeros((times.size, body.nq)), np.zeros((times.size, body.nu))
     if bp.formulation == MODAL_EXACT:
@@ -301,7 +301,7 @@ def _history(bp, system, times, q0, u0, dt):
         Ac = np.einsum("nij,j->ni", res.R, c)
         q[:, :3] = res.rho - Ac
         u[:, :3] = res.v - np.einsum("nij,nj->ni", res.R, np.cross(res.Omega, c))
-        q[:, body._r], u[:, 3:6] = _orientation_coordinates(body.param, res.R, res.Omega)
+        q[:, body.q_r_slice], u[:, 3:6] = _orientation_coordinates(body.param, res.R, res.Omega)
     q[:, f.start + idx] = res.r
     u[:, fu.start + idx] = res.rdot
     return q, u

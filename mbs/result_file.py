@@ -90,6 +90,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
+from ffrmbs import __version__
 from ffrmbs.errors import InputFileError, OutputFileError, first_line, os_reason
 from preprocess.body import mass_normalized
 from preprocess.inputfiles import regular_file
@@ -111,8 +112,6 @@ def versions() -> dict:
     """Versions of ffrmbs and of the libraries that decide its numbers."""
     import numba
     import scipy
-
-    from ffrmbs import __version__
 
     return {"ffrmbs": __version__, "python": platform.python_version(), "numpy": np.__version__,
             "scipy": scipy.__version__, "numba": numba.__version__, "h5py": h5py.__version__}

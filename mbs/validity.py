@@ -100,6 +100,15 @@ class SpinMonitor:
         """The bodies being watched (those that have not warned yet included)."""
         return [w[0] for w in self._watch]
 
+    def restore(self, events) -> None:
+        """Take the events of a checkpoint, (t [s], body name, |Ω| [rad/s], ω1 [rad/s]) each:
+        a body that warned before is not checked again, as in the run that was interrupted."""
+        self.events = list(events)
+        warned = {event[1] for event in self.events}
+        for entry in self._watch:
+            if entry[0].name in warned:
+                entry[2] = None
+
     def check(self, t, q, u) -> None:
         """Compare each watched body's |Ω| [rad/s] at (t, q, u) (system state arrays) with
         ratio · ω1; warn (FFRValidityWarning, and on the "ffrmbs.validity" logger) the

@@ -12,7 +12,8 @@ from preprocess.body import BodyData
 from preprocess.bodyfiles import read_body, write_body
 from preprocess.fe import consistent_mass_matrix, face_load, lumped_masses, stiffness_matrix
 from preprocess.geometry import box, cylinder, grooved_block, spherical_cap, stepped_beam
-from preprocess.mesh import Mesh, read_mesh
+from preprocess.mesh import Mesh
+from preprocess.mesh_files import read_mesh
 from preprocess.modes import clamped_modes, free_modes
 from preprocess.pipeline import Material, build_body, mesh_source
 from preprocess.statics import solve_static

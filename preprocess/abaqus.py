@@ -1,6 +1,6 @@
 """Abaqus ``.inp`` files: what meshio does not check, or reports without a line.
 
-meshio reads ``.inp`` files (:mod:`preprocess.mesh`). Before it does,
+meshio reads ``.inp`` files (:mod:`preprocess.mesh_files`). Before it does,
 :func:`check_includes` makes sure every file an ``*INCLUDE`` pulls in is a regular
 file (meshio would block on a FIFO). When meshio fails, :func:`inp_fault` scans the
 file once more, only then, for the line of the fault: an element type it cannot read,

@@ -89,8 +89,11 @@ def shape_functions(order, pts):
     return N, np.concatenate([dN_corner, dN_mid], axis=1)
 
 
-def _geometry(mesh, tets, degree):
-    """Quadrature weights × det J (E, Q), shape functions (Q, n), physical gradients (E, Q, n, 3)."""
+def element_geometry(mesh, tets, degree):
+    """The quadrature of the elements ``tets`` (E, n) of ``mesh`` by the rule exact to
+    polynomial ``degree`` (:func:`tet_quadrature`, Q points): the weights × det J (E, Q)
+    [m³], the shape functions N (Q, n) and their physical gradients ∇N (E, Q, n, 3) [1/m]
+    at the points. ModelError for an element whose Jacobian is not positive."""
     pts, w = tet_quadrature(degree)
     N, dN = shape_functions(mesh.order, pts)
     x = mesh.points[tets]  # (E, n, 3)
@@ -110,7 +113,7 @@ def stiffness_matrix(mesh: Mesh, young, poisson) -> sp.csr_matrix:
     eye = np.eye(3)
     for start in range(0, mesh.n_elements, _CHUNK):
         tets = mesh.tets[start:start + _CHUNK]
-        wdet, _, g = _geometry(mesh, tets, 2 * (mesh.order - 1))
+        wdet, _, g = element_geometry(mesh, tets, 2 * (mesh.order - 1))
         ke = (lam * np.einsum("eq,eqai,eqbj->eaibj", wdet, g, g)
               + mu * np.einsum("eq,eqaj,eqbi->eaibj", wdet, g, g)
               + mu * np.einsum("eq,eqak,eqbk,ij->eaibj", wdet, g, g, eye))
@@ -133,7 +136,7 @@ def lumped_masses(mesh: Mesh, density) -> np.ndarray:
     masses = np.zeros(mesh.n_nodes)
     for start in range(0, mesh.n_elements, _CHUNK):
         tets = mesh.tets[start:start + _CHUNK]
-        wdet, N, _ = _geometry(mesh, tets, 2 * mesh.order)
+        wdet, N, _ = element_geometry(mesh, tets, 2 * mesh.order)
         element_mass = density * wdet.sum(axis=1)  # (E,)
         if mesh.order == 1:
             share = np.einsum("eq,qa->ea", wdet, N) / wdet.sum(axis=1)[:, None]  # row sums
@@ -154,7 +157,7 @@ def consistent_mass_matrix(mesh: Mesh, density) -> sp.csr_matrix:
     rows, cols, vals = [], [], []
     for start in range(0, mesh.n_elements, _CHUNK):
         tets = mesh.tets[start:start + _CHUNK]
-        wdet, N, _ = _geometry(mesh, tets, 2 * mesh.order)
+        wdet, N, _ = element_geometry(mesh, tets, 2 * mesh.order)
         me = density * np.einsum("eq,qa,qb->eab", wdet, N, N)
         rows.append(np.repeat(tets, n, axis=1).ravel())
         cols.append(np.tile(tets, (1, n)).ravel())

@@ -97,7 +97,7 @@ def stress_geometric_matrices(mesh: Mesh, young, poisson, displacements) -> list
     rows, cols, vals = [], [], [[] for _ in range(m)]
     for start in range(0, mesh.n_elements, _CHUNK):
         tets = mesh.tets[start:start + _CHUNK]
-        wdet, _, g = fe._geometry(mesh, tets, 3 * (mesh.order - 1))      # g (E, Q, n, 3)
+        wdet, _, g = fe.element_geometry(mesh, tets, 3 * (mesh.order - 1))      # g (E, Q, n, 3)
         grad_u = np.einsum("enkc,eqni->ceqki", U[tets], g)              # ∂u_k/∂x_i
         strain = 0.5 * (grad_u + grad_u.transpose(0, 1, 2, 4, 3))
         trace = np.einsum("ceqkk->ceq", strain)

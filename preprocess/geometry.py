@@ -1,6 +1,6 @@
 """Meshing with gmsh: ``.geo`` files, STEP and IGES files and the built-in validation geometries.
 
-CAD files (:data:`preprocess.mesh.CAD_SUFFIXES`) are read by gmsh's OpenCASCADE kernel
+CAD files (:data:`preprocess.mesh_files.CAD_SUFFIXES`) are read by gmsh's OpenCASCADE kernel
 in mm, meshed and scaled to the run's length unit (:func:`mesh_cad_file`); their node
 groups come from the names in the file, selection boxes (``--group``) and the bounding
 planes that hold a face.
@@ -213,7 +213,7 @@ BOX_GROW = 1e-6            # a face lies in a selection box grown by this x the 
 
 
 def mesh_cad_file(path, order=2, mesh_size=None, check_limits=True, length_unit="m", face_boxes=None) -> Mesh:
-    """Mesh the solids of a STEP or IGES file (:data:`preprocess.mesh.CAD_SUFFIXES`, gmsh's
+    """Mesh the solids of a STEP or IGES file (:data:`preprocess.mesh_files.CAD_SUFFIXES`, gmsh's
     OpenCASCADE reader) with tetrahedra of ``order`` and maximum size ``mesh_size`` (in
     ``length_unit``).
 

@@ -20,7 +20,8 @@ from preprocess import fe, geometry, limits, modes, units as unitsys
 from preprocess.body import BodyData
 from preprocess.geometric import geometric_stiffness as geometric_stiffness_of
 from preprocess.inputfiles import regular_file
-from preprocess.mesh import Mesh, check_meshing_options, read_mesh
+from preprocess.mesh import Mesh
+from preprocess.mesh_files import check_meshing_options, read_mesh
 
 #: built-in geometries with dimensions: name -> (dimension names, mesher of :mod:`preprocess.geometry`,
 #: its check of the dimensions beyond each being positive (or None), an example spec)
@@ -126,7 +127,7 @@ def check_mesh_options(spec: str, order=None, mesh_size=None, structured=None, g
     built-in geometry's dimensions (:func:`builtin_shape`), for ``structured`` divisions
     that are not three whole numbers >= 1 or given for anything but a ``box:`` or with a
     ``mesh_size``, and for an ``order`` or a ``mesh_size`` given for a mesh file
-    (:func:`~preprocess.mesh.check_meshing_options`), and for ``groups`` (``--group``
+    (:func:`~preprocess.mesh_files.check_meshing_options`), and for ``groups`` (``--group``
     texts, :func:`face_boxes`) malformed or given for anything but a STEP or IGES file;
     an InputFileError for a file that is missing or not a regular file
     (:func:`~preprocess.inputfiles.regular_file`).
@@ -162,7 +163,7 @@ def mesh_source(spec: str, order=None, mesh_size=None, check_limits=True, announ
     (:func:`~preprocess.geometry.box` ``divisions``), every face a node grid. ``order``:
     1 (tet4) or 2 (tet10) for a built-in geometry or a ``.geo`` file, None meaning 2;
     None for a mesh file, which keeps its own order
-    (:func:`~preprocess.mesh.read_mesh`). ``check_limits``: a mesh estimated over the
+    (:func:`~preprocess.mesh_files.read_mesh`). ``check_limits``: a mesh estimated over the
     limits of :mod:`preprocess.limits` is a ModelError before meshing. ``announce``: called
     (no arguments) once the options pass :func:`check_mesh_options`, before anything is
     read or meshed, so a caller reporting progress says nothing for a refused option.

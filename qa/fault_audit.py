@@ -42,7 +42,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from qa.fault_cases import KINDS, Case, all_cases, build_shared, controls
-from validation.harness import cell, write_atomic
+from validation.report import cell, write_atomic
 
 OUTCOMES = ("clear", "traceback", "unclear", "silent", "hang")
 TIMEOUT = 60.0                  # [s] per case

@@ -4,8 +4,8 @@
 and writes ``results.json``, ``report.md`` and one work-precision PNG per case.
 """
 
-from validation.harness import (CASES, CaseResult, CpuTiming, available_cases, cpu_per_call, cpu_samples, make_row,
-                                run_validation, timed)
+from validation.harness import CASES, CaseResult, CpuTiming, available_cases, cpu_per_call, cpu_samples, make_row, timed
+from validation.report import run_validation
 
 __all__ = ["CASES", "CaseResult", "CpuTiming", "available_cases", "cpu_per_call", "cpu_samples", "make_row",
            "run_validation", "timed"]

@@ -3,8 +3,9 @@
 Each case is one task: the worker imports the case's module by name, runs it on one
 thread (BLAS and numba pools limited to one) and returns the same outcome the serial run
 makes in-process — rows, skipped lines, notes and figures (pickled by Dask's cloudpickle)
-and the CPU time measured inside the task. The harness then writes the same report and
-results.json as a serial run. Clients: :func:`ffrmbs_app.sweep.dask_client` (the caller's
+and the CPU time measured inside the task (:func:`validation.harness.run_case`).
+:func:`validation.report.run_validation` then writes the same report and results.json as
+a serial run. Clients: :func:`ffrmbs_app.sweeps.dask_client` (the caller's
 client, a running scheduler, or a LocalCluster of single-threaded worker processes).
 
 The cases are submitted longest first (LPT scheduling: the long cases start while the
@@ -19,6 +20,7 @@ import importlib
 import json
 
 from ffrmbs_app.scenes.cache import cache_dir
+from validation.harness import outcome_line, run_case
 
 TIMES_FILE = "case-times.json"
 
@@ -26,8 +28,7 @@ TIMES_FILE = "case-times.json"
 def run_cases(registry, names, quick, say, client=None, scheduler=None, workers=None) -> list:
     """The outcomes of the cases ``names`` of ``registry`` (name -> module), in that order,
     each run as one Dask task; ``say`` receives a line as each case finishes."""
-    from ffrmbs_app.sweep import dask_client
-    from validation.harness import outcome_line
+    from ffrmbs_app.sweeps import dask_client
 
     done = {}
     times = case_times(quick)
@@ -79,8 +80,6 @@ def record_case_times(quick, times) -> None:
 def run_case_task(module_name, name, quick):
     """One case in a worker: its module imported by name and run on one thread."""
     from threadpoolctl import threadpool_limits
-
-    from validation.harness import run_case
 
     module = importlib.import_module(module_name)
     with threadpool_limits(1):

@@ -179,7 +179,8 @@ class NeutralContour(Contour):
             self._position_field.update(self.R, self.A, self._local_position)
             self._fields_stamp = self._state[K.STAMP_AT]
 
-    def _require_velocity(self):
+    def require_velocity(self):
+        """ModelError unless the last :meth:`update` was given the velocities u."""
         if not self._has_u:
             raise ModelError(f"{self.name}: velocity asked for, but update() was given no u")
 
@@ -194,11 +195,17 @@ class NeutralContour(Contour):
         if self._has_u:
             K.store_velocity(self._state, v, w, body.elastic_velocities(u))
 
+    def kernel_updated(self, velocity=True) -> None:
+        """Note that a compiled kernel wrote the body state into the state vector of
+        :attr:`kernel_data` as :meth:`update` does (R, A, q_f and, with ``velocity``, v, ω̄,
+        q̇_f), e.g. the fused detection of :mod:`mbs.fused_detection`."""
+        self._has_u = bool(velocity)
+
     def evaluate(self, point, eta, xi=0.0, velocity=False, jacobians=False):
         """Fields at (η, ξ) (see :meth:`Contour.evaluate`); J_T = [1, −A ũ T, A Φ] and
         J_R from the body (thesis eq. 2.70, 2.72) with the interpolated ū and Φ."""
         if velocity:
-            self._require_velocity()
+            self.require_velocity()
         point.eta, point.xi = eta, xi
         if self.compiled:
             self._evaluate_local(point, eta, xi, velocity, velocity or jacobians)
@@ -253,12 +260,25 @@ class NeutralContour(Contour):
         if field not in products:
             raise ModelError(f"{self.name}: field must be one of {sorted(products)}, not {field!r}")
         if field == "velocity":
-            self._require_velocity()
+            self.require_velocity()
         ctrl, e = getattr(self, products[field]).ctrl, self.space.eta
         if self.dim == 1:
             return to_geomdl_curve(e.knots, e.p, ctrl)
         x = self.space.xi
         return to_geomdl_surface(e.knots, e.p, x.knots, x.p, ctrl)
+
+    @property
+    def rest_box(self) -> tuple:
+        """(lo (3,), hi (3,)) [m]: the box of the undeformed position control points P_ū0
+        in the body frame, the box of :meth:`bounding_box` at q_f = 0."""
+        return self._box0
+
+    @property
+    def mode_box_growth(self) -> np.ndarray:
+        """(3, n_f) [m per unit q_f,k]: max_i |P_Φ,i,ck|, how far mode k moves a control
+        point along body axis c at most; :meth:`bounding_box` grows :attr:`rest_box` by
+        Σ_k mode_box_growth[c, k] |q_f,k| along axis c."""
+        return self._phi_bound
 
     def bounding_box(self, out=None) -> np.ndarray:
         """A box (2, 3) [m] around the position control points: a B-spline lies in their

@@ -6,7 +6,7 @@ wrote (stability.json). At ``builder-inited`` this extension writes one MyST pag
 ``docs/validation/generated/<run>.md``: the run's date, mode and machine, a summary table,
 and per case its description, status, a table of its rows (code, config, error, CPU time,
 reference, extra columns), its figures and notes. Every figure on the pages comes from those
-files; the cells are formatted by :func:`validation.harness.cell` and the stability table by
+files; the cells are formatted by :func:`validation.report.cell` and the stability table by
 :func:`validation.stability.runner.markdown_table`, as in ``report.md``.
 """
 from __future__ import annotations
@@ -16,7 +16,8 @@ import math
 import re
 from pathlib import Path
 
-from validation.harness import ROW_KEYS, cell
+from validation.harness import ROW_KEYS
+from validation.report import cell
 from validation.stability.core import StabilityRow
 from validation.stability.runner import markdown_table
 
@@ -25,7 +26,7 @@ GENERATED = "generated"
 
 
 def _file_stem(name: str) -> str:
-    """The harness's file name of a case (``run_validation``: unsafe characters as ``_``)."""
+    """The report's file name of a case (``run_validation``: unsafe characters as ``_``)."""
     return re.sub(r"[^A-Za-z0-9_.-]", "_", name)
 
 

@@ -2,7 +2,7 @@
 A parameter sweep on a Dask cluster
 ===================================
 
-``ffrmbs sweep`` (or :func:`ffrmbs.sweep` from Python) runs one scene file over a grid of
+``ffrmbs sweep`` (or :func:`ffrmbs_app.sweep` from Python) runs one scene file over a grid of
 overrides, each run a task on a Dask cluster: a local one, a running scheduler, or an
 HPC queue's through dask-jobqueue (``SLURMCluster`` passed as ``Client(cluster)``). Each
 run writes its own result file; the table (``sweep.csv``, ``.json``, ``.md``) has one row
@@ -21,7 +21,7 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 
-import ffrmbs
+import ffrmbs_app
 
 try:
     here = Path(__file__).resolve().parent
@@ -38,8 +38,8 @@ apex_times = [round(float(t1 * (1 + e)), 4) for e in restitution]      # Python 
 def main():
     """The sweep on a local cluster of two single-threaded worker processes (``workers=2``;
     ``client=Client(cluster)`` runs it on your own cluster); the table."""
-    return ffrmbs.sweep(scene, {"contact.floor.e": restitution, "scene.t_end": apex_times},
-                        Path(tempfile.mkdtemp()) / "sweep", workers=2, zip=True, progress=print)
+    return ffrmbs_app.sweep(scene, {"contact.floor.e": restitution, "scene.t_end": apex_times},
+                            Path(tempfile.mkdtemp()) / "sweep", workers=2, zip=True, progress=print)
 
 
 # %%

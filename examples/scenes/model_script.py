@@ -1,6 +1,6 @@
 """A model script: the scene of ``point_mass_beam.toml`` written in Python.
 
-``ffrmbs run model_script.py`` calls :func:`scene` (see :mod:`ffrmbs_app.scene`). The script
+``ffrmbs run model_script.py`` calls :func:`scene` (see :mod:`ffrmbs_app.scene_loader`). The script
 shows what each entry of the TOML file maps to. The scene is the thesis's point mass
 dropped on the clamped flexible beam (Sec. 5.2, setup A). SI units.
 """

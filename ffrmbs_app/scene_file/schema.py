@@ -4,7 +4,7 @@ bounds; the kinds come from the library's registries).
 
 ``read_scene(path)`` (:mod:`ffrmbs_app.scene_file`) reads a scene file and returns a
 :class:`ffrmbs_app.scene.Scene`: the :class:`mbs.System` with its initial state set, and
-how to integrate it and what to record. ``ffrmbs_app.scene.load_scene`` calls it for ``.toml`` files. Every entry maps
+how to integrate it and what to record. ``ffrmbs_app.scene_loader.load_scene`` calls it for ``.toml`` files. Every entry maps
 onto the Python API (:mod:`mbs`, :mod:`contours`, :mod:`contact`). The physics is
 not implemented here. SI units throughout: m, kg, s, N, rad.
 

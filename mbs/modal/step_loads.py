@@ -17,7 +17,8 @@ import numpy as np
 
 from ffrmbs.errors import ModelError
 
-from ..loads import read_force_file
+from ..force_file import read_force_file
+from ..step_times import check_times
 
 FRAMES = ("body", "inertial")
 
@@ -34,18 +35,11 @@ class StepLoads:
     """
 
     def __init__(self, times, nodes, forces, frame="body"):
-        times = np.array(times, dtype=float).ravel()
+        times = check_times(np.array(times, dtype=float).ravel(), "StepLoads")
         nodes = np.array(nodes, dtype=np.int64).ravel()
         forces = np.array(forces, dtype=float)
         if frame not in FRAMES:
             raise ModelError(f"StepLoads: frame must be one of {FRAMES}, got {frame!r}")
-        if times.size == 0 or not np.all(np.isfinite(times)):
-            raise ModelError("StepLoads: need at least one finite load time")
-        bad = np.flatnonzero(np.diff(times) <= 0)
-        if bad.size:
-            i = bad[0]
-            raise ModelError(f"StepLoads: times must increase strictly, but times[{i + 1}] = "
-                             f"{times[i + 1]!r} s follows times[{i}] = {times[i]!r} s")
         if forces.shape != (times.size, nodes.size, 3):
             raise ModelError(f"StepLoads: forces must have shape (n_t, k, 3) = "
                              f"({times.size}, {nodes.size}, 3), got {forces.shape}")

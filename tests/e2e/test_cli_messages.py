@@ -65,7 +65,7 @@ BALL = fixture_text("scenes/ball_on_floor.toml")
 
 def test_the_job_says_what_its_warm_up_run_is(tmp_path):
     from ffrmbs_app.job import run_scene
-    from ffrmbs_app.scene import load_scene
+    from ffrmbs_app.scene_loader import load_scene
 
     path = tmp_path / "ball.toml"
     path.write_text(BALL)

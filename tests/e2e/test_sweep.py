@@ -1,4 +1,4 @@
-"""Parameter sweeps (ffrmbs_app.sweep, ffrmbs.sweep, ``ffrmbs sweep``) on one local Dask
+"""Parameter sweeps (ffrmbs_app.sweeps, ffrmbs_app.sweep, ``ffrmbs sweep``) on one local Dask
 cluster shared by the module: a ball bouncing on a rigid floor (runs of a few hundred
 steps), a 2 x 2 grid with an invalid value, resume, zip mode, bitwise equality with the
 same run made alone, the tables, the value splitting and the command line."""
@@ -13,9 +13,9 @@ import sys
 import h5py
 import pytest
 
-import ffrmbs
+import ffrmbs_app
 from ffrmbs.errors import FfrmbsError
-from ffrmbs_app.sweep import override_sets, parse_set, run_key, split_values
+from ffrmbs_app.sweeps import override_sets, parse_set, run_key, split_values
 from qa.fixtures import fixture_text
 
 import paths
@@ -41,7 +41,7 @@ def grid_sweep(dask_client, scene, tmp_path_factory):
     """The 2 x 2 sweep through the package's entry point, with its progress lines."""
     out = tmp_path_factory.mktemp("sweep")
     lines = []
-    table = ffrmbs.sweep(scene, GRID, out, client=dask_client, progress=lines.append)
+    table = ffrmbs_app.sweep(scene, GRID, out, client=dask_client, progress=lines.append)
     return out, table, lines
 
 
@@ -57,7 +57,7 @@ def datasets(path) -> dict:
 def alone(scene, overrides, out) -> dict:
     """The datasets of the same run made alone in this process, as ``ffrmbs run`` does."""
     from ffrmbs_app.job import run_scene
-    from ffrmbs_app.scene import load_scene
+    from ffrmbs_app.scene_loader import load_scene
 
     summary = run_scene(lambda: load_scene(scene, overrides=overrides), out, check=False, export=False, plot=False,
                         checkpoint_every=None, log=lambda line: None)
@@ -133,7 +133,7 @@ def test_resume_runs_only_what_is_missing(grid_sweep, dask_client, scene):
     kept = out / table[0]["result_file"]
     stamp = kept.stat().st_mtime_ns
     (out / table[2]["result_file"]).unlink()
-    again = ffrmbs.sweep(scene, GRID, out, client=dask_client, progress=lambda line: None)
+    again = ffrmbs_app.sweep(scene, GRID, out, client=dask_client, progress=lambda line: None)
     assert [r["reused"] for r in again] == [True, False, False, False]     # the failed ones run again too
     assert [r["status"] for r in again] == ["complete", "failed", "complete", "failed"]
     assert kept.stat().st_mtime_ns == stamp
@@ -141,8 +141,8 @@ def test_resume_runs_only_what_is_missing(grid_sweep, dask_client, scene):
 
 
 def test_zip_sweep_with_check_and_python_values(dask_client, scene, tmp_path):
-    table = ffrmbs.sweep(scene, {"scene.dt": [1e-3, 5e-4], "scene.t_end": [0.2, 0.15]}, tmp_path, client=dask_client,
-                         zip=True, check=True, progress=lambda line: None)
+    table = ffrmbs_app.sweep(scene, {"scene.dt": [1e-3, 5e-4], "scene.t_end": [0.2, 0.15]}, tmp_path, client=dask_client,
+                             zip=True, check=True, progress=lambda line: None)
     assert [r["run"] for r in table] == ["dt=0.001,t_end=0.2", "dt=0.0005,t_end=0.15"]
     assert [r["steps"] for r in table] == [200, 300]
     for r in table:
@@ -155,18 +155,18 @@ def test_zip_sweep_with_check_and_python_values(dask_client, scene, tmp_path):
 
 def test_bad_sweeps_are_refused_before_running(scene, tmp_path):
     with pytest.raises(FfrmbsError, match="equal lengths"):
-        ffrmbs.sweep(scene, {"scene.dt": [1e-3, 5e-4], "scene.t_end": [0.2]}, tmp_path, zip=True)
+        ffrmbs_app.sweep(scene, {"scene.dt": [1e-3, 5e-4], "scene.t_end": [0.2]}, tmp_path, zip=True)
     with pytest.raises(FfrmbsError, match="not found"):
-        ffrmbs.sweep(tmp_path / "missing.toml", GRID, tmp_path)
+        ffrmbs_app.sweep(tmp_path / "missing.toml", GRID, tmp_path)
     with pytest.raises(FfrmbsError, match="not both"):
-        ffrmbs.sweep(scene, GRID, tmp_path, client=object(), workers=2)
+        ffrmbs_app.sweep(scene, GRID, tmp_path, client=object(), workers=2)
     with pytest.raises(FfrmbsError, match="workers"):
-        ffrmbs.sweep(scene, GRID, tmp_path, workers=0)
+        ffrmbs_app.sweep(scene, GRID, tmp_path, workers=0)
     try:
         import pandas  # noqa: F401
     except ImportError:
         with pytest.raises(FfrmbsError, match="pandas"):
-            ffrmbs.sweep(scene, GRID, tmp_path, as_frame=True)
+            ffrmbs_app.sweep(scene, GRID, tmp_path, as_frame=True)
     assert not (tmp_path / "runs").exists()
 
 

@@ -116,7 +116,7 @@ def test_flip_period_against_dop853():
     flips = sol.t_events[0]
     assert len(flips) >= 4
     np.testing.assert_allclose(np.diff(flips), T / 2, rtol=1e-8)
-    assert bc._periods(bc.euler_rk4_crossings(I, w0, 2.2 * T, 1e-3)) == pytest.approx([T] * 3, rel=1e-8)
+    assert bc.periods_from_flips(bc.euler_rk4_crossings(I, w0, 2.2 * T, 1e-3)) == pytest.approx([T] * 3, rel=1e-8)
 
 
 # --- Cardan singularity ------------------------------------------------------------------

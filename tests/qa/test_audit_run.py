@@ -284,7 +284,7 @@ def test_too_much_memory_is_refused_with_the_numbers(tmp_path):
 
 def test_no_limits_lifts_both_limits(tmp_path):
     from ffrmbs_app.limits import check_resources
-    from ffrmbs_app.scene import load_scene
+    from ffrmbs_app.scene_loader import load_scene
 
     scene = load_scene(scene_file(tmp_path, t_end=1e9, n_out=10 ** 15))
     estimate = check_resources(scene, check=False, no_limits=True)

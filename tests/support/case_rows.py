@@ -1,7 +1,8 @@
 """Shared by the tests of validation cases: one quick harness run grouped by case (with
 or without the report files), and row selection by config."""
 
-from validation.harness import run_case, run_validation
+from validation.harness import run_case
+from validation.report import run_validation
 
 
 def quick_rows_by_case(out, cases):

@@ -55,7 +55,7 @@ def benchmark(t_end, log=print) -> dict:
     log(f"Akantu: {aka['n_steps']} steps, {aka['cpu_s']:.2f} CPU s")
     for scheme, n_modes, dt in OURS:
         basis = ModalBasis.from_body(data, n_modes)
-        u, cpu, _ = case._end_to_end(lambda b=basis, h=dt, s=scheme: SimpleRB(b, [loads], dt=h, scheme=s), t_out)
+        u, cpu, _ = case.end_to_end(lambda b=basis, h=dt, s=scheme: SimpleRB(b, [loads], dt=h, scheme=s), t_out)
         rms = wb.rms_error(u, aka["displacement"])[1]
         doc["rows"].append({"solver": "SimpleRB", "scheme": scheme, "n_modes": n_modes, "dt": dt, "cpu_s": cpu,
                             "akantu_cpu_s": aka["cpu_s"], "akantu_loop_cpu_s": aka["loop_cpu_s"],

@@ -78,7 +78,7 @@ def _runs(data, weights, probe, n_modes, exudyn_steps):
     for dt in exudyn_steps:
         runs.append(({"code": "exudyn", "n_modes": n_modes, "integrator": "generalized-alpha", "dt": dt,
                       "options": {"rho_inf": 0.9}},
-                     lambda dt=dt: ff._exudyn_run(data, weights, n_modes, dt, probe)))
+                     lambda dt=dt: ff.exudyn_run(data, weights, n_modes, dt, probe)))
     return runs
 
 

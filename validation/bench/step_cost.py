@@ -118,8 +118,8 @@ def exudyn_us_per_step(repeats) -> float | None:
     mesh = box(1.0, 1.0, 5.0, REPORT_MESH_SIZE, order=2)
     data = build_body(mesh, MATERIAL, FREE_MODES, clamp=None)
     weights, probe = ff.face_weights(mesh), ff.node_a(mesh)
-    ff._exudyn_run(data, weights, FREE_MODES, FREE_DT, probe)            # warm-up
-    cpu = [ff._exudyn_run(data, weights, FREE_MODES, FREE_DT, probe)[2] for _ in range(repeats)]
+    ff.exudyn_run(data, weights, FREE_MODES, FREE_DT, probe)            # warm-up
+    cpu = [ff.exudyn_run(data, weights, FREE_MODES, FREE_DT, probe)[2] for _ in range(repeats)]
     return 1e6 * float(np.median(cpu)) / round(ff.T_END / FREE_DT)
 
 

@@ -86,7 +86,11 @@ def node_a(mesh) -> int:
     return int(np.argmin(np.linalg.norm(mesh.points, axis=1)))
 
 
-def _exudyn_run(data, weights, n_modes, dt, probe):
+def exudyn_run(data, weights, n_modes, dt, probe):
+    """The same scene in Exudyn (:func:`validation.peers.exudyn_ffr.free_flight`, the peer
+    must be installed): ``n_modes`` modes of ``data``, the two face loads of ``weights``
+    (:func:`face_weights`), step ``dt`` [s]; returns (r_A (n, 3) [m], ū_f,A (n, 3) [m],
+    CPU s) at the output times of :func:`simulate`, node A being ``probe``."""
     from validation.peers import exudyn_ffr
 
     loads = [(np.bincount(nodes, w, minlength=data.n_nodes), np.array([0.0, 1.0, 0.0]),
@@ -133,7 +137,7 @@ def run(quick: bool) -> CaseResult:
                 options = {"rho_inf": 0.9} if integ == "generalized-alpha" else {}
                 _, r, e, cpu = simulate(data, weights, n_modes, h, integ, probe, **options)
             else:
-                r, e, cpu = _exudyn_run(data, weights, n_modes, h, probe)
+                r, e, cpu = exudyn_run(data, weights, n_modes, h, probe)
             traj, elas = errors(r, e, ref)
             config = {"n_modes": n_modes, "integrator": integ, "dt": h}
             per_step = cpu / round(T_END / h) * 1e6

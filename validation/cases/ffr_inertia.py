@@ -42,7 +42,7 @@ from mbs.shape_integrals import ShapeIntegrals
 from preprocess import Material, box, build_body, fe, stepped_beam
 from validation import CaseResult, make_row, timed
 from validation.cases.complex_beam import MATERIAL_MM
-from validation.stability.body_cases import _crossings, _periods, flip_period
+from validation.stability.body_cases import flip_period, periods_from_flips, zero_crossings
 
 NAME = "ffr_inertia"
 DESCRIPTION = ("consistent vs lumped mass: rigid-body inertia of boxes and the stepped beam vs exact, "
@@ -184,7 +184,7 @@ def measured_flip_periods(data):
     res, cpu = timed(system.simulate, n * dt, dt, t_out=np.arange(n + 1) * dt, plan=False, rho_inf=1.0)
     w2 = [axes[:, 1] @ (body.orientation(q[body.q_slice]).T @ body.angular_velocity(q[body.q_slice], u[body.u_slice]))
           for q, u in zip(res.q, res.u)]
-    return np.array(_periods(_crossings(res.t, np.array(w2)))), T_own, cpu
+    return np.array(periods_from_flips(zero_crossings(res.t, np.array(w2)))), T_own, cpu
 
 
 def flip_rows(quick):

@@ -38,10 +38,11 @@ OUT_DT = 1e-3
 REPEATS = 5
 
 
-def _end_to_end(make_solver, t_out):
-    """(displacements, median CPU s per run, rotation angle at the impact's end), timed by
-    :func:`validation.cpu_per_call` with BLAS on one thread, like Akantu's loop (CPU time
-    counts every thread)."""
+def end_to_end(make_solver, t_out):
+    """Solve and place the nodes with the modal solver ``make_solver()`` at the output
+    times ``t_out`` [s]: (displacements, median CPU s per run, rotation angle [rad] at the
+    impact's end), timed by :func:`validation.cpu_per_call` with BLAS on one thread, like
+    Akantu's loop (CPU time counts every thread)."""
     def solve_and_place():
         res = make_solver().solve(t_out)
         return res.displacements(), res
@@ -84,7 +85,7 @@ def run(quick: bool) -> CaseResult:
         else:
             def make(basis=basis, dt=dt):
                 return CoupledRB(basis, [loads], dt=dt)
-        u, cpu, theta = _end_to_end(make, t_out)
+        u, cpu, theta = end_to_end(make, t_out)
         theta_max = max(theta_max, theta)
         per_time, overall = wb.rms_error(u, u_ref)
         ratio = aka["cpu_s"] / cpu

@@ -397,14 +397,14 @@ def euler_rk4_crossings(I, w0, t_end, h):
     return out
 
 
-def _crossings(t, y) -> list[float]:
+def zero_crossings(t, y) -> list[float]:
     """Sign changes of sampled y(t), located by linear interpolation (at a flip ω2 has an
     inflection point, sn'' = 0 at sn = 0, so the interpolation error is third order)."""
     idx = np.flatnonzero(np.signbit(y[:-1]) != np.signbit(y[1:]))
     return [float(t[i] - y[i] * (t[i + 1] - t[i]) / (y[i + 1] - y[i])) for i in idx]
 
 
-def _periods(crossings) -> list[float]:
+def periods_from_flips(crossings) -> list[float]:
     """Full periods from flip times: sn's zeros are equally spaced by 2K, so each interval
     between successive flips is half a period, T = 2 (t_{j+1} − t_j)."""
     return [2.0 * (b - a) for a, b in zip(crossings[:-1], crossings[1:])]
@@ -441,8 +441,8 @@ def run_tennis_racket(body_kind, flips, dt_per_rad=0.01, rho_inf=1.0):
     w_principal = np.array([P.T @ (body.orientation(q[body.q_slice]).T
                                    @ body.angular_velocity(q[body.q_slice], u[body.u_slice]))
                             for q, u in zip(res.q, res.u)])
-    flips_t = _crossings(res.t, w_principal[:, 1])
-    periods = _periods(flips_t)
+    flips_t = zero_crossings(res.t, w_principal[:, 1])
+    periods = periods_from_flips(flips_t)
     return {"body": body_kind, "I": I.tolist(), "T_analytic": T, "omega_p": wp, "m": m, "K": K,
             "flip_times": flips_t, "flip_times_analytic": [(2 * j + 1) * K / wp for j in range(flips)],
             "periods": periods, "dt": dt, "steps": res.stats["steps"], "t_end": t_end,
@@ -476,7 +476,7 @@ def tennis_racket(quick: bool) -> StabilityRow:
     r0 = runs[0]
     I, w0 = r0["I"], (0.0, RACKET_SPIN, RACKET_TILT * RACKET_SPIN)
     with Stopwatch() as w:
-        rk = [_periods(euler_rk4_crossings(I, w0, r0["t_end"], h)) for h in (0.02, 0.01)]
+        rk = [periods_from_flips(euler_rk4_crossings(I, w0, r0["t_end"], h)) for h in (0.02, 0.01)]
     rk_conv = max(abs(a - b) / r0["T_analytic"] for a, b in zip(*rk))
     rk_err = max(abs(p / r0["T_analytic"] - 1) for p in rk[1])
     if not (rk_conv <= 1e-8 and rk_err <= 1e-7):

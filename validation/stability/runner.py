@@ -20,7 +20,8 @@ import traceback
 
 from ffrmbs.errors import FfrmbsError, SimulationError
 from validation.bench.common import machine
-from validation.harness import cell, json_safe, write_atomic
+from validation.report import cell, json_safe, write_atomic
+from validation.stability import body_cases, contact_cases  # noqa: F401  (they register their cases in CASES)
 from validation.stability.core import CASES, StabilityCase, StabilityRow, graceful_row
 
 COLUMNS = ("case", "finished", "stable", "energy drift", "max penetration [m]", "error (reference)", "run time [s]",
@@ -70,7 +71,6 @@ def run_stability(out_dir, quick=False, only=None, progress=print, cases=None) -
     ``out_dir/report.md`` (the table, then each row's note), print the table with
     ``progress``, return the rows; raise FfrmbsError naming the cases that did not pass."""
     if cases is None:
-        import validation.stability  # noqa: F401  (registers the case modules)
         cases = CASES
     selected = select_cases(cases, only)
     rows = []
@@ -125,5 +125,5 @@ def _num(x) -> str:
 
 
 def _write_text(path, text):
-    """Write ``text`` (UTF-8) to ``path`` atomically (:func:`validation.harness.write_atomic`)."""
+    """Write ``text`` (UTF-8) to ``path`` atomically (:func:`validation.report.write_atomic`)."""
     write_atomic(path, lambda f: f.write(text.encode("utf-8")))

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from ffrmbs.errors import InputFileError
-from ffrmbs_app.scene import load_scene
+from ffrmbs_app.scene_loader import load_scene
 from ffrmbs_app.scene_file.overrides import parse_value, split_override
 from qa.fixtures import fixture_text
 

@@ -9,7 +9,7 @@ from matplotlib.figure import Figure
 
 from ffrmbs_app.ticks import PlainFormatter, log_ticks, number_text
 from validation import make_row
-from validation.harness import work_precision_figure
+from validation.report import work_precision_figure
 
 
 def tick_texts(axis):

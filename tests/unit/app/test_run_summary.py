@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from ffrmbs_app.job import run_scene
-from ffrmbs_app.scene import load_scene
+from ffrmbs_app.scene_loader import load_scene
 
 import paths
 

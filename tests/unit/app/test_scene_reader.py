@@ -17,7 +17,8 @@ from contact import (ContactKinematicsPointContour2s, ContactKinematicsPointPlan
                      UnilateralCoulombContact, UnilateralNewtonImpact)
 from contours import Contour1sNeutralFFR, Contour2sNeutralFFR, FlexibleBand, FlexibleCylinder, PlaneContour
 from ffrmbs.errors import InputFileError
-from ffrmbs_app.scene import Scene, load_scene
+from ffrmbs_app.scene import Scene
+from ffrmbs_app.scene_loader import load_scene
 from ffrmbs_app.scene_file import read_scene
 from mbs import (DistributedForce, FlexibleBodyFFR, Force, Joint, NodalForces, PointMass, PrescribedFrameMotion,
                  RigidBody, SpringDamper, System, Tabulated, Torque, ground_frame, write_force_file)

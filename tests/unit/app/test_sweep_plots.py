@@ -1,4 +1,4 @@
-"""The sweep's plots and run names (ffrmbs_app.sweep), from tables made here: one line per
+"""The sweep's plots and run names (ffrmbs_app.sweeps), from tables made here: one line per
 value of the other varied keys, legends naming what varies (never a constant override), a
 panel of each output against each varied key, and names a user can read."""
 
@@ -7,7 +7,7 @@ import itertools
 import pytest
 
 from ffrmbs.errors import FfrmbsError
-from ffrmbs_app.sweep import outputs_figure, override_sets, plot_sweep, run_key, work_precision_figure
+from ffrmbs_app.sweeps import outputs_figure, override_sets, plot_sweep, run_key, work_precision_figure
 
 
 def table_of(grid, error=True):

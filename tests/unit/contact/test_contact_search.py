@@ -5,8 +5,7 @@ outside open contours, seams of closed contours, several roots (the nearest wins
 import numpy as np
 import pytest
 
-from contact.broad_phase import BroadPhase, overlapping
-from contact.kinematics import ContactKinematicsPointPlane
+from contact._detection_kernels import boxes_overlap
 from contact.search import Contact1sSearch, Contact2sSearch
 from contours import (Contour1sNeutralFFR, Contour2sNeutralFFR, FlexibleCylinder, PlaneContour, PointContour,
                       SphereContour)
@@ -229,28 +228,48 @@ def test_bad_input(contours):
 
 # --- broad phase ------------------------------------------------------------------------
 
-def test_overlapping_boxes():
+def test_the_box_test_of_a_contact():
+    """contact._detection_kernels.boxes_overlap, the box test of Contact.locate: boxes (2, 3)
+    each grown by the margin overlap; touching counts; an infinite (plane) box overlaps all."""
     a = np.array([[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]])
-    assert overlapping(a, a + 0.5) and overlapping(a, a + [1.0, 0, 0])  # touching counts
+    assert boxes_overlap(a, a + 0.5, 0.0) and boxes_overlap(a, a + [1.0, 0, 0], 0.0)  # touching counts
     apart = a + [1.1, 0.0, 0.0]
-    assert not overlapping(a, apart) and not overlapping(apart, a)
-    assert overlapping(a, apart, margin=0.051) and not overlapping(a, apart, margin=0.049)
-    assert not overlapping(a, a + [0.0, 0.0, -1.5])  # separated along z only
+    assert not boxes_overlap(a, apart, 0.0) and not boxes_overlap(apart, a, 0.0)
+    assert boxes_overlap(a, apart, 0.051) and not boxes_overlap(a, apart, 0.049)
+    assert not boxes_overlap(a, a + [0.0, 0.0, -1.5], 0.0)  # separated along z only
     plane = np.array([np.full(3, -np.inf), np.full(3, np.inf)])
-    assert overlapping(plane, apart + 100.0) and overlapping(apart, plane, margin=1.0)
+    assert boxes_overlap(plane, apart + 100.0, 0.0) and boxes_overlap(apart, plane, 1.0)
 
 
-def test_broad_phase_keeps_the_overlapping_pairs():
-    near, far = PointMass(1.0, position=(0.0, 0.0, 0.03)), PointMass(1.0, position=(5.0, 0.0, 0.0))
-    p_near, p_far = PointContour(near.point), PointContour(far.point)
+def test_a_contact_searches_only_when_the_boxes_overlap():
+    """Contact.locate searches a pair only when the contours' boxes, grown by the margin,
+    overlap (else no coarse search, no Newton step, the gap stays NaN), and then finds the
+    analytic gap: |p − c| − ρ of a point p and a sphere (c, ρ), the height above a floor."""
+    from contact import UnilateralNewtonImpact, connect
+
+    ball = SphereContour(ground_frame((0.0, 0.0, 0.05)), 0.03)  # box z in [0.02, 0.08], x, y in [-0.03, 0.03]
     floor = PlaneContour(ground_frame())
-    ball = SphereContour(ground_frame((0.0, 0.0, 0.05)), 0.03)  # box z in [0.02, 0.08]
-    contact = ContactKinematicsPointPlane(p_far, floor)
-    phase = BroadPhase([(p_near, ball), (p_far, ball), contact], margin=0.0)
-    assert phase.candidates() == [(p_near, ball), contact]  # the plane's box is infinite
-    below = PointContour(ground_frame((0.0, 0.0, 0.012)))
-    assert BroadPhase([(below, ball)]).candidates() == []
-    assert BroadPhase([(below, ball)], margin=0.005).candidates() == [(below, ball)]
+
+    def located(position, contour, margin):
+        """(searches made, g_N [m]) of one locate of a point at ``position``."""
+        point = PointContour(PointMass(1.0, position=position).point)
+        contact = connect(point, contour, UnilateralNewtonImpact(0.0), margin=margin)
+        contact.locate()
+        k = contact.kinematics
+        search = getattr(k, "search", None)
+        return (search.coarse_searches + search.newton_solves if search else None), k.g_N
+
+    searches, g_N = located((0.025, 0.025, 0.05), ball, 0.0)          # inside the ball's box
+    assert searches > 0 and g_N == pytest.approx(np.sqrt(2) * 0.025 - 0.03, abs=1e-12)
+    searches, g_N = located((5.0, 0.0, 0.0), ball, 0.0)               # far apart
+    assert searches == 0 and np.isnan(g_N)
+    assert located((5.0, 0.0, 0.0), floor, 0.0)[1] == 0.0             # the plane's box is infinite
+    below = (0.01, 0.0, 0.012)                                        # 8 mm below the box
+    for margin in (0.0, 0.0039):                                      # the boxes grown by 2 x margin
+        searches, g_N = located(below, ball, margin)
+        assert searches == 0 and np.isnan(g_N)
+    searches, g_N = located(below, ball, 0.005)                       # ... by 2 x 5 mm
+    assert searches > 0 and g_N == pytest.approx(np.hypot(0.01, 0.038) - 0.03, abs=1e-12)
 
 
 def test_contact_searches_only_pairs_the_broad_phase_keeps():

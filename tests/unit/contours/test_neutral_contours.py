@@ -222,6 +222,13 @@ def test_bounding_box_contains_the_contour(beam, top):
     assert (pts >= lo - 1e-15).all() and (pts <= hi + 1e-15).all()
     mesh = top.to_trimesh(30, 12)
     assert np.allclose(mesh.vertices, pts) and len(mesh.faces) == 2 * 29 * 11
+    lo0, hi0 = top.rest_box                    # the body-frame box at rest, grown per mode
+    P0 = top.local_position.ctrl0.reshape(-1, 3)
+    assert np.array_equal(lo0, P0.min(axis=0)) and np.array_equal(hi0, P0.max(axis=0))
+    P = P0 + top.mode_shapes.ctrl.reshape(-1, 3, top.n_modes) @ top.q_f   # control points of ū
+    grown = top.mode_box_growth @ np.abs(top.q_f)
+    assert (P >= lo0 - grown - 1e-15).all() and (P <= hi0 + grown + 1e-15).all()
+    assert np.isclose(P - P0, 0.0).mean() < 0.5                            # q_f moves them
 
 
 def test_neutral_axis_contour(beam):

@@ -37,7 +37,7 @@ def random_state(body, seed, qf_scale=1.0):
         q[3:7] = p / np.linalg.norm(p)
     else:
         q[3:6] = rng.uniform(-1.2, 1.2, size=3)
-    q[body._f] = qf_scale * rng.normal(size=body.n_modes)
+    q[body.q_f_slice] = qf_scale * rng.normal(size=body.n_modes)
     return q, u
 
 
@@ -291,6 +291,26 @@ def test_node_positions_equal_node_frames(bodies):
     expected = np.array([body.node(j).position(q) for j in nodes])
     np.testing.assert_allclose(body.node_positions(q, nodes), expected, atol=1e-13)
     np.testing.assert_allclose(body.node_positions(q)[nodes], expected, atol=1e-13)
+
+
+@pytest.mark.parametrize("rotation, n_r", [("quaternion", 4), ("cardan", 3)])
+def test_bounding_sphere_holds_every_node_by_the_public_constants(data, bodies, rotation, n_r):
+    """The state layout q = (R, q_r, q_f), u = (Ṙ, ω̄, q̇_f) read through the public slices;
+    rest_radius and mode_reach against the nodes and modes (brute force), and the
+    bounding sphere, rest_radius + Σ mode_reach |q_f|, holds every node of random states."""
+    body = bodies[rotation]
+    assert (body.q_r_slice, body.q_f_slice, body.u_f_slice) == (slice(3, 3 + n_r), slice(3 + n_r, body.nq),
+                                                                 slice(6, body.nu))
+    centre = 0.5 * (data.u0.min(axis=0) + data.u0.max(axis=0))
+    assert body.rest_radius == np.linalg.norm(data.u0 - centre, axis=1).max()
+    phi = data.phi[:, :N_F].reshape(data.n_nodes, 3, N_F)
+    np.testing.assert_allclose(body.mode_reach, [np.linalg.norm(phi[:, :, k], axis=1).max() for k in range(N_F)],
+                               rtol=1e-15)
+    for seed in range(3):
+        q, _ = random_state(body, seed, qf_scale=0.1)
+        c, radius = body.bounding_sphere(q)
+        assert radius == pytest.approx(body.rest_radius + body.mode_reach @ np.abs(q[body.q_f_slice]), rel=1e-15)
+        assert np.linalg.norm(body.node_positions(q) - c, axis=1).max() <= radius
 
 
 def test_point_jacobian_kernel_matches_the_formula():

@@ -15,8 +15,8 @@ from ffrmbs.errors import InputFileError, ModelError
 from mbs.body import ground_frame
 from mbs.flexible_body import FlexibleBodyFFR
 from mbs.floating_frame import PrescribedFrameMotion
-from mbs.loads import (DistributedForce, Force, NodalForces, Tabulated, Torque,
-                       read_force_file, write_force_file)
+from mbs.force_file import read_force_file, write_force_file
+from mbs.loads import DistributedForce, Force, NodalForces, Tabulated, Torque
 from mbs.rigid_body import RigidBody
 from mbs.rotations import cardan_to_matrix
 from mbs.system import System

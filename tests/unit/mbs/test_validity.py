@@ -110,6 +110,21 @@ def test_one_event_per_body_and_custom_ratio(beam_data):
     assert sorted(e[1] for e in monitor.events) == ["a", "b"] and len(seen) == 2
 
 
+def test_a_restored_monitor_warns_only_the_bodies_that_had_not_warned(beam_data):
+    """Events taken from a checkpoint (SpinMonitor.restore): the body that warned before
+    the interruption stays silent, the other still warns once above its limit."""
+    w1 = omega1_independent(beam_data, [0, 1, 2])
+    system = System()
+    system.add(FlexibleBodyFFR(beam_data, 3, frame=constant_spin(0.5 * w1), name="a"))
+    system.add(FlexibleBodyFFR(beam_data, 3, frame=constant_spin(0.5 * w1), name="b"))
+    before = (0.25, "a", 0.5 * w1, w1)
+    monitor = SpinMonitor(system, ratio=0.4)
+    monitor.restore([before])
+    seen = checks(monitor, system, [0.5, 0.75])
+    assert [e[1] for e in monitor.events] == ["a", "b"] and monitor.events[0] == before and len(seen) == 1
+    assert "'b'" in str(seen[0].message)
+
+
 def test_frames_that_cannot_rotate_and_rigid_bodies_are_not_watched(beam_data):
     system = System()
     system.add(FlexibleBodyFFR(beam_data, 3, frame=PrescribedFrameMotion.fixed(), name="fixed"))

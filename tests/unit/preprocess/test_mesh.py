@@ -7,7 +7,8 @@ import trimesh
 
 from ffrmbs.errors import InputFileError
 from preprocess import fe
-from preprocess.mesh import canonical_mesh, read_mesh
+from preprocess.mesh import canonical_mesh
+from preprocess.mesh_files import read_mesh
 
 GMSH_TET10 = [0, 1, 2, 3, 4, 5, 6, 7, 9, 8]  # gmsh swaps the mid-nodes of edges (1,3), (2,3)
 

@@ -159,7 +159,7 @@ def test_load_pattern_is_the_contours_displacement(kind, clamped_data):
         Tp = point_pattern(rc, T, eta, xi)
         q = beam.q_init.copy()
         r0 = contour.evaluate(contour.new_point(), eta, xi).r.copy()
-        q[beam._f] = q_f
+        q[beam.q_f_slice] = q_f
         contour.update(q, beam.u_init)
         r1 = contour.evaluate(contour.new_point(), eta, xi).r.copy()
         contour.update(beam.q_init, beam.u_init)

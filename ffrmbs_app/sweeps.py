@@ -1,7 +1,7 @@
-"""Parameter sweeps of a scene file on a Dask cluster (``ffrmbs sweep``, ``ffrmbs.sweep``).
+"""Parameter sweeps of a scene file on a Dask cluster (``ffrmbs sweep``, :func:`ffrmbs_app.sweep`).
 
 A sweep runs one scene file many times, each run with its own set of overrides
-(``KEY=VALUE``, as :func:`ffrmbs_app.scene.load_scene` takes them: KEY a dotted path into the
+(``KEY=VALUE``, as :func:`ffrmbs_app.scene_loader.load_scene` takes them: KEY a dotted path into the
 scene file, ``scene.dt``, ``body.beam.modes``, ``contact.impact.e``; VALUE TOML text). The
 sets are the Cartesian product of the grid's value lists, or with ``zip=True`` the lists
 taken side by side.
@@ -107,7 +107,7 @@ def parse_set(items) -> dict:
 
 def toml_text(value) -> str:
     """A grid value as TOML text: a str is taken as TOML text already (a bare word is a
-    string to :func:`~ffrmbs_app.scene.load_scene`); bool, int, float and lists of them are
+    string to :func:`~ffrmbs_app.scene_loader.load_scene`); bool, int, float and lists of them are
     written in TOML."""
     if isinstance(value, str):
         return value.strip()
@@ -219,7 +219,7 @@ def run_one(scene, overrides, result, check=False) -> dict:
         from threadpoolctl import threadpool_limits
 
         from ffrmbs_app.job import run_scene
-        from ffrmbs_app.scene import load_scene
+        from ffrmbs_app.scene_loader import load_scene
 
         with threadpool_limits(1):
             summary = run_scene(lambda: load_scene(scene, overrides=overrides), Path(result).parent, check=check,
