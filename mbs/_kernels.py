@@ -456,15 +456,15 @@ def linear_bodies_energy(rows, M, K, force, V0, q, u):
             s = 0.0
             for j in range(a, b):
                 s += M[i, j] * u[j]
-            kinetic += u[i] * s
+            kinetic += 0.5 * u[i] * s           # ½ first: the same bits, and no overflow of u M u
             if kind == CONSTANT_FORCE or kind >= ELASTIC_LOADED:
                 gravity -= force[i] * q[i]
             if kind != CONSTANT_FORCE:
                 s = 0.0
                 for j in range(a, b):
                     s += K[i, j] * q[j]
-                elastic += q[i] * s
-    return 0.5 * kinetic, 0.5 * elastic + gravity + V0
+                elastic += 0.5 * q[i] * s
+    return kinetic, elastic + gravity + V0
 
 
 @njit(cache=True)
