@@ -5,45 +5,16 @@ a curve along the top face's centre line) driven through the same
 random deformed states (warm and cold starts, open, closed, apart by the broad phase,
 outside the contour), and the choice of the path per contact in the Model."""
 
-import dataclasses
-
 import numpy as np
 import pytest
 
-from contact import Contact, ContactKinematicsSphereContour2s
-from contours import SphereContour
+from centre_scenes import centre_scene as _scene
+from contact import Contact, ContactKinematicsPointPlane, UnilateralNewtonImpact
+from contours import PlaneContour, PointContour
 from contours.neutral import _kernels as NK
-from contact import (ContactKinematicsPointContour1s, ContactKinematicsPointPlane, ContactKinematicsSphereContour1s,
-                     UnilateralNewtonImpact)
-from contours import Contour1sNeutralFFR, PlaneContour, PointContour
 from mbs import PointMass, System, ground_frame
 from mbs.fused_detection import CentreOnNeutral1s, CentreOnNeutral2s, CentreOnOffset, fused_detection
 from mbs.model import compile_model
-
-LAWS = ("impact", "penalty")
-RADIUS = 0.01       # [m], the sphere on the point mass
-
-
-def _scene(law, side="point", contour="2s"):
-    """The default scene (with its ``contour``, "2s" or "band", or "1s": a curve along the
-    top face's centre line); with ``side="sphere"`` its contact made of a sphere of RADIUS
-    about the point mass's point against the same contour, with the same law."""
-    from ffrmbs_app.scenes import point_mass_beam as pmb
-
-    scene = pmb.build("A", modes=20, law=law, contour="2s" if contour == "1s" else contour)
-    if side == "point" and contour != "1s":
-        return scene
-    old = scene.contact
-    surface = old.kinematics.contour2
-    if contour == "1s":
-        surface = Contour1sNeutralFFR.along_line(scene.beam, (0.0, pmb.HEIGHT, pmb.WIDTH / 2), (1, 0, 0),
-                                                 normal=(0, 1, 0), degree=4)
-    point = PointContour(scene.mass.point) if side == "point" else SphereContour(scene.mass.point, RADIUS)
-    kinematics = {("point", "1s"): ContactKinematicsPointContour1s, ("sphere", "1s"): ContactKinematicsSphereContour1s}
-    kind = kinematics.get((side, contour), ContactKinematicsSphereContour2s)
-    contact = Contact(kind(point, surface), old.law, name=f"{side} on {contour}")
-    scene.system.contacts[scene.system.contacts.index(old)] = contact
-    return dataclasses.replace(scene, contact=contact)
 
 
 def _python_locate(scene, q, u, t):

@@ -3,7 +3,9 @@ allocated in a steady step, the in-place kernels agree with their numpy referenc
 and a planned run leaves the System as it was."""
 
 import numpy as np
+import pytest
 
+from centre_scenes import PAIRS, centre_scene
 from contact import _kernels as kern
 from contact.solver import ProxSolver, _diagonal
 from mbs import stages
@@ -12,25 +14,27 @@ from mbs.model import Data, compile_model
 from numpy_allocations import NumpyAllocations
 
 
-
-def _default_scene():
-    from ffrmbs_app.scenes import point_mass_beam as pmb
-
-    scene = pmb.build("A", modes=20)
+def _default_scene(side="point", contour="2s"):
+    """The default scene's Model and Data, its contact one of :data:`centre_scenes.PAIRS`
+    (a sphere starts its radius higher: the same gap)."""
+    scene = centre_scene("impact", side, contour)
     system = scene.system
     model = compile_model(system, system.plan(0.1), theta=0.5, solver=ProxSolver("gauss-seidel", tol=1e-10,
                                                                                    max_iter=2000))
     data = Data(model)
     data.q[:], data.u[:] = system.initial_state()
+    data.q[scene.mass.q_slice][1] += scene.contact.kinematics.radius
     return model, data
 
 
-def test_a_steady_step_allocates_no_numpy_array():
-    """The default scene (setup A, 20 modes, Δt = 1e-5 s): 200 steps with the contact
-    open (from 5 ms, it closes at 10 ms) and 200 with it closed throughout, after
-    warm-up steps that compile the kernels and build the factor of M̂ and the contact
-    set: not one array (not even a 0-d one) is allocated."""
-    model, data = _default_scene()
+@pytest.mark.parametrize("side, contour", PAIRS)
+def test_a_steady_step_allocates_no_numpy_array(side, contour):
+    """The default scene (setup A, 20 modes, Δt = 1e-5 s) with every pair kind of a fused
+    detection: 200 steps with the contact open (from 5 ms, it closes at 10 ms) and 200
+    with it closed throughout, after warm-up steps that compile the kernels and build the
+    factor of M̂ and the contact set: not one array (not even a 0-d one) is allocated."""
+    model, data = _default_scene(side, contour)
+    assert model.fused[0] is not None
     dt = 1e-5
     phases = {}
     while data.t < 0.04 and len(phases) < 2:
