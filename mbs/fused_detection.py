@@ -46,8 +46,8 @@ from . import _fused_detection_kernels as K
 
 def fused_detection(contact):
     """The fused detection of ``contact`` (:class:`CentreOnNeutral2s`,
-    :class:`CentreOnOffset`, :class:`CentreOnNeutral1s`) when its kind has one and its bodies belong to a System,
-    else None (the Python path)."""
+    :class:`CentreOnOffset`, :class:`CentreOnNeutral1s`) when its kind has one and its
+    bodies belong to a System, else None (the Python path)."""
     for kind in (CentreOnNeutral2s, CentreOnOffset, CentreOnNeutral1s):
         if kind.applies(contact):
             return kind(contact)
