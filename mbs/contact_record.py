@@ -8,10 +8,12 @@
   g_N + δ of a contact through residual flexibility (:mod:`contact.compliance`, S1: the
   surface deflected by the spring δ as well as by the kept modes); while it is open (or
   pruned by the plan, or separated by the broad phase, when the steps do not locate it),
-  located afresh at the sample's state (t, q, u) — the contours updated and the search
-  run there, the contours' and the contact's run state put back afterwards, so recording
-  changes nothing of the run. NaN where no contact point exists (a point beyond the
-  contour's domain);
+  located afresh at the sample's state (t, q, u), the broad phase left out: a pair kind
+  with a fused detection in copies of its arrays (:class:`mbs.fused_detection.Probe`),
+  else (and when the probe cannot start from the run's last contact point) the contours
+  updated and the search run there, the contours' and the contact's run state put back
+  afterwards — either way recording changes nothing of the run. NaN where no contact
+  point exists (a point beyond the contour's domain);
 * ``deflection`` [m]: δ of the normal row, the spring's deflection at the end of the last
   step of a closed contact through residual flexibility (0 otherwise);
 * ``force`` [N]: the integrator's (``Integrator.contact_force``).
@@ -63,6 +65,7 @@ class ContactRecorder:
     def __init__(self, model):
         self.model = model
         self.slices = {id(contour): (qs, us) for contour, owners, qs, us in model.contours}
+        self.probes = [None if f is None else f.probe() for f in model.fused]
         self._kept = {}         # contact id -> StateCopy of its contours' and its own run state
         self._saved = None
 
@@ -76,6 +79,11 @@ class ContactRecorder:
             rec["active"][i] = closed
             rec["deflection"][i] = delta = self.deflection(data, j) if closed else 0.0
             afresh = c.unilateral and not closed
+            found = self.probes[j].locate(q, u) if afresh and self.probes[j] is not None else None
+            if found is not None:
+                gap, point, normal = found
+                rec["gap"][i], rec["point"][i], rec["normal"][i] = gap + delta, point, normal
+                continue
             located = self.locate(c, t, q, u) if afresh else k.active
             rec["gap"][i] = k.g_N + delta if located else np.nan
             rec["point"][i] = k.point2.r if located else np.nan

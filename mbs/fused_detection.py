@@ -151,6 +151,53 @@ class _FusedCentre:
             self._newton_settings()
         return closed
 
+    def probe(self) -> "Probe":
+        """A :class:`Probe` of this contact."""
+        return Probe(self)
+
+
+def _copied(args):
+    """The arrays of a kernel's argument tuple copied (nested tuples of work arrays too)."""
+    return tuple(_copied(a) if isinstance(a, tuple) else a.copy() for a in args)
+
+
+class Probe:
+    """The gap of a contact with a fused detection at a given state, located into copies
+    of the detection's arrays (contour states, contact points, kinematics, warm start,
+    counters, work), so that the run's own stay as they are: what the contact recorder
+    (:mod:`mbs.contact_record`) samples of an open contact, without the save and restore
+    of the run state around the Python path. Newton starts from the run's last contact
+    point; the broad phase is left out (the recorder wants the gap however far).
+
+    Parameters
+    ----------
+    fused : _FusedCentre
+    """
+
+    def __init__(self, fused):
+        self.fused = fused
+        self.args = _copied(fused._args)
+        position = {id(a): i for i, a in enumerate(fused._args)}
+        k = fused.kinematics
+        self._start = self.args[position[id(k.start)]]
+        self._point2 = self.args[position[id(k.point2.buffer)]]
+        self._kin = self.args[position[id(k.buffer)]]
+
+    def locate(self, q, u):
+        """(g_N [m], contact point C2 (3,) [m], normal n (3,)) at the global (q, u) — views
+        of the probe's arrays —, or None when the kernel cannot locate it from the run's
+        warm start (then the caller takes the Python path)."""
+        fused, args = self.fused, self.args
+        itab, ftab = args[0], args[1]
+        np.copyto(itab, fused._itab)
+        itab[K.BOX] = 0
+        np.copyto(ftab, fused._ftab)
+        np.copyto(self._start, fused.kinematics.start)
+        outcome, g_N = type(fused).kernel(q, u, *args)[:2]
+        if outcome != K.LOCATED:
+            return None
+        return g_N, self._point2[:3], self._kin[:3]
+
 
 class CentreOnNeutral2s(_FusedCentre):
     """Stages 3 and 4 of a point or a sphere on a point mass against a neutral 2s contour
