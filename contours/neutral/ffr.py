@@ -119,10 +119,20 @@ class Contour1sNeutralFFR(_FFRProducts, Contour1sNeutralFactory):
     @classmethod
     def along_line(cls, body, start, direction, normal, nodes=None, **kw):
         """The contour through the nodes on the line through ``start`` [m] along
-        ``direction`` (optionally among ``nodes`` or a node-group name)."""
+        ``direction`` (optionally among ``nodes`` or a node-group name). Too few nodes on
+        the line for the curve's degree (an unstructured mesh has few nodes on an arbitrary
+        line) is a ModelError that says so and what to do."""
         if isinstance(nodes, str):
             nodes = body.node_group(nodes)
-        return cls(body, node_line(body.data.u0, start, direction, nodes), normal, **kw)
+        on_line = node_line(body.data.u0, start, direction, nodes)
+        degree = kw.get("degree", 3)
+        if kw.get("control_points") is None and on_line.size < degree + 1:
+            point = lambda v: "(" + ", ".join(f"{float(x):g}" for x in np.ravel(v)) + ")"  # noqa: E731
+            raise ModelError(f"{kw.get('name', 'neutral 1s')}: only {on_line.size} nodes of {body.name!r} lie on the "
+                             f"line through {point(start)} m along {point(direction)}, a degree-{degree} curve "
+                             f"needs {degree + 1}: mesh the part with nodes along that line (e.g. a structured "
+                             "mesh) or give the curve's nodes in order")
+        return cls(body, on_line, normal, **kw)
 
 
 class Contour1sEdgeFFR(Contour1sNeutralFFR):

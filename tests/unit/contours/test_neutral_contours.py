@@ -255,6 +255,17 @@ def test_neutral_axis_contour(beam):
     assert np.linalg.norm((rp - rm) / (2 * h) - point.v) < 1e-7 * np.linalg.norm(point.v)
 
 
+def test_too_few_nodes_on_the_line_say_so_and_what_to_do(beam):
+    """The centre line holds 11 nodes: a degree-10 curve through them builds, a degree-11
+    one is refused with the count, the need and the way out (before: the interpolation's
+    bare "needs at least 12 points")."""
+    assert len(Contour1sNeutralFFR.along_line(beam, (0, H / 2, W / 2), (1, 0, 0), normal=(0, 1, 0),
+                                              degree=10).nodes) == 11
+    with pytest.raises(ModelError, match=r"only 11 nodes of .* lie on the line through \(0, 0.025, 0.025\) m along "
+                                         r"\(1, 0, 0\), a degree-11 curve needs 12: mesh the part with nodes along"):
+        Contour1sNeutralFFR.along_line(beam, (0, H / 2, W / 2), (1, 0, 0), normal=(0, 1, 0), degree=11)
+
+
 def test_closed_curve_through_a_ring_of_nodes(beam):
     """The perimeter of the end face x1 as a closed 1s contour: C² across the seam."""
     u0 = beam.data.u0
