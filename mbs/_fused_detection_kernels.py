@@ -20,9 +20,11 @@ Python path it replaces — ``contour.update`` of both contours, then
 
 The kernel takes each object's arrays as the one vector their views share
 (:attr:`contours.base.ContourPoint.buffer`, :attr:`contact.kinematics.ContactKinematics.buffer`,
-the frame contour's ``state``, the neutral contour's state and span cache), the
+the frame contour's ``state``), the surface's ``kernel_data`` (knots … span cache), the
 constants of the pair as one int table ``itab`` and one float table ``ftab`` (layouts
-below, written by :class:`mbs.fused_detection.CentreOnNeutral2s`) and a work vector.
+below, written by :mod:`mbs.fused_detection`), a small work vector, and the work arrays the
+search's Newton (``newton_work``) and the contour's evaluation (``contour_work``) use on the
+Python path.
 
 Constant arguments of nested kernel calls are passed as typed values (``np.int64(0)``,
 ``np.bool_(True)``): numba compiles a callee apart for every literal argument, once more
@@ -49,37 +51,26 @@ from ._kernels import point_jacobian_T
 APART, LOCATED, FALLBACK = 0, 1, 2          # outcomes of a fused detection
 
 # itab: the point's rows of q and u, the body's q_f and q̇_f rows, n_f, nu of the two
-# bodies, velocity wanted (0/1), broad phase on (0/1), Newton iterations, the neutral
-# contour's ints (6: p, n_ctrl, closed per direction), the knot vectors' lengths, the
-# offsets of the kinematics buffer (contact.kinematics.buffer_layout, 8)
-QP, UP, QF, UF, NF, NU1, NU2, VELOCITY, BOX, MAX_ITER = range(10)
-GEOM_AT, KNOTS_E_N, KNOTS_X_N, KIN_AT = 10, 16, 17, 18
+# bodies, velocity wanted (0/1), broad phase on (0/1), Newton iterations, an offset
+# contour's offset law (contours._offset_kernels.offsets) and whether its ξ is closed, the
+# offsets of the kinematics buffer (contact.kinematics.buffer_layout, 8). The surface's
+# own kernel data (knots, ints, floats, control points, state, span cache) are arguments.
+QP, UP, QF, UF, NF, NU1, NU2, VELOCITY, BOX, MAX_ITER, LAW, XI_CLOSED, KIN_AT = range(13)
 ITAB_SIZE = KIN_AT + 8
 # ftab: margin [m], tol2 [m²] (NaN until the search knows its length scale), the largest
-# Newton steps in η and ξ, the normal's sign, edge2 [m²] (contact.search: how far beyond
-# the domain's boundary a point still projects onto it, squared), the point frame's offset ū0 (3) [m], the
-# domain (4), the sphere's radius ρ [m] (0: a point), then the knots in η and ξ, the undeformed control points' box (lo (3),
-# hi (3)) [m] and the bound of P_Φ (3, n_f) [m] (contours.neutral._kernels.bounding_box)
+# Newton steps in η and ξ, the normal's sign (2s), edge2 [m²] (contact.search: how far
+# beyond the domain's boundary a point still projects onto it, squared), the point frame's
+# offset ū0 (3) [m], an offset contour's law size [m], ξ domain (2) and reach (the largest
+# offset [m], which grows the neutral curve's box), the sphere's radius ρ [m] (0: a point),
+# then the undeformed control points' box (lo (3), hi (3)) [m] and the bound of P_Φ
+# (3, n_f) [m] (contours.neutral._kernels.bounding_box)
 MARGIN, TOL2, MAX_STEP_E, MAX_STEP_X, SIGN, EDGE2 = range(6)
-OFFSET_AT, FLOATS_AT, RADIUS, KNOTS_AT = 6, 9, 13, 14
-# an offset contour's tables: in itab its offset law (contours._offset_kernels.offsets) at
-# LAW and whether ξ is closed at XI_CLOSED (no knots: the neutral curve's kernel data are
-# arguments); in ftab at FLOATS_AT the law's size [m], the ξ domain (2) and the reach
-# (the largest offset [m], which grows the neutral curve's box), then from KNOTS_AT the box
-# constants as above
-LAW, XI_CLOSED = GEOM_AT, GEOM_AT + 1
+OFFSET_AT, FLOATS_AT, RADIUS, BOX_AT = 6, 9, 13, 14
 SIZE, XI_A, XI_B, REACH = FLOATS_AT, FLOATS_AT + 1, FLOATS_AT + 2, FLOATS_AT + 3
 
 
-MAX_DEGREE = 7
-# the work vector: basis tables (2, 3, p_max + 1), ū rows (6, 3), r rows (6, 3), g (3,), then
-# from WORK_AT the Φ rows (6, 3 n_f), two boxes (2, 3) and the direction −n (3,)
-WORK_AT = 6 * (MAX_DEGREE + 1) + 39
-
-
-def work_size(n_f):
-    """Length of the work vector of a contour with n_f modes (degrees up to 7)."""
-    return WORK_AT + 18 * n_f + 15
+WORK_SIZE = 15     # the work vector: two boxes (2, 3) and the direction −n (3,); Newton and the
+                   # contour's evaluation work in the search's and the contour's own work arrays
 
 
 @njit(cache=True)
@@ -100,8 +91,7 @@ def _begin(q, u, itab, ftab, box0, reach, state, frame1, point1, centre, axes1, 
         state[Q_AT + n_f + k] = u[uf + k]
     state[STAMP_AT] += 1.0
     if itab[BOX] != 0:
-        work_at = WORK_AT + 18 * n_f
-        box1, box2 = work[work_at:work_at + 6].reshape(2, 3), work[work_at + 6:work_at + 12].reshape(2, 3)
+        box1, box2 = work[0:6].reshape(2, 3), work[6:12].reshape(2, 3)
         for c in range(3):
             box1[0, c] = frame1[rigid.R_AT + c] - radius
             box1[1, c] = frame1[rigid.R_AT + c] + radius
@@ -137,7 +127,7 @@ def _finish(itab, ftab, frame1, point1, point2, kin, centre, axes1, work):
     g_N, a sphere's C1, the frame's pieces into ``kin``. Returns (g_N [m], ġ_N [m/s],
     the sphere's C1 η, ξ [rad] (NaN for a point))."""
     nan = np.nan
-    n_f, nu1, nu2 = itab[NF], itab[NU1], itab[NU2]
+    nu1, nu2 = itab[NU1], itab[NU2]
     velocity = itab[VELOCITY] != 0
     radius = ftab[RADIUS]
     D2 = point2[DERIVS_AT:FRAME_AT].reshape(6, 3)
@@ -145,8 +135,7 @@ def _finish(itab, ftab, frame1, point1, point2, kin, centre, axes1, work):
     g_N = normal_gap(F2, centre, D2, radius)
     eta1 = xi1 = nan
     if radius > 0.0:
-        work_at = WORK_AT + 18 * n_f
-        m = work[work_at + 12:work_at + 15]
+        m = work[12:15]
         for c in range(3):
             m[c] = -F2[c, 2]
         eta1, xi1 = sphere_angles(axes1, m)
@@ -183,8 +172,8 @@ def _jacobian_at_rest(state, local, phi_point, n_f, point2, nu2):
 
 
 @njit(cache=True)
-def centre_on_neutral_2s(q, u, itab, ftab, ctrl0, phi, state, span, frame1, point1, point2, kin, centre, axes1,
-                         start, counts, work):
+def centre_on_neutral_2s(q, u, itab, ftab, knots_e, knots_x, ints, floats, ctrl0, phi, state, span, frame1, point1,
+                         point2, kin, centre, axes1, start, counts, work, newton_work, contour_work):
     """Stages 3 and 4 for one contact (module docstring) at the global (q, u) [m, m/s]:
 
     1. the contours' states: the point r = q_P + ū0, ṙ = u_P into ``frame1`` (the
@@ -198,13 +187,14 @@ def centre_on_neutral_2s(q, u, itab, ftab, ctrl0, phi, state, span, frame1, poin
        r, frame, J_T = 1, J_R = 0 of a point-mass frame, ṙ with ``itab[VELOCITY]``;
        a sphere's axes into ``axes1``);
     4. Newton on eq. 3.31–3.32 for c from the warm start ``start`` (η, ξ)
-       (:func:`~contact._detection_kernels.newton_2s`), the search's ``counts`` and
+       (:func:`~contact._detection_kernels.newton_2s` on the surface's kernel data, in the
+       search's ``newton_work`` = B, ū rows, r rows, g), the search's ``counts`` and
        ``start`` updated — no warm start, no tolerance yet or no root: FALLBACK (the
        caller runs the Python path, which searches the coarse grid);
     5. C2 into ``point2``: r and its derivatives (eq. 3.23, 3.25, 3.26: those of Newton's
        last evaluation, at the root), the frame (eq. 3.27–3.29), ṙ (eq. 2.32)
        with ``itab[VELOCITY]`` — what :func:`~contours.neutral._kernels.evaluate_2s`
-       gives at the root —, J_T = A Φ (eq. 2.70 on a prescribed frame,
+       gives at the root, its Φ rows in the contour's own (``contour_work``[2]) —, J_T = A Φ (eq. 2.70 on a prescribed frame,
        :func:`mbs._kernels.point_jacobian_T`), J_R = 0;
     6. g_N = nᵀ (c − r_C2) − ρ (eq. 3.4); a sphere's C1 = c − ρ n into ``point1``
        (:func:`contours._rigid_kernels.sphere_point` at the coordinates of −n); n, T, ġ_T,
@@ -215,23 +205,15 @@ def centre_on_neutral_2s(q, u, itab, ftab, ctrl0, phi, state, span, frame1, poin
     """
     nan = np.nan
     n_f = itab[NF]
-    o = KNOTS_AT + itab[KNOTS_E_N] + itab[KNOTS_X_N]
-    if not _begin(q, u, itab, ftab, ftab[o:o + 6 + 3 * n_f], 0.0, state, frame1, point1, centre, axes1, work):
+    if not _begin(q, u, itab, ftab, ftab[BOX_AT:BOX_AT + 6 + 3 * n_f], 0.0, state, frame1, point1, centre, axes1,
+                  work):
         return APART, nan, nan, nan, nan, nan, nan
     if np.isnan(start[0]) or np.isnan(ftab[TOL2]):
         return FALLBACK, nan, nan, nan, nan, nan, nan
-    ints = itab[GEOM_AT:GEOM_AT + 6]
-    pm = max(ints[0], ints[3]) + 1
-    B = work[:6 * pm].reshape(2, 3, pm)
-    local = work[6 * pm:6 * pm + 18].reshape(6, 3)
-    D = work[6 * pm + 18:6 * pm + 36].reshape(6, 3)
-    g = work[6 * pm + 36:6 * pm + 39]
-    knots_e = ftab[KNOTS_AT:KNOTS_AT + itab[KNOTS_E_N]]
-    knots_x = ftab[KNOTS_AT + itab[KNOTS_E_N]:o]
-    found, eta, xi, gg, k, steps = newton_2s(centre, start[0], start[1], knots_e, knots_x, ints,
-                                             ftab[FLOATS_AT:FLOATS_AT + 4], ctrl0, phi, state, span, ftab[MAX_STEP_E],
-                                             ftab[MAX_STEP_X], ftab[TOL2], ftab[EDGE2], itab[MAX_ITER], B, local,
-                                             D, g)
+    B, local, D, g = newton_work
+    found, eta, xi, gg, k, steps = newton_2s(centre, start[0], start[1], knots_e, knots_x, ints, floats, ctrl0, phi,
+                                             state, span, ftab[MAX_STEP_E], ftab[MAX_STEP_X], ftab[TOL2], ftab[EDGE2],
+                                             itab[MAX_ITER], B, local, D, g)
     if not found:
         return FALLBACK, nan, nan, nan, nan, nan, nan
     _count(counts, k, steps)
@@ -240,7 +222,7 @@ def centre_on_neutral_2s(q, u, itab, ftab, ctrl0, phi, state, span, frame1, poin
     for k in range(18):
         point2[DERIVS_AT + k] = D[k // 3, k % 3]
     frame_2s(point2[DERIVS_AT:FRAME_AT].reshape(6, 3), ftab[SIGN], point2[FRAME_AT:V_AT].reshape(3, 3))
-    phi_rows = work[WORK_AT:WORK_AT + 18 * n_f].reshape(6, 3 * n_f)
+    phi_rows = contour_work[2]
     contract_surface(B[0], int(span[1]), ints[0], B[1], int(span[2]), ints[3], phi, np.int64(1), phi_rows)
     if itab[VELOCITY] != 0:
         point_velocity(state, local[0], phi_rows[0], point2[V_AT:J_AT])
@@ -263,7 +245,7 @@ def centre_on_offset(q, u, itab, ftab, knots, ints, floats, ctrl0, phi, state, s
     Returns as :func:`centre_on_neutral_2s`."""
     nan = np.nan
     n_f = itab[NF]
-    if not _begin(q, u, itab, ftab, ftab[KNOTS_AT:KNOTS_AT + 6 + 3 * n_f], ftab[REACH], state, frame1, point1, centre,
+    if not _begin(q, u, itab, ftab, ftab[BOX_AT:BOX_AT + 6 + 3 * n_f], ftab[REACH], state, frame1, point1, centre,
                   axes1, work):
         return APART, nan, nan, nan, nan, nan, nan
     if np.isnan(start[0]) or np.isnan(ftab[TOL2]):
@@ -300,7 +282,7 @@ def centre_on_neutral_1s(q, u, itab, ftab, knots, ints, floats, ctrl0, phi, stat
     J_T = A Φ, J_R = 0. Returns as :func:`centre_on_neutral_2s` (C2's ξ = 0)."""
     nan = np.nan
     n_f = itab[NF]
-    if not _begin(q, u, itab, ftab, ftab[KNOTS_AT:KNOTS_AT + 6 + 3 * n_f], 0.0, state, frame1, point1, centre, axes1,
+    if not _begin(q, u, itab, ftab, ftab[BOX_AT:BOX_AT + 6 + 3 * n_f], 0.0, state, frame1, point1, centre, axes1,
                   work):
         return APART, nan, nan, nan, nan, nan, nan
     if np.isnan(start[0]) or np.isnan(ftab[TOL2]):

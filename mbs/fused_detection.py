@@ -63,7 +63,9 @@ class _FusedCentre:
     """What the fused detections of a centre (a point or a sphere on a point mass) on a
     surface of a body at rest share: the tables' common entries (the layouts of
     :mod:`._fused_detection_kernels`), Newton's settings, and :meth:`locate` around the
-    kernel (:attr:`kernel` with the arguments :attr:`_args` after q and u)."""
+    kernel (:attr:`kernel` with the arguments :attr:`_args` after q and u). ``neutral``: the
+    neutral contour whose state the kernel writes (the surface, or a band's curve);
+    ``offset_floats``: an offset contour's law size [m], ξ domain and reach [m] (ftab)."""
 
     kernel = None
 
@@ -86,11 +88,11 @@ class _FusedCentre:
                 and type(k.search) is search and k.search.compiled
                 and body1.q_slice is not None and body2.q_slice is not None)
 
-    def __init__(self, contact, neutral, surface_floats, box_at):
+    def __init__(self, contact, neutral, offset_floats=(0.0, 0.0, 0.0, 0.0)):
         self.contact = contact
         k = self.kinematics = contact.kinematics
         point, surface = k.contour1, k.contour2
-        self.point, self.surface, self.search, self.neutral = point, surface, k.search, neutral
+        self.search, self.neutral = k.search, neutral
         self.velocity = not contact.set_valued
         self.closing_tol = contact.closing_tol
         body1, body2 = point.body, surface.body
@@ -103,14 +105,14 @@ class _FusedCentre:
         itab[K.VELOCITY], itab[K.BOX] = self.velocity, contact.margin is not None
         itab[K.KIN_AT:K.KIN_AT + 8] = buffer_layout(point.nu, surface.nu)
         lo0, hi0 = neutral.rest_box
-        ftab = np.concatenate((np.zeros(box_at), lo0, hi0, neutral.mode_box_growth.ravel()))
+        ftab = np.concatenate((np.zeros(K.BOX_AT), lo0, hi0, neutral.mode_box_growth.ravel()))
         ftab[K.MARGIN] = 0.0 if contact.margin is None else contact.margin
         ftab[K.OFFSET_AT:K.OFFSET_AT + 3] = point.frame_ref.u0
         ftab[K.RADIUS] = k.radius
-        ftab[K.FLOATS_AT:K.FLOATS_AT + 4] = surface_floats
+        ftab[K.FLOATS_AT:K.FLOATS_AT + 4] = offset_floats
         self._itab, self._ftab = itab, ftab
         self._newton_settings()
-        self._work = np.zeros(K.work_size(n_f))
+        self._work = np.zeros(K.WORK_SIZE)
         self._points = (point.state, k.point1.buffer, k.point2.buffer, k.buffer, k.centre, k.axes1, k.start,
                         k.search.counts)
         self.sphere = k.radius > 0.0
@@ -217,21 +219,16 @@ class CentreOnNeutral2s(_FusedCentre):
     def applies(contact) -> bool:
         """True for a point or a sphere on a point mass against a compiled neutral 2s
         contour on a body at rest, not trimmed (a face with holes takes the Python path,
-        whose search tests the trim), of degrees up to MAX_DEGREE (:meth:`_FusedCentre._applies`)."""
+        whose search tests the trim) (:meth:`_FusedCentre._applies`)."""
         return _FusedCentre._applies(contact, lambda s: isinstance(s, Contour2sNeutralFactory) and s.compiled
-                                     and s.trim is None and max(s.space.eta.p, s.space.xi.p) <= K.MAX_DEGREE)
+                                     and s.trim is None)
 
     def __init__(self, contact):
         surface = contact.kinematics.contour2
-        knots_e, knots_x, ints, floats, ctrl0, phi, state, span = surface.kernel_data
-        super().__init__(contact, surface, floats, K.KNOTS_AT + knots_e.size + knots_x.size)
-        itab, ftab = self._itab, self._ftab
-        itab[K.GEOM_AT:K.GEOM_AT + 6] = ints
-        itab[K.KNOTS_E_N], itab[K.KNOTS_X_N] = knots_e.size, knots_x.size
-        ftab[K.KNOTS_AT:K.KNOTS_AT + knots_e.size] = knots_e
-        ftab[K.KNOTS_AT + knots_e.size:K.KNOTS_AT + knots_e.size + knots_x.size] = knots_x
-        ftab[K.SIGN] = surface.sign
-        self._args = (itab, ftab, ctrl0, phi, state, span, *self._points, self._work)
+        super().__init__(contact, surface)
+        self._ftab[K.SIGN] = surface.sign
+        self._args = (self._itab, self._ftab, *surface.kernel_data, *self._points, self._work, self.search.newton_work,
+                      surface.evaluate_work)
 
 
 class CentreOnOffset(_FusedCentre):
@@ -244,21 +241,18 @@ class CentreOnOffset(_FusedCentre):
     @staticmethod
     def applies(contact) -> bool:
         """True for a point or a sphere on a point mass against a compiled offset contour
-        on a compiled 1s neutral curve of degree up to MAX_DEGREE on a body at rest
-        (:meth:`_FusedCentre._applies`)."""
+        on a compiled 1s neutral curve on a body at rest (:meth:`_FusedCentre._applies`)."""
         return _FusedCentre._applies(contact, lambda s: isinstance(s, OffsetContour) and s.compiled
-                                     and isinstance(s.neutral, Contour1sNeutralFactory) and s.neutral.compiled
-                                     and s.neutral.space.eta.p <= K.MAX_DEGREE)
+                                     and isinstance(s.neutral, Contour1sNeutralFactory) and s.neutral.compiled)
 
     def __init__(self, contact):
         surface = contact.kinematics.contour2
         neutral = surface.neutral
-        knots, ints, floats, ctrl0, phi, state, span = neutral.kernel_data
         law, size = surface.offset_law
         xi_axis = contact.kinematics.search.axes[1]
-        super().__init__(contact, neutral, (size, xi_axis.a, xi_axis.b, surface.reach), K.KNOTS_AT)
+        super().__init__(contact, neutral, (size, xi_axis.a, xi_axis.b, surface.reach))
         self._itab[K.LAW], self._itab[K.XI_CLOSED] = law, xi_axis.closed
-        self._args = (self._itab, self._ftab, knots, ints, floats, ctrl0, phi, state, span, neutral.normal_ref,
+        self._args = (self._itab, self._ftab, *neutral.kernel_data, neutral.normal_ref,
                       *self._points, self._work, self.search.newton_work, surface.evaluate_work)
 
 
@@ -271,13 +265,12 @@ class CentreOnNeutral1s(_FusedCentre):
     @staticmethod
     def applies(contact) -> bool:
         """True for a point or a sphere on a point mass against a compiled neutral 1s
-        contour of degree up to MAX_DEGREE on a body at rest (:meth:`_FusedCentre._applies`)."""
-        return _FusedCentre._applies(contact, lambda s: isinstance(s, Contour1sNeutralFactory) and s.compiled
-                                     and s.space.eta.p <= K.MAX_DEGREE, ON_CURVE, Contact1sSearch)
+        contour on a body at rest (:meth:`_FusedCentre._applies`)."""
+        return _FusedCentre._applies(contact, lambda s: isinstance(s, Contour1sNeutralFactory) and s.compiled,
+                                     ON_CURVE, Contact1sSearch)
 
     def __init__(self, contact):
         curve = contact.kinematics.contour2
-        knots, ints, floats, ctrl0, phi, state, span = curve.kernel_data
-        super().__init__(contact, curve, np.zeros(4), K.KNOTS_AT)
-        self._args = (self._itab, self._ftab, knots, ints, floats, ctrl0, phi, state, span, curve.n_ref,
+        super().__init__(contact, curve)
+        self._args = (self._itab, self._ftab, *curve.kernel_data, curve.n_ref,
                       *self._points, self._work, self.search.newton_work, curve.evaluate_work)
