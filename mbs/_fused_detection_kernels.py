@@ -194,7 +194,7 @@ def centre_on_neutral_2s(q, u, itab, ftab, knots_e, knots_x, ints, floats, ctrl0
     5. C2 into ``point2``: r and its derivatives (eq. 3.23, 3.25, 3.26: those of Newton's
        last evaluation, at the root), the frame (eq. 3.27–3.29), ṙ (eq. 2.32)
        with ``itab[VELOCITY]`` — what :func:`~contours.neutral._kernels.evaluate_2s`
-       gives at the root, its Φ rows in the contour's own (``contour_work``[2]) —, J_T = A Φ (eq. 2.70 on a prescribed frame,
+       gives at the root, its Φ rows in the third of the contour's ``contour_work`` —, J_T = A Φ (eq. 2.70 on a prescribed frame,
        :func:`mbs._kernels.point_jacobian_T`), J_R = 0;
     6. g_N = nᵀ (c − r_C2) − ρ (eq. 3.4); a sphere's C1 = c − ρ n into ``point1``
        (:func:`contours._rigid_kernels.sphere_point` at the coordinates of −n); n, T, ġ_T,
