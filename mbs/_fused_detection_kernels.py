@@ -10,9 +10,9 @@ against an offset contour (band, cylinder: :mod:`contours.derived`) of such a bo
 :class:`~contact.kinematics.ContactKinematicsSphereContour2s` with its compiled
 :class:`~contact.search.Contact2sSearch`), :func:`centre_on_neutral_1s` against a neutral
 1s contour (:class:`~contact.kinematics.ContactKinematicsPointContour1s`,
-``ContactKinematicsSphereContour1s`` with a compiled :class:`~contact.search.Contact1sSearch`). Both share the states and broad phase
-(:func:`_begin`) and the gap, the sphere's point and the frame's pieces (:func:`_finish`). Its reference is the
-Python path it replaces — ``contour.update`` of both contours, then
+``ContactKinematicsSphereContour1s`` with a compiled :class:`~contact.search.Contact1sSearch`).
+All three share the states and broad phase (:func:`_begin`) and the gap, the sphere's point
+and the frame's pieces (:func:`_finish`). Their reference is the Python path they replace — ``contour.update`` of both contours, then
 :meth:`contact.Contact.locate` (bounding boxes, ``search.solve`` warm-started,
 ``contour.evaluate``, :func:`~contact._detection_kernels.normal_gap`,
 :func:`~contact._detection_kernels.frame_rates_jacobians`) — which
@@ -36,7 +36,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from contact._detection_kernels import boxes_overlap, frame_rates_jacobians, newton_1s, newton_2s, newton_offset, normal_gap
+from contact._detection_kernels import (boxes_overlap, frame_rates_jacobians, newton_1s, newton_2s, newton_offset,
+                                       normal_gap)
 from contact.search import LAST_ITERATIONS, NEWTON_ITERATIONS, NEWTON_SOLVES
 from contours import rigid
 from contours._offset_kernels import evaluate_offset, offsets
@@ -194,8 +195,9 @@ def centre_on_neutral_2s(q, u, itab, ftab, knots_e, knots_x, ints, floats, ctrl0
     5. C2 into ``point2``: r and its derivatives (eq. 3.23, 3.25, 3.26: those of Newton's
        last evaluation, at the root), the frame (eq. 3.27–3.29), ṙ (eq. 2.32)
        with ``itab[VELOCITY]`` — what :func:`~contours.neutral._kernels.evaluate_2s`
-       gives at the root, its Φ rows in the third of the contour's ``contour_work`` —, J_T = A Φ (eq. 2.70 on a prescribed frame,
-       :func:`mbs._kernels.point_jacobian_T`), J_R = 0;
+       gives at the root, its Φ rows in the third of the contour's ``contour_work`` —,
+       J_T = A Φ (eq. 2.70 on a prescribed frame, :func:`mbs._kernels.point_jacobian_T`),
+       J_R = 0;
     6. g_N = nᵀ (c − r_C2) − ρ (eq. 3.4); a sphere's C1 = c − ρ n into ``point1``
        (:func:`contours._rigid_kernels.sphere_point` at the coordinates of −n); n, T, ġ_T,
        w_N1, w_N2, w_T1, w_T2 (eq. 3.8) into ``kin``.
