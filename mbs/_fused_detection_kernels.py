@@ -12,11 +12,11 @@ against an offset contour (band, cylinder: :mod:`contours.derived`) of such a bo
 1s contour (:class:`~contact.kinematics.ContactKinematicsPointContour1s`,
 ``ContactKinematicsSphereContour1s`` with a compiled :class:`~contact.search.Contact1sSearch`).
 All three share the states and broad phase (:func:`_begin`) and the gap, the sphere's point
-and the frame's pieces (:func:`_finish`). Their reference is the Python path they replace — ``contour.update`` of both contours, then
-:meth:`contact.Contact.locate` (bounding boxes, ``search.solve`` warm-started,
+and the frame's pieces (:func:`_finish`). Their reference is the Python path they replace —
+``contour.update`` of both contours, then :meth:`contact.Contact.locate` (bounding boxes, ``search.solve`` warm-started,
 ``contour.evaluate``, :func:`~contact._detection_kernels.normal_gap`,
 :func:`~contact._detection_kernels.frame_rates_jacobians`) — which
-``tests/unit/contact/test_fused_detection.py`` compares it against.
+``tests/unit/contact/test_fused_detection.py`` compares them against.
 
 The kernel takes each object's arrays as the one vector their views share
 (:attr:`contours.base.ContourPoint.buffer`, :attr:`contact.kinematics.ContactKinematics.buffer`,
