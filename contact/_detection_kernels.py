@@ -283,22 +283,25 @@ def _project(J, n, T, sign, w_N, w_T):
 
 
 @njit(cache=True)
-def assemble_W(out, start1, w_N1, w_T1, start2, w_N2, w_T2):
-    """W = [W_N] (out (nu_total, 1)) or [W_N, W_T] (out (nu_total, 3)) from the bodies'
-    pieces (eq. 3.8): zero, then the pieces added at rows start_i.. (start_i < 0: the
-    ground, no rows); both contours may sit on one body."""
-    out[:, :] = 0.0
-    _add_block(out, start1, w_N1, w_T1)
-    _add_block(out, start2, w_N2, w_T2)
+def assemble_W(out, col, dim, start1, w_N1, w_T1, start2, w_N2, w_T2):
+    """W = [W_N] (dim 1) or [W_N, W_T] (dim 3) (eq. 3.8) into the columns col..col + dim of
+    ``out`` (nu_total, ≥ col + dim) from the bodies' pieces: zero, then the pieces added at
+    rows start_i.. (start_i < 0: the ground, no rows); both contours may sit on one body.
+    ``out`` is the whole array (not a column slice), so the kernel sees one layout."""
+    for i in range(out.shape[0]):
+        for k in range(dim):
+            out[i, col + k] = 0.0
+    _add_block(out, col, dim, start1, w_N1, w_T1)
+    _add_block(out, col, dim, start2, w_N2, w_T2)
 
 
 @njit(cache=True)
-def _add_block(out, start, w_N, w_T):
-    """out[start + j] += (w_N[j], w_T[j]) (the W_T columns only when out has three)."""
+def _add_block(out, col, dim, start, w_N, w_T):
+    """out[start + j, col..] += (w_N[j], w_T[j]) (the W_T columns only when dim is 3)."""
     if start < 0:
         return
     for j in range(w_N.shape[0]):
-        out[start + j, 0] += w_N[j]
-        if out.shape[1] == 3:
-            out[start + j, 1] += w_T[j, 0]
-            out[start + j, 2] += w_T[j, 1]
+        out[start + j, col] += w_N[j]
+        if dim == 3:
+            out[start + j, col + 1] += w_T[j, 0]
+            out[start + j, col + 2] += w_T[j, 1]

@@ -99,9 +99,10 @@ class Contact(ContactElement):
             return False
         return bool(k.update(velocity=not self.set_valued, jacobians=True)) and k.g_N <= self.closing_tol
 
-    def jacobian(self, out) -> None:
-        """W (nu, dim) = [W_N] or [W_N, W_T] of the closed contact into ``out``."""
-        self.kinematics.fill_W(out)
+    def jacobian(self, out, col=0) -> None:
+        """W (nu, dim) = [W_N] or [W_N, W_T] of the closed contact into the columns
+        col..col + dim of ``out`` (nu, ·)."""
+        self.kinematics.fill_W(out, col, self.dim)
 
     def add_forces(self, h) -> float:
         """Single-valued law at the located, closed contact: h += W_N F_N (+ W_T F_T),
@@ -151,8 +152,10 @@ class CurveConstraint(ContactElement):
             raise ModelError(f"{self.name}: the point left the curve's domain")
         return True
 
-    def jacobian(self, out) -> None:
-        self.kinematics.W(out)
+    def jacobian(self, out, col=0) -> None:
+        """W (nu, 2) = [w_n, w_t2] of the point on the curve into the columns col, col + 1
+        of ``out`` (nu, ·)."""
+        self.kinematics.W(out[:, col:col + 2])
 
 
 def connect(contour1, contour2, law, friction=None, name="contact", margin="auto"):

@@ -161,13 +161,14 @@ class ContactKinematics(ABC):
         """W_T (nu_total, 2) into ``out`` (zero outside the bodies' slices); ġ_T = W_Tᵀ u."""
         return self._assemble(np.zeros((self.nu_total, 2)) if out is None else out, self.w_T1, self.w_T2)
 
-    def fill_W(self, out) -> None:
-        """W = [W_N] or [W_N, W_T] into ``out`` (nu_total, 1 or 3) (zero outside the bodies'
-        slices), the columns of :meth:`W_N` and :meth:`W_T` in one kernel
+    def fill_W(self, out, col=0, dim=None) -> None:
+        """W = [W_N] (dim 1) or [W_N, W_T] (dim 3) into the columns col..col + dim of ``out``
+        (nu_total, ·) (zero outside the bodies' slices; dim None: all of out's columns), the
+        columns of :meth:`W_N` and :meth:`W_T` in one kernel
         (:func:`._detection_kernels.assemble_W`)."""
         s1, s2 = self.u_slices()
-        K.assemble_W(out, -1 if s1 is None else s1.start, self.w_N1, self.w_T1,
-                     -1 if s2 is None else s2.start, self.w_N2, self.w_T2)
+        K.assemble_W(out, col, out.shape[1] - col if dim is None else dim, -1 if s1 is None else s1.start,
+                     self.w_N1, self.w_T1, -1 if s2 is None else s2.start, self.w_N2, self.w_T2)
 
     def _assemble(self, out, w1, w2):
         """out ← the blocks w1, w2 added at the bodies' slices of the global u (both

@@ -167,13 +167,20 @@ def quat_matrix_into(q, k, A):
 def elastic_row(K, D, damped, q_f, qd_f, a):
     """Row a of K q_f + D q̇_f (the elastic and damping forces, thesis eq. 2.36, with
     their sign reversed), summed in a fixed order."""
-    n = q_f.shape[0]
+    return elastic_block_row(K, D, damped, q_f, qd_f, np.int64(0), q_f.shape[0], a)
+
+
+@njit(cache=True)
+def elastic_block_row(K, D, damped, q, u, lo, hi, a):
+    """Row a of the diagonal block [lo, hi) of K q + D q̇, indexed in place (a block view
+    would give the kernel a second array layout to compile for): :func:`elastic_row` of
+    K[lo:hi, lo:hi], q[lo:hi], in its order."""
     acc = 0.0
-    for b in range(n):
-        acc += K[a, b] * q_f[b]
+    for b in range(hi - lo):
+        acc += K[lo + a, lo + b] * q[lo + b]
     if damped:
-        for b in range(n):
-            acc += D[a, b] * qd_f[b]
+        for b in range(hi - lo):
+            acc += D[lo + a, lo + b] * u[lo + b]
     return acc
 
 
@@ -428,14 +435,14 @@ def linear_bodies_h(rows, KD, force, q, u, h):
             for i in range(a, b):
                 h[i] = 0.0 + force[i]
         else:
-            K_b, D_b, q_b, u_b = KD[0, a:b, a:b], KD[1, a:b, a:b], q[a:b], u[a:b]   # views made once
+            K, D = KD[0], KD[1]
             damped = kind == 3 or kind == 5
             if kind >= 4:
                 for i in range(b - a):
-                    h[a + i] = -elastic_row(K_b, D_b, damped, q_b, u_b, i) + force[a + i]
+                    h[a + i] = -elastic_block_row(K, D, damped, q, u, a, b, i) + force[a + i]
             else:
                 for i in range(b - a):
-                    h[a + i] = -elastic_row(K_b, D_b, damped, q_b, u_b, i)
+                    h[a + i] = -elastic_block_row(K, D, damped, q, u, a, b, i)
 
 
 @njit(cache=True)

@@ -26,25 +26,33 @@ def cholesky_into(A, L):
     precision: its pivot a_jj − Σ_k l_jk² is at most n ε a_jj (like LAPACK's ``info``,
     with a rounding-level margin, so a matrix singular but for rounding is reported,
     not factored); L is then incomplete. ``L`` may be ``A``."""
-    n = A.shape[0]
+    return cholesky_block(A, L, np.int64(0), A.shape[0])
+
+
+@njit(cache=True)
+def cholesky_block(A, L, lo, hi):
+    """:func:`cholesky_into` of the diagonal block A[lo:hi, lo:hi] into the same block of
+    ``L``, indexed in place (a block view would give the kernel a second array layout to
+    compile for); returns 0 or the block's j + 1."""
+    n = hi - lo
     tol = n * 2.220446049250313e-16
     for j in range(n):
-        s = A[j, j]
+        s = A[lo + j, lo + j]
         floor = tol * abs(s)
         for k in range(j):
-            s -= L[j, k] * L[j, k]
+            s -= L[lo + j, lo + k] * L[lo + j, lo + k]
         if not s > floor:
             return j + 1
         d = math.sqrt(s)
-        L[j, j] = d
+        L[lo + j, lo + j] = d
         for i in range(j + 1, n):
-            s = A[i, j]
+            s = A[lo + i, lo + j]
             for k in range(j):
-                s -= L[i, k] * L[j, k]
-            L[i, j] = s / d
+                s -= L[lo + i, lo + k] * L[lo + j, lo + k]
+            L[lo + i, lo + j] = s / d
     for i in range(n):
         for j in range(i + 1, n):
-            L[i, j] = 0.0
+            L[lo + i, lo + j] = 0.0
     return 0
 
 
@@ -136,7 +144,7 @@ def block_cholesky_into(A, blocks, L):
     read by the block solves. Returns 0, or the first row a + j + 1 whose pivot fails."""
     for k in range(blocks.shape[0]):
         a, b = blocks[k, 0], blocks[k, 1]
-        info = cholesky_into(A[a:b, a:b], L[a:b, a:b])
+        info = cholesky_block(A, L, a, b)
         if info:
             return a + info
     return 0

@@ -43,7 +43,7 @@ from .fused_detection import fused_detection
 from .residual_contact import ResidualContacts
 
 N_FACTORS = 8          # Cholesky factors of a constant M̂ kept for different step sizes (+1)
-CACHES = ("contact_sets", "problem_views", "newton_views", "factor_dt", "factor_last", "comp_entries")
+CACHES = ("contact_sets", "problem_views", "lapack_views", "solver_views", "compliance_views", "factor_dt", "factor_last", "comp_entries")
 # ^ Data rebuilt on demand (the last step's factor of a constant M̂ is looked up again in
 #   ``factors``; the compliant contacts' entries are made each step): not in a checkpoint
 CARRIED = ("t", "q", "u", "closed", "lam_prev", "warm", "lam_joints", "warm_joints", "comp_force", "comp_delta",
@@ -199,7 +199,7 @@ def compile_model(system, plan=None, theta=0.5, solver=None) -> Model:
                  theta=float(theta), solver=solver, constant_iteration=equations.constant_iteration_matrix,
                  prune=plan is not None, contacts=contacts, set_valued=set_valued,
                  unilateral=tuple(bool(c.unilateral) for c in contacts), dims=dims, lam_at=lam_at,
-                 lam_rows=np.array([lam_at, dims], dtype=np.int64).T.reshape(-1, 2),
+                 lam_rows=np.ascontiguousarray(np.array([lam_at, dims], dtype=np.int64).T.reshape(-1, 2)),
                  penalty=penalty, spheres=SphereTable(contacts) if plan is not None else None, fused=fused,
                  contours=contours, owner_at=owner_at, owners=owners,
                  single_valued=tuple(i for i, sv in enumerate(set_valued) if not sv), m_max=system.n_c + sum(dims),
@@ -248,18 +248,19 @@ class Data:
         self.problem_views = {}             # (nu, m) -> views of the buffers below (Data.problem)
         self.W_buf = np.zeros(nu * m)
         self.MW_buf = np.zeros(nu * m)
-        self.W_act_buf = np.zeros(n_act * m)
+        self.MW_lapack_buf = np.zeros(nu * m)     # M̂⁻¹W in Fortran order for LAPACK (Data.lapack_matrix)
+        self.lapack_views = {}
         self.G_buf = np.zeros(m * m)
         self.lam_buf, self.gamma_plus_buf = np.zeros(m), np.zeros(m)
         self.xi_free_buf, self.gamma_pre_buf = np.zeros(m), np.zeros(m)
         self.closing_buf, self.offset_buf = np.zeros(m), np.zeros(m)
         self.work_u = np.zeros(nu)          # M̂⁻¹ W Λ, then (1 − 2θ)Δt u_k
         self.u_prev = np.zeros(nu)          # u_k while u_{k+1} is formed
-        self.solver_work = np.zeros((WORK_ROWS, m))
+        self.solver_work_buf = np.zeros(WORK_ROWS * m)     # the solver's scratch (WORK_ROWS, m),
         self.newton_matrix_buf = np.zeros(m * m)    # the Newton phases with friction: J (m, m),
-        self.newton_pivots = np.zeros((2, m), dtype=np.int64)    # pivots,
+        self.newton_pivots_buf = np.zeros(2 * m, dtype=np.int64)    # pivots (2, m),
         self.newton_local = np.zeros((5, 3))        # an entry's z, P, ∂P/∂z
-        self.newton_views = {}              # m -> views of the three above (stages.impulses)
+        self.solver_views = {}              # m -> views of the four above (Data.solver_scratch)
         # compliant contacts (mbs.residual_contact, contact.compliance): spring state per
         # contact row (end force [N], deflection [m], its rate [m/s]), the last step's
         # Λ₀ = (1 − θ)Δt F_k per contact row [N s] (its impulse is Λ₀ + lam_prev), and this step's
@@ -269,7 +270,8 @@ class Data:
         self.comp_impulse0 = np.zeros(n_rows)
         self.comp_rows, self.comp_normal = np.zeros(m, dtype=np.int64), np.zeros(m, dtype=np.int64)
         self.comp_fresh = np.zeros(m, dtype=np.bool_)      # the row's contact was open last step
-        self.comp_C = np.zeros((m, m))
+        self.comp_C_buf = np.zeros(m * m)                  # C (r, r): Data.compliance
+        self.compliance_views = {}                         # r -> C
         self.comp_F, self.comp_d, self.comp_dd, self.comp_lam0 = np.zeros((4, m))
         self.comp_c, self.comp_work = np.zeros((3, 3)), np.zeros((2, 3, 3))     # c(a, b), its frame work
         self.comp_r = 0
@@ -293,18 +295,48 @@ class Data:
                                             # force, load work, damping loss
 
     def problem(self, nu, m):
-        """Views (W (nu, m) C order, M̂⁻¹W (nu, m) Fortran order, G (m, m), Λ, γ⁺, ξ_free,
-        γ⁻, closing, offset (m,)) of the contact problem with m rows, made once
-        per (nu, m) and kept in ``problem_views``."""
+        """Views (W (nu, m), M̂⁻¹W (nu, m), G (m, m), Λ, γ⁺, ξ_free, γ⁻, closing, offset
+        (m,)) of the contact problem with m rows, made once per (nu, m) and kept in
+        ``problem_views``; all C-contiguous, so that every m gives the kernels one array
+        layout and each kernel is compiled once."""
         views = self.problem_views.get((nu, m))
         if views is None:
             views = self.problem_views[(nu, m)] = self._problem(nu, m)
         return views
 
     def _problem(self, nu, m):
-        return (self.W_buf[:nu * m].reshape(nu, m), self.MW_buf[:nu * m].reshape(m, nu).T,
+        return (self.W_buf[:nu * m].reshape(nu, m), self.MW_buf[:nu * m].reshape(nu, m),
                 self.G_buf[:m * m].reshape(m, m), self.lam_buf[:m], self.gamma_plus_buf[:m],
                 self.xi_free_buf[:m], self.gamma_pre_buf[:m], self.closing_buf[:m], self.offset_buf[:m])
+
+    def lapack_matrix(self, nu, m):
+        """A (nu, m) Fortran-order scratch for LAPACK's in-place solve of M̂⁻¹W
+        (:func:`mbs.stages.solve_matrix`), made once per (nu, m)."""
+        X = self.lapack_views.get((nu, m))
+        if X is None:
+            X = self.lapack_views[(nu, m)] = self.MW_lapack_buf[:nu * m].reshape(m, nu).T
+        return X
+
+    def solver_scratch(self, m):
+        """(work (WORK_ROWS, m), (J (m, m), pivots (2, m), local (5, 3))): the contact
+        solver's scratch of an m-row problem (:meth:`contact.solver.ProxSolver.solve_into`),
+        C-contiguous views of the buffers made once per m and kept in ``solver_views``. Every
+        m gives the kernels arrays of one layout, so each kernel is compiled once (a column
+        slice of a (WORK_ROWS, m_max) array would be C-contiguous only at m = m_max)."""
+        views = self.solver_views.get(m)
+        if views is None:
+            views = self.solver_views[m] = (self.solver_work_buf[:WORK_ROWS * m].reshape(WORK_ROWS, m),
+                                            (self.newton_matrix_buf[:m * m].reshape(m, m),
+                                             self.newton_pivots_buf[:2 * m].reshape(2, m), self.newton_local))
+        return views
+
+    def compliance(self, r):
+        """The compliance C (r, r) [m/N] of this step's r compliant rows
+        (:mod:`mbs.residual_contact`): a C-contiguous view made once per r."""
+        C = self.compliance_views.get(r)
+        if C is None:
+            C = self.compliance_views[r] = self.comp_C_buf[:r * r].reshape(r, r)
+        return C
 
     def collect(self, prefix, arrays: dict, kinds: dict) -> None:
         """Every array and scalar of the run under ``prefix/…`` (:mod:`mbs.state_arrays`):

@@ -119,7 +119,7 @@ def assemble(model, data, dt) -> int:
                 n_e += 1
             r += dim
         row += dim
-    C = data.comp_C[:r, :r]
+    C = data.compliance(r)
     C.fill(0.0)
     c, work = data.comp_c, data.comp_work
     for a in range(n_e):

@@ -156,7 +156,7 @@ def constraints(model, data, dt):
         i = data.closed_idx[j]
         c = model.contacts[i]
         dim = model.dims[i]
-        c.jacobian(W[:, row:row + dim])
+        c.jacobian(W, row)
         if model.unilateral[i] and c.kinematics.g_N > 0.0 and data.warm[i]:   # resting within closing_tol
             closing[row] = c.kinematics.g_N / dt
         row += dim
@@ -165,7 +165,7 @@ def constraints(model, data, dt):
     data.comp_r = 0
     if model.residual is not None and residual_contact.assemble(model, data, dt):
         r = data.comp_r
-        compliant_problem(G, xi_free, gamma_pre, data.comp_rows[:r], data.comp_C[:r, :r], data.comp_F[:r],
+        compliant_problem(G, xi_free, gamma_pre, data.comp_rows[:r], data.compliance(r), data.comp_F[:r],
                           data.comp_d[:r], data.comp_dd[:r], data.comp_fresh[:r], dt, model.theta,
                           data.comp_lam0[:r])
 
@@ -181,19 +181,16 @@ def impulses(model, data, dt):
         return
     W, MW, G, lam, gamma_plus, xi_free, gamma_pre, closing, offset = data.problem(model.nu, m)
     warm_start(model, data, lam)
-    newton = data.newton_views.get(m)
-    if newton is None:                       # the Newton phases' scratch of m rows, made once per m
-        newton = data.newton_views[m] = (data.newton_matrix_buf[:m * m].reshape(m, m), data.newton_pivots[:, :m],
-                                         data.newton_local)
+    work, newton = data.solver_scratch(m)
     it, residual, converged = model.solver.solve_into(contact_set(model, data), G, xi_free, gamma_pre, lam,
-                                                      gamma_plus, data.solver_work[:, :m], newton)
+                                                      gamma_plus, work, newton)
     if not converged:
         raise StepFailure(f"contact problem not solved: residual {residual:.3g} m/s after "
                           f"{it} iterations ({data.n_closed} closed contacts)")
     keep_warm_start(model, data, lam)
     r = data.comp_r
     if r:
-        compliant_update(lam, gamma_plus, gamma_pre, data.comp_rows[:r], data.comp_normal[:r], data.comp_C[:r, :r],
+        compliant_update(lam, gamma_plus, gamma_pre, data.comp_rows[:r], data.comp_normal[:r], data.compliance(r),
                          data.comp_F[:r], data.comp_d[:r], data.comp_dd[:r], dt, model.theta, data.comp_lam0[:r])
         residual_contact.store(model, data)
     last = data.last
@@ -331,13 +328,15 @@ def solve(model, data, factor, b):
 
 
 def solve_matrix(model, data, factor, W, MW):
-    """M̂⁻¹ W (nu, m) into MW (Fortran order without left-out bodies, else C order)."""
+    """M̂⁻¹ W (nu, m) into MW (C order; LAPACK solves in a Fortran-order scratch)."""
     if model.blocks is not None:
         block_cho_solve_matrix(factor, model.blocks, model.idle_rows, W, MW)
         return
     if model.active_u is None:
-        MW[...] = W
-        dpotrs(factor, MW, lower=True, overwrite_b=True)
+        X = data.lapack_matrix(model.nu, W.shape[1])
+        X[...] = W
+        dpotrs(factor, X, lower=True, overwrite_b=True)
+        MW[...] = X
         return
     act = model.active_u
     x = dpotrs(factor, W[act], lower=True)[0]

@@ -171,6 +171,63 @@ def test_the_cache_reader_counts_each_signature(tmp_path):
     assert sorted(counts.values()) == [1, 3] and len(counts) == 2
 
 
+# Two point masses landing one after the other on the default beam's top face (residual
+# flexibility on, one contact frictionless, one with Coulomb friction), stepped by the
+# Moreau stages: the contact problem has 1, 3 and 4 rows in turn. In a process of its own
+# (kernels loaded from the suite's cache or compiled there), every kernel it called holds
+# one signature.
+TWO_LANDINGS = textwrap.dedent("""
+    import json, sys
+    sys.path.insert(0, sys.argv[1])
+    import compile_lock
+    compile_lock.install(sys.argv[2])
+    import numpy as np
+    from numba.core.registry import CPUDispatcher
+    from contact import UnilateralCoulombContact, connect
+    from contact.solver import ProxSolver
+    from contours import PointContour
+    from ffrmbs_app.scenes import point_mass_beam as pmb
+    from mbs import PointMass, stages
+    from mbs.model import Data, compile_model
+
+    scene = pmb.build(residual_flexibility=True)
+    second = scene.system.add(PointMass(pmb.MASS, position=(0.15, pmb.HEIGHT + 0.003, 0.02), velocity=pmb.VELOCITY,
+                                        name="second mass"))
+    surface = scene.contact.kinematics.contour2
+    scene.system.add(connect(PointContour(second.point), surface, UnilateralCoulombContact(0.0, 0.3), name="second"))
+    model = compile_model(scene.system, None, theta=0.5, solver=ProxSolver())
+    data = Data(model)
+    data.q[:], data.u[:] = scene.system.initial_state()
+    rows = set()
+    for _ in range(2500):
+        stages.step(model, data, 1e-5)
+        rows.add(data.m)
+    twice = {}
+    for name, module in list(sys.modules.items()):
+        if name.split(".")[0] in ("contact", "contours", "mbs", "ffrmbs", "preprocess"):
+            for attr, value in vars(module).items():
+                if isinstance(value, CPUDispatcher) and len(value.signatures) > 1:
+                    twice[f"{name}.{attr}"] = [str(s) for s in value.signatures]
+    print(json.dumps({"rows": sorted(rows), "twice": twice}))
+""")
+
+
+@pytest.mark.slow
+def test_a_scene_whose_contact_problem_changes_size_compiles_each_kernel_once():
+    """The scratch and problem arrays of every size are C-contiguous views
+    (:meth:`mbs.model.Data.problem`, ``solver_scratch``, ``compliance``), block factors are
+    indexed in place, and a contact's W block is written into the whole W: the kernels see
+    one array layout for every problem size. Before, a problem of fewer rows than the most
+    a scene can have passed column slices ('A' layout) and compiled the contact solver a
+    second time in the middle of a run (15 CPU s), and the one-row problem (M̂⁻¹W both C-
+    and Fortran-contiguous) compiled the stage kernels twice."""
+    done = subprocess.run([sys.executable, "-c", TWO_LANDINGS, str(ROOT / "tests" / "support"),
+                           str(Path(os.environ["NUMBA_CACHE_DIR"]).with_name("numba-locks"))], capture_output=True, text=True, check=True)
+    report = json.loads(done.stdout.strip().splitlines()[-1])
+    assert {1, 3, 4} <= set(report["rows"])
+    assert report["twice"] == {}
+
+
 def test_a_failed_second_process_is_named_and_the_job_goes_on():
     from ffrmbs_app.precompile import Precompiler
 

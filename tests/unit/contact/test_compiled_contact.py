@@ -274,6 +274,10 @@ def test_point_and_sphere_on_the_beam_compiled_equal_reference(world, gap, side)
         W = np.full((nu, 3), np.nan)
         kin.fill_W(W)
         close(W, np.column_stack([W_N, W_T]), 1e-15)
+        wide = np.full((nu, 6), np.nan)                 # the columns 2..4 of a wider W
+        kin.fill_W(wide, 2, 3)
+        close(wide[:, 2:5], W, 0.0)
+        assert np.isnan(wide[:, [0, 1, 5]]).all()
 
 
 def test_point_on_a_curve_compiled_equals_reference(world):

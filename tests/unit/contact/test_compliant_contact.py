@@ -148,7 +148,7 @@ def bounce_energies(data, modes, dt, t_end, e=1.0):
     def record(model, d):
         q_f, qd_f = d.q[beam.q_slice][beam._f], d.u[beam.u_slice][beam._fu]
         e = 0.5 * m * d.u[point.u_slice] @ d.u[point.u_slice] + 0.5 * qd_f @ qd_f + 0.5 * q_f @ beam.K_ff @ q_f
-        rows.append((e + spring_energy(model, d), d.closed[0], d.comp_force[0], d.comp_C[0, 0] if d.comp_r else 0.0))
+        rows.append((e + spring_energy(model, d), d.closed[0], d.comp_force[0], d.compliance(d.comp_r)[0, 0] if d.comp_r else 0.0))
 
     run(system, t_end, dt, every=record)
     return np.array(rows, dtype=float).T
