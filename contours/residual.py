@@ -115,7 +115,7 @@ class ResidualCompliance:
         if len(self._dirs) == 1:
             d = self._dirs[0]
             B = self._B[0]
-            s = NK.locate(d.knots, d.p, d.n_ctrl, d.closed, d.a, d.b, eta, B)
+            s = NK.locate(d.knots, d.p, d.n_ctrl, d.closed, d.a, d.b, float(eta), B)
             for a in range(d.p + 1):
                 index[k] = self.offset + s - d.p + a
                 blocks[k] = B[0, a] * np.eye(3)
@@ -123,8 +123,8 @@ class ResidualCompliance:
             return k
         e, x = self._dirs
         Be, Bx = self._B
-        se = NK.locate(e.knots, e.p, e.n_ctrl, e.closed, e.a, e.b, eta, Be)
-        sx = NK.locate(x.knots, x.p, x.n_ctrl, x.closed, x.a, x.b, xi, Bx)
+        se = NK.locate(e.knots, e.p, e.n_ctrl, e.closed, e.a, e.b, float(eta), Be)
+        sx = NK.locate(x.knots, x.p, x.n_ctrl, x.closed, x.a, x.b, float(xi), Bx)
         for a in range(e.p + 1):
             for b in range(x.p + 1):
                 index[k] = self.offset + (se - e.p + a) * x.n_ctrl + (sx - x.p + b)

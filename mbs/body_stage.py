@@ -75,6 +75,9 @@ class BodyStage:
         self._items = [(b, b.q_slice, b.u_slice, b.workspace()) for b in self.active if b not in points]
         self._work = {id(b): w for b, _, _, w in self._items}
         self._work.update((id(b), b.workspace()) for b in points)
+        # each body's M block, C-contiguous: its mass kernel sees one array layout whether the
+        # body is alone (M itself) or beside others (a view of M's block would be another)
+        self._mass_blocks = {id(b): np.zeros((b.nu, b.nu)) for b, _, _, _ in self._items}
         self.gravity = np.asarray(gravity, dtype=float).reshape(3)
         self._point_q = np.array([b.q_slice.start for b in points], dtype=np.int64)
         self._point_u = np.array([b.u_slice.start for b in points], dtype=np.int64)
@@ -246,8 +249,11 @@ class BodyStage:
                 for b in self.idle:
                     for i in range(b.u_slice.start, b.u_slice.stop):
                         M[i, i] = 1.0
+            blocks = self._mass_blocks
             for b, qs, us, work in self._items:
-                b.mass_and_h_into(q[qs], u[us], t, M[us, us], h[us], work)
+                M_b = blocks[id(b)]
+                b.mass_and_h_into(q[qs], u[us], t, M_b, h[us], work)
+                M[us, us] = M_b
             if self._point_u.size:
                 K.point_masses_mass(self._point_u, self._point_mass, M)
                 K.point_masses_h(self._point_u, self._point_force, h)

@@ -323,7 +323,7 @@ class Contour1sNeutralFactory(NeutralContour):
         K.frame_1s(point.derivs, self._n_ref, point.frame)
 
     def _evaluate_local(self, point, eta, xi, velocity, modal):
-        K.evaluate_1s(eta, *self.kernel_data, self._n_ref, modal, velocity, self._B, self._local_rows,
+        K.evaluate_1s(float(eta), *self.kernel_data, self._n_ref, modal, velocity, self._B, self._local_rows,
                       self._phi_rows, point.derivs, point.frame, point.v)
 
 
@@ -341,5 +341,5 @@ class Contour2sNeutralFactory(NeutralContour):
         K.frame_2s(point.derivs, self.sign, point.frame)
 
     def _evaluate_local(self, point, eta, xi, velocity, modal):
-        K.evaluate_2s(eta, xi, *self.kernel_data, self.sign, modal, velocity, self._B, self._local_rows,
+        K.evaluate_2s(float(eta), float(xi), *self.kernel_data, self.sign, modal, velocity, self._B, self._local_rows,
                       self._phi_rows, point.derivs, point.frame, point.v)

@@ -46,7 +46,7 @@ class _Direction:
         self.span = self.p
 
     def locate(self, t):
-        self.span = K.locate(self.knots, self.p, self.n_ctrl, self.closed, self.a, self.b, t, self.B)
+        self.span = K.locate(self.knots, self.p, self.n_ctrl, self.closed, self.a, self.b, float(t), self.B)
 
 
 class CurveSpace:

@@ -173,9 +173,10 @@ def test_the_cache_reader_counts_each_signature(tmp_path):
 
 # Two point masses landing one after the other on the default beam's top face (residual
 # flexibility on, one contact frictionless, one with Coulomb friction), stepped by the
-# Moreau stages: the contact problem has 1, 3 and 4 rows in turn. In a process of its own
-# (kernels loaded from the suite's cache or compiled there), every kernel it called holds
-# one signature.
+# Moreau stages: the contact problem has 1, 3 and 4 rows in turn; then a free beam alone
+# and beside a point mass (its mass matrix the whole M, then a block of it). In a process
+# of its own (kernels loaded from the suite's cache or compiled there), every kernel it
+# called holds one signature.
 TWO_LANDINGS = textwrap.dedent("""
     import json, sys
     sys.path.insert(0, sys.argv[1])
@@ -187,7 +188,7 @@ TWO_LANDINGS = textwrap.dedent("""
     from contact.solver import ProxSolver
     from contours import PointContour
     from ffrmbs_app.scenes import point_mass_beam as pmb
-    from mbs import PointMass, stages
+    from mbs import FlexibleBodyFFR, PointMass, System, stages
     from mbs.model import Data, compile_model
 
     scene = pmb.build(residual_flexibility=True)
@@ -202,6 +203,16 @@ TWO_LANDINGS = textwrap.dedent("""
     for _ in range(2500):
         stages.step(model, data, 1e-5)
         rows.add(data.m)
+    for beside in (False, True):            # a free beam alone, then beside a point mass
+        system = System(gravity=(0.0, -9.81, 0.0))
+        system.add(FlexibleBodyFFR(pmb.default_beam_data(), modes=4, name="free beam"))
+        if beside:
+            system.add(PointMass(1.0, position=(1.0, 0.0, 0.0), name="mass"))
+        free = compile_model(system, None, theta=0.5, solver=ProxSolver())
+        state = Data(free)
+        state.q[:], state.u[:] = system.initial_state()
+        for _ in range(3):
+            stages.step(free, state, 1e-4)
     twice = {}
     for name, module in list(sys.modules.items()):
         if name.split(".")[0] in ("contact", "contours", "mbs", "ffrmbs", "preprocess"):
@@ -217,10 +228,12 @@ def test_a_scene_whose_contact_problem_changes_size_compiles_each_kernel_once():
     """The scratch and problem arrays of every size are C-contiguous views
     (:meth:`mbs.model.Data.problem`, ``solver_scratch``, ``compliance``), block factors are
     indexed in place, and a contact's W block is written into the whole W: the kernels see
-    one array layout for every problem size. Before, a problem of fewer rows than the most
-    a scene can have passed column slices ('A' layout) and compiled the contact solver a
-    second time in the middle of a run (15 CPU s), and the one-row problem (M̂⁻¹W both C-
-    and Fortran-contiguous) compiled the stage kernels twice."""
+    one array layout for every problem size, and a body's mass kernel writes a C-contiguous
+    block of its own. Before, a problem of fewer rows than the most a scene can have
+    passed column slices ('A' layout) and compiled the contact solver a second time in the
+    middle of a run (15 CPU s), the one-row problem (M̂⁻¹W both C- and Fortran-contiguous)
+    compiled the stage kernels twice, and a free body's mass kernels (ffr_mass_qv_into: 4
+    CPU s) compiled again for a block of M."""
     done = subprocess.run([sys.executable, "-c", TWO_LANDINGS, str(ROOT / "tests" / "support"),
                            str(Path(os.environ["NUMBA_CACHE_DIR"]).with_name("numba-locks"))], capture_output=True, text=True, check=True)
     report = json.loads(done.stdout.strip().splitlines()[-1])
