@@ -43,7 +43,8 @@ from .fused_detection import fused_detection
 from .residual_contact import ResidualContacts
 
 N_FACTORS = 8          # Cholesky factors of a constant M̂ kept for different step sizes (+1)
-CACHES = ("contact_sets", "problem_views", "lapack_views", "solver_views", "compliance_views", "factor_dt", "factor_last", "comp_entries")
+CACHES = ("contact_sets", "problem_views", "lapack_views", "solver_views", "compliance_views", "factor_dt",
+          "factor_last", "comp_entries")
 # ^ Data rebuilt on demand (the last step's factor of a constant M̂ is looked up again in
 #   ``factors``; the compliant contacts' entries are made each step): not in a checkpoint
 CARRIED = ("t", "q", "u", "closed", "lam_prev", "warm", "lam_joints", "warm_joints", "comp_force", "comp_delta",
