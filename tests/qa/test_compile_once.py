@@ -213,12 +213,13 @@ TWO_LANDINGS = textwrap.dedent("""
         state.q[:], state.u[:] = system.initial_state()
         for _ in range(3):
             stages.step(free, state, 1e-4)
-    twice = {}
+    twice = {}                              # each kernel once, under its defining module's name
     for name, module in list(sys.modules.items()):
         if name.split(".")[0] in ("contact", "contours", "mbs", "ffrmbs", "preprocess"):
-            for attr, value in vars(module).items():
+            for value in vars(module).values():
                 if isinstance(value, CPUDispatcher) and len(value.signatures) > 1:
-                    twice[f"{name}.{attr}"] = [str(s) for s in value.signatures]
+                    kernel = f"{value.py_func.__module__}.{value.py_func.__qualname__}"
+                    twice[kernel] = [str(s) for s in value.signatures]
     print(json.dumps({"rows": sorted(rows), "twice": twice}))
 """)
 
