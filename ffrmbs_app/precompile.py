@@ -3,8 +3,8 @@
 A cold first ``ffrmbs run`` spends most of its time compiling numba kernels (about 40 CPU
 s on a 2-core machine) and preprocessing the beam (its modes, some 5 s). Both are
 single-threaded, so on two cores they can run side by side: :func:`start` launches
-``python -m ffrmbs_app.precompile_child SETTINGS`` (:mod:`ffrmbs_app.precompile_child`)
-that builds the default scene on the 25 mm mesh
+:mod:`ffrmbs_app.precompile_child` with the job's settings (:func:`child_command`, from
+the copy of ffrmbs the job runs), which builds the default scene on the 25 mm mesh
 (:data:`~ffrmbs_app.scenes.point_mass_beam.TET10_COARSE`, the job's mesh check, cached
 for it) and runs its warm-up, which compiles every kernel the scene calls with the
 argument types of the 12.5 mm mesh's scene (the same arrays, other sizes) into numba's
@@ -21,6 +21,7 @@ import subprocess
 import sys
 import time
 from dataclasses import asdict
+from pathlib import Path
 
 CHILD = "ffrmbs_app.precompile_child"     # the module the second process runs
 
@@ -55,6 +56,17 @@ def start(settings, log) -> Precompiler:
     :class:`~ffrmbs_app.main_job.JobSettings`); its output is discarded."""
     log("compiling numba kernels in a second process while preprocessing (first run; cached on disk for the "
         "next) ...")
-    process = subprocess.Popen([sys.executable, "-m", CHILD, json.dumps(asdict(settings))],
-                               stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    process = subprocess.Popen(child_command(settings), stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                               stderr=subprocess.DEVNULL)
     return Precompiler(process)
+
+
+def child_command(settings) -> list:
+    """The child's command line: :data:`CHILD` run as ``__main__`` from the copy of ffrmbs
+    this process imported (its directory first on ``sys.path``). ``python -m CHILD`` would
+    put the working directory first, and from a clone after ``pip install .`` import the
+    clone's source while the job runs the installed copy: numba keys its disk cache by the
+    source's directory, so the job would compile every kernel again."""
+    root = str(Path(__file__).resolve().parents[1])
+    code = f"import runpy, sys; sys.path.insert(0, {root!r}); runpy.run_module({CHILD!r}, run_name='__main__')"
+    return [sys.executable, "-c", code, json.dumps(asdict(settings))]

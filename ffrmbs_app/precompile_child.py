@@ -1,6 +1,6 @@
-"""The second process of :mod:`ffrmbs_app.precompile`: ``python -m
-ffrmbs_app.precompile_child SETTINGS`` (the :class:`~ffrmbs_app.main_job.JobSettings` as
-JSON) runs the warm-up of the default scene on the 25 mm mesh, which compiles every kernel
+"""The second process of :mod:`ffrmbs_app.precompile`, run as ``__main__`` with SETTINGS
+(the :class:`~ffrmbs_app.main_job.JobSettings` as JSON;
+:func:`~ffrmbs_app.precompile.child_command`): it runs the warm-up of the default scene on the 25 mm mesh, which compiles every kernel
 it calls into numba's disk cache.
 """
 

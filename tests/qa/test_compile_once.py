@@ -242,6 +242,24 @@ def test_a_scene_whose_contact_problem_changes_size_compiles_each_kernel_once():
     assert report["twice"] == {}
 
 
+def test_the_second_process_runs_the_copy_of_ffrmbs_the_job_runs(tmp_path):
+    """From a directory holding another ffrmbs_app (a clone after ``pip install .``), the
+    child still imports the job's copy: numba keys its disk cache by the source's
+    directory, and ``python -m`` (the working directory first on sys.path) ran the clone's
+    source, so the job compiled every kernel a second time (README's first command: two
+    compilations of the default scene). Here the other copy exits 7 on import, and the
+    job's child stops at once on a settings key it does not know."""
+    from ffrmbs_app.main_job import JobSettings
+    from ffrmbs_app.precompile import child_command
+
+    decoy = tmp_path / "ffrmbs_app"
+    decoy.mkdir()
+    (decoy / "__init__.py").write_text("raise SystemExit(7)\n")
+    command = child_command(JobSettings())[:-1] + ['{"no_such_setting": 1}']
+    done = subprocess.run(command, cwd=tmp_path, capture_output=True, text=True)
+    assert done.returncode == 1 and "no_such_setting" in done.stderr
+
+
 def test_a_failed_second_process_is_named_and_the_job_goes_on():
     from ffrmbs_app.precompile import Precompiler
 
