@@ -13,6 +13,12 @@ c = (1 − α_f)/(1 − α_m), and the constraint rows scaled by 1/(β h² c). K
 constant elastic, damping and link tangents; the gyroscopic tangents are left out
 (a quasi-Newton method), which only slows convergence for fast rotation.
 
+Newton stops when the correction Δu̇ is below ``tol`` |u̇| or, with constraints, below
+their round-off floor: g(q) is known to about ε max(1, |q|∞) and its rows are scaled by
+1/(β h² c), so Δu̇ < 16 ε max(1, |q|∞) / (β h² c) moves q by less than its own round-off
+and cannot be resolved (without the floor a small step never converged: a hinged beam
+failed at Δt = 1e-5 s however many iterations it was given).
+
 Each iteration is allocation-free: M and h come from the body stage
 (:class:`mbs.body_stage.BodyStage`) into a preallocated workspace, the vector algebra
 and the Cholesky solve of S from numba kernels (:mod:`mbs.integrators._kernels`,
@@ -35,6 +41,8 @@ from ffrmbs.errors import ModelError
 
 from ._kernels import combine_into, ga_base, ga_newton_update, ga_predict
 from .driver import Integrator, StepFailure
+
+ROUNDOFF = 16 * np.finfo(float).eps     # the constraint residual's relative round-off (module docstring)
 
 
 class _Workspace:
@@ -101,6 +109,7 @@ class GeneralizedAlpha(Integrator):
         lam = self.lam.copy() if sys.n_c else self.lam
         nc = sys.n_c
         hg, hhb = h * gm, h * h * bt
+        floor = ROUNDOFF * max(1.0, float(np.abs(self.q).max())) / (hhb * c) if nc else 0.0
         ga_base(self.u, self.abar, h * (1 - gm), h, h * h * (0.5 - bt), w.base_u, w.base_dq)
         for it in range(1, self.max_iter + 1):
             ga_predict(self.a, a1, self.abar, w.base_u, w.base_dq, af, am, hg, hhb, w.abar1, w.u1, w.dq)
@@ -119,7 +128,7 @@ class GeneralizedAlpha(Integrator):
             self.iterations += 1
             if not finite:
                 break
-            if err <= self.tol * (scale + 1e-300):
+            if err <= self.tol * (scale + 1e-300) + floor:
                 break
         else:
             raise StepFailure(f"generalized-α Newton did not converge in {self.max_iter} iterations "

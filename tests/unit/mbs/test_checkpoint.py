@@ -27,8 +27,11 @@ from ffrmbs_app.scenes.cache import cache_dir
 from mbs import FlexibleBodyFFR, Joint, PointMass, PrescribedFrameMotion, RigidBody, System, ground_frame
 from mbs import state_arrays
 from mbs.checkpoint import read_checkpoint
-from mbs.integrators import driver, integrator_class
+from mbs.integrators import INTEGRATORS, driver, integrator_class
+from mbs.joints import JOINTS
+from mbs.registry import BODIES, LOADS, ROTATIONS
 from mbs.result_file import ResultRecorder
+from mechanism import mechanism
 
 
 # --- scenes ---------------------------------------------------------------------------------
@@ -303,6 +306,46 @@ def test_a_resumed_run_of_every_kind_equals_the_uninterrupted_one(key, tmp_path)
     ckpt = runs[2]
     assert ckpt.arrays["data/closed"].all(), "the checkpoint is taken with the contact closed"
     assert_resumed_equals_whole(*runs)
+
+
+# --- every body kind, rotation parametrization, joint kind, load kind and integrator ---------
+
+MECHANISM_RUNS = {   # integrator: (options, t_end [s], dt [s], samples, stop at [s])
+    "moreau": (dict(integrator="moreau", trace=True), 2e-3, 1e-4, 11, 1e-3),
+    "moreau-adaptive": (dict(integrator="moreau-adaptive", trace=True, atol=1e-7), 2e-3, 1e-4, 11, 1e-3),
+    "generalized-alpha": (dict(integrator="generalized-alpha"), 2e-3, 1e-4, 11, 1e-3),
+    "rk4": (dict(integrator="rk4"), 1e-3, 2e-5, 11, 6e-4),
+}
+
+
+def test_the_mechanism_has_every_registered_kind_and_every_integrator_runs_it():
+    """A body, rotation parametrization, joint, load kind or integrator registered without
+    a place in :func:`mechanism` and :data:`MECHANISM_RUNS` fails here."""
+    system, _ = mechanism()
+    assert {BODIES.name_of(b) for b in system.bodies} == set(BODIES.names())
+    assert {ROTATIONS.name_of(b.param) for b in system.bodies if getattr(b, "param", None)} == set(ROTATIONS.names())
+    assert {j.kind for j in system.constraints} == set(JOINTS.names())
+    assert {LOADS.name_of(f) for f in system.forces} - {None} == set(LOADS.names())
+    assert set(MECHANISM_RUNS) == set(INTEGRATORS.names())
+
+
+@pytest.mark.parametrize("integrator", list(MECHANISM_RUNS))
+def test_a_resumed_mechanism_equals_the_uninterrupted_one(integrator, tmp_path):
+    """Stopped halfway (the nodal forces stepped, every joint's λ and the integrator's own
+    state in the checkpoint), resumed: the uninterrupted run bit for bit, and the
+    mechanism moved (the slider slid, the beam turned)."""
+    options, t_end, dt, n_out, stop_at = MECHANISM_RUNS[integrator]
+
+    def run(path, **kw):
+        system, outputs = mechanism()
+        return run_scene(system, outputs, options, t_end, dt, n_out, path, **kw)
+
+    runs = stopped_and_resumed(run, stop_at, tmp_path)
+    assert_resumed_equals_whole(*runs)
+    whole = runs[0]
+    assert whole.t[-1] == pytest.approx(t_end)
+    assert np.all(np.isfinite(whole.q))
+    assert whole["slider"][-1, 0] > 0.0 and not np.array_equal(whole["tip"][-1], whole["tip"][0])
 
 
 def started(system, integrator, dt, t_end, **options):
