@@ -15,12 +15,12 @@
 
 :class:`CurveConstraint` keeps a point on a curve (bilateral, 2 rows; thesis Sec. 5.3).
 The integrator updates every contour once per step before ``locate``
-(:mod:`mbs.stages`).
+(:mod:`mbs.run.stages`).
 
 Broad phase: ``locate`` first compares the two contours' bounding boxes (each contour's
 ``bounding_box()``, a plane's infinite), each grown by ``margin`` [m], in the kernel
 :func:`contact._detection_kernels.boxes_overlap`; only overlapping pairs reach the search.
-A planned run prunes far pairs before that by bounding spheres (:mod:`mbs.bounding_spheres`).
+A planned run prunes far pairs before that by bounding spheres (:mod:`mbs.run.bounding_spheres`).
 The margin must exceed the deepest penetration the scene can produce in one step (a
 point below a flat contour lies outside its unpadded box); the default is a tenth of
 the largest edge of contour 2's box at construction (for a plane, whose box is
@@ -49,7 +49,7 @@ class ContactElement:
     ``unilateral``; ``dim`` (rows of Λ when set-valued); ``bodies()`` and ``contours()``;
     ``locate()`` (True when closed, after the contours were updated); ``jacobian(out)``
     (W (nu, dim) of a closed set-valued contact). Whether a contact is closed, and a
-    single-valued law's force, are the run's (:class:`mbs.model.Data`), not the
+    single-valued law's force, are the run's (:class:`mbs.run.model.Data`), not the
     contact's."""
 
     set_valued: bool
@@ -68,7 +68,7 @@ class Contact(ContactElement):
     ``friction`` only with a single-valued normal law."""
 
     unilateral = True
-    run_state = ("box1", "box2", "kinematics")     # (mbs.state_arrays)
+    run_state = ("box1", "box2", "kinematics")     # (mbs.results.state_arrays)
 
     def __init__(self, kinematics: ContactKinematics, law, friction=None, name="contact", margin="auto",
                  closing_tol=1e-12):
@@ -139,7 +139,7 @@ class CurveConstraint(ContactElement):
     set_valued = True
     unilateral = False
     dim = 2
-    run_state = ("kinematics",)     # (mbs.state_arrays); whether it is closed is the run's Data
+    run_state = ("kinematics",)     # (mbs.results.state_arrays); whether it is closed is the run's Data
 
     def __init__(self, kinematics: PointOnCurveConstraint, name="on curve"):
         if not isinstance(kinematics, PointOnCurveConstraint):

@@ -78,7 +78,7 @@ class ContactKinematics(ABC):
         takes them as one array.
     """
 
-    #: what update() wrote (:mod:`mbs.state_arrays`)
+    #: what update() wrote (:mod:`mbs.results.state_arrays`)
     run_state = ("active", "g_N", "n", "T", "gd_N", "gd_T", "w_N1", "w_N2", "w_T1", "w_T2", "point1", "point2")
 
     def __init__(self, contour1, contour2, nu_total=None):

@@ -169,7 +169,7 @@ class _Search:
     """
 
     dim: int
-    #: what a solve changes (:mod:`mbs.state_arrays`); ``_G``: the coarse grid's workspace
+    #: what a solve changes (:mod:`mbs.results.state_arrays`); ``_G``: the coarse grid's workspace
     run_state = ("_length_scale", "counts", "_point", "_g", "_G", "hole")
 
     def __init__(self, contour, tol, max_iter, length_scale, compiled, edge_tol=EDGE_TOL):
@@ -220,7 +220,7 @@ class _Search:
     @property
     def newton_work(self):
         """The compiled Newton's work arrays (the contour's ``kernel_workspace()`` and
-        g (3,)), for a fused detection (:mod:`mbs.fused_detection`); None on the
+        g (3,)), for a fused detection (:mod:`mbs.run.fused_detection`); None on the
         reference route."""
         return self._work
 

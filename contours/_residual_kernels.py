@@ -1,5 +1,5 @@
 """numba kernels of the residual compliance (:mod:`contours.residual`, eq. C1–C2) and of
-a contact's compliance block in its frame (:mod:`mbs.residual_contact`); the numpy
+a contact's compliance block in its frame (:mod:`mbs.run.residual_contact`); the numpy
 references are :func:`compliance_between_reference` and the blocks route of
 :meth:`contours.residual.ResidualCompliance.weights` for neutral contours. The blocks of a
 derived contour (:func:`offset_weights`) are checked against the full FE static solution

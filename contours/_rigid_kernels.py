@@ -1,7 +1,7 @@
 """numba kernels of the rigid contours (:mod:`contours.rigid`): a sphere's surface
 coordinates of a direction and its point at given coordinates — the one implementation
 that :meth:`contours.rigid.SphereContour.evaluate`, the contact kinematics of spheres
-(:mod:`contact.kinematics`) and the compiled detection (:mod:`mbs._fused_detection_kernels`)
+(:mod:`contact.kinematics`) and the compiled detection (:mod:`mbs.run._fused_detection_kernels`)
 share. The frame contour's ``state`` and the point's ``buffer`` are the flat vectors
 their arrays are views of (layouts below and :data:`contours.base.DERIVS_AT` …).
 """

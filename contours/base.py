@@ -57,7 +57,7 @@ class ContourPoint:
         row-major, J_R row-major), so that a compiled kernel takes a point as one array.
     """
 
-    run_state = ("eta", "xi", "derivs", "frame", "v", "J_T", "J_R")     # (mbs.state_arrays)
+    run_state = ("eta", "xi", "derivs", "frame", "v", "J_T", "J_R")     # (mbs.results.state_arrays)
 
     def __init__(self, nu: int):
         self.eta = 0.0

@@ -67,7 +67,7 @@ class OffsetContour(Contour):
     """
 
     dim = 2
-    run_state = ("neutral",)    # its state is the neutral contour's (mbs.state_arrays)
+    run_state = ("neutral",)    # its state is the neutral contour's (mbs.results.state_arrays)
 
     def __init__(self, neutral: Contour1sNeutralFactory, xi_domain, closed_xi, reach, name, compiled=True):
         if not isinstance(neutral, Contour1sNeutralFactory):
@@ -101,7 +101,7 @@ class OffsetContour(Contour):
         """The work arrays :meth:`evaluate` fills (the neutral's basis table, its ū rows,
         the offset point's rows, the neutral frame, the Φ rows, Φ_P), as
         :func:`._offset_kernels.evaluate_offset` takes them (a fused detection,
-        :mod:`mbs.fused_detection`, fills them as :meth:`evaluate` does)."""
+        :mod:`mbs.run.fused_detection`, fills them as :meth:`evaluate` does)."""
         return self._B, self._local_rows, self._rows, self._frame, self._phi_rows, self._phi_point
 
     @property

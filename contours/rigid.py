@@ -34,7 +34,7 @@ class _FrameContour(Contour):
     and Jacobians, read once per update (views of one vector ``state``, layout
     ``R_AT`` … ``J_AT``, so that a compiled kernel takes them as one array)."""
 
-    run_state = ("_r", "_A", "_v", "_w", "_J_T", "_J_R")     # what update() wrote (mbs.state_arrays)
+    run_state = ("_r", "_A", "_v", "_w", "_J_T", "_J_R")     # what update() wrote (mbs.results.state_arrays)
 
     def __init__(self, frame, name):
         body = None if frame.is_ground else frame.body

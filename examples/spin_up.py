@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from mbs.result_file import ResultRecorder
+from mbs.results.result_file import ResultRecorder
 from validation.scenes.spin_up import T_END, beam_body, spin_up_system
 
 SAMPLE = 0.05     # output interval [s]

@@ -1,7 +1,7 @@
 """Result files to ParaView: deformed surfaces, bodies and contact points over time.
 
 :func:`export_paraview` reads an ffrmbs result file (the HDF5 layout of
-:mod:`mbs.result_file`) and writes, with meshio, one VTK unstructured grid (``.vtu``) per
+:mod:`mbs.results.result_file`) and writes, with meshio, one VTK unstructured grid (``.vtu``) per
 written sample and series, and ParaView collection files (``.pvd``) that give each file
 its time. Open ``<out_dir>/<stem>.pvd`` in ParaView (File > Open, Apply) to see every
 series as one multiblock dataset moving with the time slider; each series also has its
@@ -25,7 +25,7 @@ Series
   ``elastic_displacement_magnitude`` [m] and ``node`` (the FE node numbers);
 * any other body (rigid body, point mass, a flexible body without surface): one vertex at
   its frame origin R [m], with point data ``velocity`` = Ṙ [m/s] for point masses and
-  rigid bodies (the first three velocity coordinates, :mod:`mbs.rigid_body`);
+  rigid bodies (the first three velocity coordinates, :mod:`mbs.bodies.rigid_body`);
 * the contacts (``/contacts``): one vertex per contact at its contact point [m], with
   point data ``force`` [N] (on the second contour's body, world), ``gap`` [m] (NaN while
   no contact point is located), ``normal`` (world; 0 while not located), ``active``
@@ -67,7 +67,7 @@ import numpy as np
 from ffrmbs.errors import FfrmbsError, InputFileError, OutputFileError, os_reason
 from ffrmbs_app.output_dirs import new_directories, remove_stale, temporary_name, terminate_interrupts
 from ffrmbs_app.result_reading import check_shape, dataset, group, open_result
-from mbs.result_file import attribute, damaged_result_file
+from mbs.results.result_file import attribute, damaged_result_file
 
 MARKER = ".ffrmbs-export"
 POINT_BODY_VELOCITY = ("PointMass", "RigidBody")   # kinds whose u[:3] is Ṙ (world) [m/s]
@@ -139,7 +139,7 @@ def export_paraview(result_path, out_dir=None, every=1, bodies=None, compress=Fa
     Parameters
     ----------
     result_path : str or os.PathLike
-        An ffrmbs result file (layout in :mod:`mbs.result_file`).
+        An ffrmbs result file (layout in :mod:`mbs.results.result_file`).
     out_dir : str or os.PathLike, optional
         Output directory; default ``<result stem>-paraview/`` beside the result file.
     every : int

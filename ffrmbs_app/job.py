@@ -15,7 +15,7 @@ The job, for a scene (:class:`ffrmbs_app.scene.Scene`) built fresh by ``make_sce
    anywhere in the job is announced on its own line and measured apart
    (:class:`ffrmbs_app.compile_clock.CompileClock`); it is reported as such and subtracted from
    the run's wall and CPU seconds, so the per-step cost never contains it;
-2. the run, streamed to ``OUT/<scene>.h5`` (:mod:`mbs.result_file`; starting it removes
+2. the run, streamed to ``OUT/<scene>.h5`` (:mod:`mbs.results.result_file`; starting it removes
    the plot and ParaView export of the run before, and what an export killed mid-write
    left, so that none can be taken for this run's, :class:`JobRecorder`) with a checkpoint
    every ``checkpoint_every`` seconds of wall time; SIGINT and SIGTERM stop it at its next
@@ -23,7 +23,7 @@ The job, for a scene (:class:`ffrmbs_app.scene.Scene`) built fresh by ``make_sce
    second signal stops it after the current step. ``resume=True`` continues a killed or
    interrupted run from its checkpoint (refused if an input file changed since): the
    scene is made again from its inputs and the run's state loaded from the checkpoint's
-   arrays (:mod:`mbs.checkpoint`); the result equals the uninterrupted run's bit for bit;
+   arrays (:mod:`mbs.results.checkpoint`); the result equals the uninterrupted run's bit for bit;
 3. the accuracy: the same scene once more at Δt/2 (``check``); max |x(Δt) − x(Δt/2)| over
    every output estimates the time-discretization error (the error of the Δt/2 run is
    about half of it for a first-order scheme across impacts), reported in the output's
@@ -36,7 +36,7 @@ The job, for a scene (:class:`ffrmbs_app.scene.Scene`) built fresh by ``make_sce
    Moreau runs with a trace the intervals in which a contact transmits a force (non-zero
    impulse or force, not a merely touching gap: :func:`contact_intervals`), the largest
    penetration and the energy balance over the steps (:func:`energy_balance`,
-   :mod:`mbs.step_work`)
+   :mod:`mbs.run.step_work`)
 
        E(t) − E(0) = W_loads − D_damping + W_impulses + residual,
 
@@ -71,7 +71,7 @@ from ffrmbs_app.output_dirs import shown
 from ffrmbs_app.output_lock import output_lock
 from ffrmbs_app.scene import MOREAU
 from mbs.integrators import driver
-from mbs.result_file import ResultRecorder, attribute, open_result_file, resume_checkpoint
+from mbs.results.result_file import ResultRecorder, attribute, open_result_file, resume_checkpoint
 
 
 def contact_intervals(t, dt, counts):
@@ -89,7 +89,7 @@ BALANCE_TERMS = ("load_work", "damping_loss", "impulse_work")
 
 
 def energy_balance(trace, initial) -> dict | None:
-    """The energy balance of a Moreau run with ``trace=True`` (:mod:`mbs.step_work`):
+    """The energy balance of a Moreau run with ``trace=True`` (:mod:`mbs.run.step_work`):
 
         E(t) − E(0) = W_loads − D_damping + W_impulses + residual
 

@@ -31,7 +31,7 @@ def estimate(scene, check=True) -> dict:
     """{"steps": time steps of the run (t_end / dt, float: may be huge), "sample_bytes":
     one output sample, "bytes": everything the job holds [bytes]} of a
     :class:`ffrmbs_app.scene.Scene`."""
-    from mbs.body import Frame
+    from mbs.bodies.body import Frame
     from mbs.integrators.moreau import TRACE_KEYS
 
     system = scene.system

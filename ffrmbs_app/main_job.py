@@ -8,7 +8,7 @@ output samples of the point mass's y position ``y`` [m] and velocity ``vy`` [m/s
 19's displacement ``node19`` [m], the kinetic and potential energy and the contact
 ``impact`` — the names of ``examples/scenes/point_mass_beam.toml``; a warm-up run of
 12.5 ms at Δt = 1e-4 s (past the first contact) compiles the numba kernels first.
-Written to ``out``: ``point_mass_beam.h5`` (the result file, :mod:`mbs.result_file`),
+Written to ``out``: ``point_mass_beam.h5`` (the result file, :mod:`mbs.results.result_file`),
 ``point_mass_beam.png`` and ``point_mass_beam-paraview/``. On a first run the kernels are
 compiled in a second process while the beam is preprocessed (:mod:`ffrmbs_app.precompile`).
 The contour carries the residual flexibility of the modes left out (:mod:`contours.residual`;

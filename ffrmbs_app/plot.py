@@ -5,7 +5,7 @@
 * an output name (``/outputs/<name>``): a scalar output is one line; a vector output
   (n, 3) one line per component, labelled x, y, z; other shapes one line per component,
   labelled by index. The y label carries the dataset's ``units`` attribute when it has
-  one (:mod:`mbs.result_file` writes one on every dataset); the panel's title says what
+  one (:mod:`mbs.results.result_file` writes one on every dataset); the panel's title says what
   the output is (its ``label`` attribute: "node19: beam node 19 displacement [m]");
 * ``energy``: kinetic, potential and their sum, total [J] (``/energy``);
 * ``contact:<name>``: the normal gap g_N [m] on the left axis and the normal force
@@ -28,7 +28,7 @@ from ffrmbs.errors import FfrmbsError, InputFileError, OutputFileError, os_reaso
 from ffrmbs_app.result_reading import check_shape, dataset, group, open_result
 from ffrmbs_app.ticks import plain_axis
 from ffrmbs_app.output_dirs import remove_stale
-from mbs.result_file import attribute
+from mbs.results.result_file import attribute
 
 COMPONENTS = ("x", "y", "z")
 SUBPLOT_HEIGHT = 2.4   # [in] per subplot
@@ -196,7 +196,7 @@ def plot_result(result_path, names=None, out=None, overwrite=False) -> Path:
     Parameters
     ----------
     result_path : str or os.PathLike
-        An ffrmbs result file (layout in :mod:`mbs.result_file`).
+        An ffrmbs result file (layout in :mod:`mbs.results.result_file`).
     names : list of str, optional
         Output names (``/outputs/<name>``), ``energy`` or ``contact:<name>``; one subplot
         each, in this order. Default: every output plus ``energy`` when recorded (the

@@ -1,4 +1,4 @@
-"""Checked reading of a result file (the HDF5 layout of :mod:`mbs.result_file`) for the
+"""Checked reading of a result file (the HDF5 layout of :mod:`mbs.results.result_file`) for the
 ParaView export (:mod:`ffrmbs_app.export`) and the plots (:mod:`ffrmbs_app.plot`): the
 file opened when it holds samples, each dataset and group fetched, and its shape checked,
 with one :class:`~ffrmbs.errors.InputFileError` naming the file and the object at fault.
@@ -11,12 +11,12 @@ from contextlib import contextmanager
 import h5py
 
 from ffrmbs.errors import InputFileError
-from mbs.result_file import attribute, open_result_file
+from mbs.results.result_file import attribute, open_result_file
 
 
 @contextmanager
 def open_result(path):
-    """Open an ffrmbs result file read-only (:func:`mbs.result_file.open_result_file`: a
+    """Open an ffrmbs result file read-only (:func:`mbs.results.result_file.open_result_file`: a
     regular HDF5 file of the result format and version, reading faults as
     InputFileError) that holds samples: a one-dimensional ``/t``. Yields the ``h5py.File``."""
     with open_result_file(path) as f:

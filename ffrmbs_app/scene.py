@@ -39,7 +39,7 @@ class Scene:
     options (e.g. theta, tol, penetration_bound [m]); n_out: output samples, equally
     spaced over [0, t_end]; outputs: {name: Frame or callable (t, q, u) -> array}, the
     quantities recorded at each sample; energies: record kinetic and potential energy
-    [J]; plan, tolerance [m]: the scene planner (:mod:`mbs.plan`); name: a plain file
+    [J]; plan, tolerance [m]: the scene planner (:mod:`mbs.run.plan`); name: a plain file
     stem (:func:`name_fault`) naming the result file and its companions; inputs: {label: path} of the files the
     scene was built from (the result file records their SHA-256); description: one line
     for logs; warmup: (t_end, dt) [s] of a short run made first so that the numba kernels

@@ -13,18 +13,18 @@ returns a ``Result``. The kinds by name (bodies, joints, loads, integrators, rot
 in :mod:`mbs.registry`.
 """
 
-from .body import Body, Frame, ground_frame
-from .flexible_body import FlexibleBodyFFR
-from .floating_frame import PrescribedFrameMotion
-from .joints import Joint
-from .force_file import read_force_file, write_force_file
-from .loads import DistributedForce, Force, NodalForces, Tabulated, Torque
-from .moving_force import MovingContourForce
-from .registry import BODIES, INTEGRATORS, JOINTS, LOADS, ROTATIONS
-from .result import Result
-from .rigid_body import PointMass, RigidBody
-from .springs import SpringDamper
-from .system import System
+from mbs.bodies.body import Body, Frame, ground_frame
+from mbs.bodies.flexible_body import FlexibleBodyFFR
+from mbs.bodies.floating_frame import PrescribedFrameMotion
+from mbs.links.joints import Joint
+from mbs.links.force_file import read_force_file, write_force_file
+from mbs.links.loads import DistributedForce, Force, NodalForces, Tabulated, Torque
+from mbs.links.moving_force import MovingContourForce
+from mbs.registry import BODIES, INTEGRATORS, JOINTS, LOADS, ROTATIONS
+from mbs.results.result import Result
+from mbs.bodies.rigid_body import PointMass, RigidBody
+from mbs.links.springs import SpringDamper
+from mbs.system import System
 
 __all__ = ["BODIES", "Body", "DistributedForce", "FlexibleBodyFFR", "Force", "Frame", "INTEGRATORS", "JOINTS", "Joint", "LOADS", "MovingContourForce", "NodalForces",
            "PointMass", "PrescribedFrameMotion", "ROTATIONS", "Result", "RigidBody", "SpringDamper", "System",

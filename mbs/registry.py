@@ -7,12 +7,12 @@ from __future__ import annotations
 
 from ffrmbs.registry import Registry
 
-from .flexible_body import FlexibleBodyFFR
-from .integrators import INTEGRATORS
-from .joints import JOINTS
-from .loads import DistributedForce, Force, NodalForces, Torque
-from .parametrization import PARAMETRIZATIONS as ROTATIONS
-from .rigid_body import PointMass, RigidBody
+from mbs.bodies.flexible_body import FlexibleBodyFFR
+from mbs.integrators import INTEGRATORS
+from mbs.links.joints import JOINTS
+from mbs.links.loads import DistributedForce, Force, NodalForces, Torque
+from mbs.bodies.parametrization import PARAMETRIZATIONS as ROTATIONS
+from mbs.bodies.rigid_body import PointMass, RigidBody
 
 BODIES = Registry("body kind")
 BODIES.register("flexible", FlexibleBodyFFR)      # FFR body (thesis Sec. 2.3)

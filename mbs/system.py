@@ -4,10 +4,10 @@ The System owns the flat state arrays: q (nq,) and u (nu,) with q̇ = Y(q) u (th
 eq. 3.1a); every body gets its slices when added. Its equations of motion — the
 block-diagonal mass matrix, the smooth forces h (bodies' Q_v − K q − D u, gravity,
 force elements), the constraint residuals g, their Jacobian C_q (W = C_qᵀ) and
-acceleration terms γ, energies — come from :class:`~mbs.equations.Equations` over all
-its bodies; a run compiles the System into a :class:`~mbs.model.Model` and never
+acceleration terms γ, energies — come from :class:`~mbs.run.equations.Equations` over all
+its bodies; a run compiles the System into a :class:`~mbs.run.model.Model` and never
 mutates it. ``simulate`` runs an integrator of
-:mod:`mbs.integrators` and returns a :class:`~mbs.result.Result`.
+:mod:`mbs.integrators` and returns a :class:`~mbs.results.result.Result`.
 
 Example::
 
@@ -17,7 +17,7 @@ Example::
     result = system.simulate(t_end=1.0, dt=1e-3, outputs={"tip": beam.node(12)})
 
 ``static_equilibrium()`` replaces the bodies' initial state by their rest under gravity
-and the loads (:mod:`mbs.static`).
+and the loads (:mod:`mbs.run.static`).
 """
 
 from __future__ import annotations
@@ -29,9 +29,9 @@ import numpy as np
 from contact.contact import ContactElement
 from ffrmbs.errors import ModelError
 
-from .body import Body, Frame, ground_frame
-from .equations import Equations
-from .link import Constraint, ForceElement
+from mbs.bodies.body import Body, Frame, ground_frame
+from mbs.run.equations import Equations
+from mbs.links.link import Constraint, ForceElement
 
 
 class System:
@@ -47,7 +47,7 @@ class System:
         self.nq = self.nu = self.n_c = 0
         self.com_frames = []     # each body's centre-of-mass frame (gravity)
         self.cache_dir = None    # where preprocessing reused between runs is kept (residual
-                                 # flexibility of contours, mbs.residual_contact); None: not kept
+                                 # flexibility of contours, mbs.run.residual_contact); None: not kept
         self._equations = None
 
     # --- building -----------------------------------------------------------------------
@@ -96,14 +96,14 @@ class System:
         """Put ``bodies`` (default: all; bodies or names) at rest in static equilibrium
         under gravity and the loads at time ``t`` [s], held by joints, springs, fixed
         frames and resting contacts, as their initial state; returns (q, u). The others
-        keep their given state. :func:`mbs.static.static_equilibrium` (Newton's method on
+        keep their given state. :func:`mbs.run.static.static_equilibrium` (Newton's method on
         h(q, 0, t) + W λ = 0, g(q) = 0; for a clamped FFR body K_ff q_f = Q_f)."""
-        from .static import static_equilibrium
+        from mbs.run.static import static_equilibrium
 
         return static_equilibrium(self, t, bodies, tol, max_iter)
 
     def equations(self):
-        """The :class:`~mbs.equations.Equations` of all bodies and force elements (rebuilt
+        """The :class:`~mbs.run.equations.Equations` of all bodies and force elements (rebuilt
         when the System grows)."""
         key = (len(self.bodies), len(self.forces), len(self.constraints))
         if self._equations is None or self._equations[0] != key:
@@ -124,15 +124,15 @@ class System:
 
     # --- planned runs -------------------------------------------------------------------
     def plan(self, t_end, tolerance=None, outputs=None):
-        """The scene plan for a run to ``t_end`` [s] (:mod:`mbs.plan`): per body the
+        """The scene plan for a run to ``t_end`` [s] (:mod:`mbs.run.plan`): per body the
         cheapest formulation within ``tolerance`` [m] (default 1e-6, shared half and half
         by neglected coupling and dropped modes) and what it leaves out; ``outputs`` the
         requested outputs. ``print(system.plan(1.0))`` shows it."""
-        from .plan import TOLERANCE, make_plan
+        from mbs.run.plan import TOLERANCE, make_plan
 
         return make_plan(self, t_end, TOLERANCE if tolerance is None else tolerance, outputs)
 
-    # --- dynamics (:class:`~mbs.equations.Equations` over all bodies) ------------------
+    # --- dynamics (:class:`~mbs.run.equations.Equations` over all bodies) ------------------
     def mass_matrix(self, t, q):
         """Block-diagonal M (nu, nu) [kg, kg m, kg m²]."""
         return self.equations().mass_matrix(t, q)
@@ -174,7 +174,7 @@ class System:
         return self.equations().constraint_bias(t, q, u)
 
     def accelerations(self, t, q, u, baumgarte=(0.0, 0.0)):
-        """(u̇, λ) of the index-1 form (:meth:`mbs.equations.Equations.accelerations`)."""
+        """(u̇, λ) of the index-1 form (:meth:`mbs.run.equations.Equations.accelerations`)."""
         return self.equations().accelerations(t, q, u, baumgarte)
 
     # --- energies and momenta ----------------------------------------------------------
@@ -211,26 +211,26 @@ class System:
         position is recorded) or callable(t, q, u) -> array}. ``energies``: also record
         kinetic and potential energy. ``breakpoints``: times [s] where loads jump, added to
         those the force elements declare (step tables, force files); the integrator stops
-        just before each and restarts there. Returns a :class:`~mbs.result.Result`; a diverging
+        just before each and restarts there. Returns a :class:`~mbs.results.result.Result`; a diverging
         run raises :class:`~ffrmbs.errors.SimulationError` whose ``result`` holds what
         was computed up to then.
 
-        ``plan`` (default True): plan the scene first (:meth:`plan`, :mod:`mbs.plan`;
+        ``plan`` (default True): plan the scene first (:meth:`plan`, :mod:`mbs.run.plan`;
         logged on the "ffrmbs.plan" logger and kept in ``Result.plan``) and solve the
         bodies it assigns to exact modal propagation or SimpleRB apart from the
-        integrator, within ``tolerance`` [m]; a :class:`~mbs.plan.Plan` from
+        integrator, within ``tolerance`` [m]; a :class:`~mbs.run.plan.Plan` from
         :meth:`plan` is used as given; ``plan=False`` integrates every body with
         ``integrator`` and updates every contour each step.
 
         ``contacts``: also record each contact's state at the outputs (``Result.contacts``).
         ``recorder``: streams the samples to a result file while the run goes and takes
-        checkpoints (:class:`mbs.result_file.ResultRecorder`); ``progress``: a callable
+        checkpoints (:class:`mbs.results.result_file.ResultRecorder`); ``progress``: a callable
         (t) called after each output time (e.g. :func:`ffrmbs_app.progress.progress_bar`).
-        ``checkpoint``: a :class:`mbs.checkpoint.Checkpoint` of this same run (same
+        ``checkpoint``: a :class:`mbs.results.checkpoint.Checkpoint` of this same run (same
         arguments, same System built afresh): the run continues from it
         (:meth:`mbs.integrators.driver.Integrator.run`).
         """
-        from .integrators import integrator_class
+        from mbs.integrators import integrator_class
 
         if q0 is None or u0 is None:
             q_init, u_init = self.initial_state()

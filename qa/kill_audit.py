@@ -11,7 +11,7 @@ SIGKILL at a random moment (``--seed``) counted from the moment its own result f
 appears (start-up times vary most under load): uniform from one second before it to 0.9
 of the reference's time from the file to the end, the first kill at the very moment the
 file appears.
-After each kill: is the file readable (:func:`mbs.result_file.load_result`) and
+After each kill: is the file readable (:func:`mbs.results.result_file.load_result`) and
 consistent (every per-sample dataset of one length), how many samples it holds, is
 there a checkpoint; if there is, ``--resume`` finishes the run and its datasets are
 compared bitwise with the reference's. ``--no-check`` and ``--no-export`` leave out the
@@ -38,7 +38,7 @@ from pathlib import Path
 import h5py
 
 from ffrmbs.errors import FfrmbsError
-from mbs.result_file import datasets, load_result, per_sample
+from mbs.results.result_file import datasets, load_result, per_sample
 
 NAME = "point_mass_beam.h5"
 ENV = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}

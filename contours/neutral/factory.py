@@ -67,7 +67,7 @@ class NeutralContour(Contour):
         the state and the cache.
     """
 
-    #: what update() and the lazy products wrote (:mod:`mbs.state_arrays`)
+    #: what update() and the lazy products wrote (:mod:`mbs.results.state_arrays`)
     run_state = ("_state", "_span", "T", "_has_u", "_fields_stamp", "_velocity_stamp", "_local_position",
                  "_position_field", "_velocity_field")
 
@@ -198,7 +198,7 @@ class NeutralContour(Contour):
     def kernel_updated(self, velocity=True) -> None:
         """Note that a compiled kernel wrote the body state into the state vector of
         :attr:`kernel_data` as :meth:`update` does (R, A, q_f and, with ``velocity``, v, ω̄,
-        q̇_f), e.g. the fused detection of :mod:`mbs.fused_detection`."""
+        q̇_f), e.g. the fused detection of :mod:`mbs.run.fused_detection`."""
         self._has_u = bool(velocity)
 
     def evaluate(self, point, eta, xi=0.0, velocity=False, jacobians=False):
@@ -219,7 +219,7 @@ class NeutralContour(Contour):
     @property
     def evaluate_work(self):
         """The work arrays the compiled :meth:`evaluate` fills (the basis table, the ū rows
-        (6, 3), the Φ rows (6, 3 n_f)), for a fused detection (:mod:`mbs.fused_detection`)."""
+        (6, 3), the Φ rows (6, 3 n_f)), for a fused detection (:mod:`mbs.run.fused_detection`)."""
         return self._B, self._local_rows, self._phi_rows
 
     def _evaluate_reference(self, point, eta, xi, velocity, jacobians):

@@ -32,7 +32,7 @@ class NeutralNurbs(ABC):
     ``ctrl`` has shape space.ctrl_shape + (width,).
     """
 
-    run_state = ("ctrl",)       # the control points at the last update (mbs.state_arrays)
+    run_state = ("ctrl",)       # the control points at the last update (mbs.results.state_arrays)
 
     def __init__(self, space, width: int):
         self.space = space

@@ -21,7 +21,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from ffrmbs_app.cli import main as command_line
-from mbs.result_file import load_result
+from mbs.results.result_file import load_result
 
 try:
     here = Path(__file__).resolve().parent

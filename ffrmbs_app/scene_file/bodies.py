@@ -13,7 +13,7 @@ from ffrmbs.errors import FfrmbsError, InputFileError
 from ffrmbs_app.scenes import point_mass_beam, sliding_ball
 from ffrmbs_app.scenes.cache import cached_body_path
 from mbs import BODIES, PrescribedFrameMotion
-from mbs.flexible_body import select_modes
+from mbs.bodies.flexible_body import select_modes
 from preprocess import read_body
 from preprocess.bodyfiles import body_files
 

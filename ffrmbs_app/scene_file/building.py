@@ -16,8 +16,8 @@ from ffrmbs.errors import InputFileError, ModelError
 from ffrmbs_app.scene import Scene, name_fault
 from ffrmbs_app.scenes.cache import cache_dir
 from mbs import INTEGRATORS, LOADS, Joint, SpringDamper, System, Tabulated, read_force_file
-from mbs.joints import AXIS_KINDS
-from mbs.loads import WEIGHT_SUM_TOL
+from mbs.links.joints import AXIS_KINDS
+from mbs.links.loads import WEIGHT_SUM_TOL
 from preprocess.modes import clamped_dofs
 
 from .bodies import BodyReader

@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from mbs import PointMass, System, ground_frame
-from mbs.body import Frame
+from mbs.bodies.body import Frame
 
 from .schema import GROUND, REQUIRED
 from .tables import Table, describe

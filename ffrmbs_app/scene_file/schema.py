@@ -66,7 +66,7 @@ other keys take the default shown.
     "moreau-adaptive", "generalized-alpha", "rk4". ``n_out`` (101) >= 2: output
     samples, equally spaced on [0, t_end]. ``energies`` (true): record the kinetic
     and potential energy. ``plan`` (true) and ``tolerance`` [m] > 0 (the planner's
-    default): see :mod:`mbs.plan`. ``gravity`` ([0, 0, 0]) [m/s²].
+    default): see :mod:`mbs.run.plan`. ``gravity`` ([0, 0, 0]) [m/s²].
 
 ``[scene.options]``
     The keyword options of the chosen integrator (see ``System.simulate``):
@@ -107,7 +107,7 @@ other keys take the default shown.
   ``rayleigh`` ([α [1/s], β [s]]) and ``modal_damping`` (ζ, one value or one per
   mode): the damping. Both are off by default.
   ``geometric_stiffening`` (false): true adds the stiffening of the body by the inertia
-  loads of its spinning frame (:mod:`mbs.geometric_stiffening`); the body file must hold
+  loads of its spinning frame (:mod:`mbs.bodies.geometric_stiffening`); the body file must hold
   the geometric stiffness (``ffrmbs preprocess ... --geometric-stiffness``).
 - "rigid": :class:`mbs.RigidBody`. ``mass`` *req.* [kg] > 0. ``inertia`` *req.*
   [kg m²] about the centre of mass in body axes: a 3 x 3 matrix, or 3 principal
@@ -282,7 +282,7 @@ from contact import LAWS, SOLVERS, RegularizedCoulombFriction
 from contours.fitting import SMOOTHING
 from mbs import BODIES, INTEGRATORS, JOINTS, LOADS, ROTATIONS, Tabulated
 from mbs.integrators import MoreauTimeStepping
-from mbs.joints import AXIS_KINDS
+from mbs.links.joints import AXIS_KINDS
 from ffrmbs.registry import Registry
 from preprocess.units import UNIT_SYSTEMS
 

@@ -50,7 +50,7 @@ from contact import CurveConstraint, PointOnCurveConstraint
 from contours import Contour1sNeutralFFR, PointContour
 from ffrmbs.errors import ModelError
 from mbs import FlexibleBodyFFR, Force, PointMass, PrescribedFrameMotion, System
-from mbs.moving_force import MovingContourForce
+from mbs.links.moving_force import MovingContourForce
 
 from .cache import cache_dir, cached_body
 
@@ -159,7 +159,7 @@ def build(modes=20, start=BALL_START, velocity=BALL_VELOCITY, degree=DEGREE, dat
     a degree-``degree`` axis contour; ``data`` the body data (default: cached);
     ``residual_flexibility``: the axis carries the dropped modes' static compliance
     (:mod:`contours.residual`), so the constraint holding the ball acts through it — a
-    massless spring in series in its rows [n, t2] (:mod:`mbs.residual_contact`; the
+    massless spring in series in its rows [n, t2] (:mod:`mbs.run.residual_contact`; the
     System caches the compliance in the scene cache)."""
     data = default_beam_data() if data is None else data
     system = System()
@@ -238,7 +238,7 @@ class MovingLoadScene:
 def build_moving_load(force, speed, x0=0.0, modes=20, degree=DEGREE, data=None) -> MovingLoadScene:
     """The cantilever with a force ``force`` [N] along +y (negative: downwards) at the
     axis point x0 + speed·t [m] (x0 [m], speed [m/s]), applied through the axis contour's
-    J_T(η(t)) (:class:`mbs.moving_force.MovingContourForce`)."""
+    J_T(η(t)) (:class:`mbs.links.moving_force.MovingContourForce`)."""
     data = default_beam_data() if data is None else data
     system = System()
     beam, axis = _beam(system, data, modes, degree)

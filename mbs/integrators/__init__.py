@@ -15,9 +15,9 @@ from __future__ import annotations
 
 from ffrmbs.registry import Registry
 
-from .explicit import RK4
-from .generalized_alpha import GeneralizedAlpha
-from .moreau import AdaptiveMoreauTimeStepping, MoreauTimeStepping
+from mbs.integrators.explicit import RK4
+from mbs.integrators.generalized_alpha import GeneralizedAlpha
+from mbs.integrators.moreau import AdaptiveMoreauTimeStepping, MoreauTimeStepping
 
 INTEGRATORS = Registry("integrator")
 INTEGRATORS.register("moreau", MoreauTimeStepping)

@@ -19,7 +19,7 @@ import math
 
 from numba import njit
 
-from ..linalg_kernels import cho_solve_vector, cholesky_into
+from mbs.run.linalg_kernels import cho_solve_vector, cholesky_into
 
 
 @njit(cache=True)

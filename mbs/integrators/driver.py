@@ -1,11 +1,11 @@
 """The loop every integrator shares: steps that land on the output times, sampling, a
 clear stop when the state diverges, and the hooks of a run that lasts — a recorder that
-streams the samples to a result file and takes checkpoints (:mod:`mbs.result_file`,
-:mod:`mbs.checkpoint`), a stop on request (:func:`request_stop`, e.g. from a signal
+streams the samples to a result file and takes checkpoints (:mod:`mbs.results.result_file`,
+:mod:`mbs.results.checkpoint`), a stop on request (:func:`request_stop`, e.g. from a signal
 handler) and a progress callback.
 
-A run compiles the System under its plan into a :class:`~mbs.model.Model` and keeps
-everything that changes in a :class:`~mbs.model.Data` (``t``, ``q``, ``u`` of an
+A run compiles the System under its plan into a :class:`~mbs.run.model.Model` and keeps
+everything that changes in a :class:`~mbs.run.model.Data` (``t``, ``q``, ``u`` of an
 integrator are Data's); the System is never mutated. A run is resumable at every
 output sample: a checkpoint holds its state as arrays — the Data, the integrator's own
 state (:meth:`Integrator.collect`), the :class:`RunState` and the samples so far, the
@@ -23,15 +23,15 @@ from threadpoolctl import threadpool_limits
 
 from ffrmbs.errors import ModelError, RunInterrupted, SimulationError
 
-from .. import state_arrays
-from .._kernels import finite_sum
-from ..contact_record import ContactRecorder, empty_records
-from ..model import Data, compile_model
-from ..probes import FramePosition, probe
-from ..residual_contact import spring_energy
-from ..result import Result
-from ..step_failure import StepFailure
-from ..validity import SpinMonitor
+from mbs.results import state_arrays
+from mbs.bodies._kernels import finite_sum
+from mbs.results.contact_record import ContactRecorder, empty_records
+from mbs.run.model import Data, compile_model
+from mbs.results.probes import FramePosition, probe
+from mbs.run.residual_contact import spring_energy
+from mbs.results.result import Result
+from mbs.run.step_failure import StepFailure
+from mbs.bodies.validity import SpinMonitor
 
 
 def output_times(t_end, dt, t_out):
@@ -76,7 +76,7 @@ class RunState:
 
     times (n,) [s]: output times; landings: output and break times in order;
     breaks: times where loads jump; probes: {name: callable (t, q, u)}; result: the
-    preallocated :class:`~mbs.result.Result`, rows [0, recorded) filled; modal: {body:
+    preallocated :class:`~mbs.results.result.Result`, rows [0, recorded) filled; modal: {body:
     (q (n, nq_b), u (n, nu_b))} of the bodies the plan solves apart; next_landing: index
     into ``landings`` of the next target; cpu_s: CPU seconds spent before this process
     (a resumed run adds its own); resumed_at: times [s] where the run was resumed;
@@ -107,17 +107,17 @@ class Integrator:
     equal steps; step-size controlled integrators override it."""
 
     name = "integrator"
-    run_state = ("steps", "iterations")     # what a checkpoint keeps of the integrator (mbs.state_arrays)
+    run_state = ("steps", "iterations")     # what a checkpoint keeps of the integrator (mbs.results.state_arrays)
 
     def __init__(self, system):
         self.system = system
         self.iterations = 0
         self.steps = 0
-        self.plan = None        # the scene plan of a planned run (mbs.plan), set by run()
+        self.plan = None        # the scene plan of a planned run (mbs.run.plan), set by run()
         self.state = None       # the RunState of the current run
         self.model = None       # the compiled Model of the current run
         self.data = None        # its Data
-        self.contact_recorder = None    # samples Result.contacts (mbs.contact_record) when asked for
+        self.contact_recorder = None    # samples Result.contacts (mbs.results.contact_record) when asked for
 
     @property
     def t(self) -> float:
@@ -145,13 +145,13 @@ class Integrator:
 
     def compile(self, plan=None) -> None:
         """Compile the System under ``plan`` (None: every body integrated) into the run's
-        :class:`~mbs.model.Model` and a new :class:`~mbs.model.Data` (before ``start``)."""
+        :class:`~mbs.run.model.Model` and a new :class:`~mbs.run.model.Data` (before ``start``)."""
         self.plan = plan
         self.model = compile_model(self.system, plan, **self.model_options())
         self.data = Data(self.model)
 
     def spring_energy(self) -> float:
-        """½ Σ Fᵀδ [J] of the compliant contacts' springs (:mod:`mbs.residual_contact`),
+        """½ Σ Fᵀδ [J] of the compliant contacts' springs (:mod:`mbs.run.residual_contact`),
         part of the potential energy recorded with ``energies``."""
         return spring_energy(self.model, self.data)
 
@@ -164,7 +164,7 @@ class Integrator:
         state_arrays.restore(self, prefix, arrays, kinds)
 
     def model_options(self) -> dict:
-        """Options of :func:`mbs.model.compile_model` the integrator fixes (Moreau: θ, solver)."""
+        """Options of :func:`mbs.run.model.compile_model` the integrator fixes (Moreau: θ, solver)."""
         return {}
 
     def advance(self, end, dt):
@@ -226,18 +226,18 @@ class Integrator:
         per body), and on this project's 2-core machines OpenBLAS threads made a 753 x 753
         Cholesky factorization 13 times slower (55 ms against 4 ms).
 
-        With a ``plan`` (:mod:`mbs.plan`), its modal bodies are solved first at the output
+        With a ``plan`` (:mod:`mbs.run.plan`), its modal bodies are solved first at the output
         times, left out of the integrated equations of the compiled Model (their
         velocities held at zero) and written into the state at each output.
 
-        ``recorder`` (:class:`mbs.result_file.ResultRecorder` or alike): ``begin(self)``
+        ``recorder`` (:class:`mbs.results.result_file.ResultRecorder` or alike): ``begin(self)``
         (``resume(self)`` for a restored run), ``landed(self)`` after each landing (it
         reads the new rows of ``self.state.result`` and may take a checkpoint),
         ``checkpoint(self)``, ``end(self, status)``. ``progress``: a
         callable (t) after each landing. ``contacts``: also record each contact's state
         (``Result.contacts``).
 
-        ``checkpoint`` (:class:`mbs.checkpoint.Checkpoint` of this run, taken at an output
+        ``checkpoint`` (:class:`mbs.results.checkpoint.Checkpoint` of this run, taken at an output
         sample): continue from it — the run is prepared as above from the same inputs,
         its state loaded from the checkpoint's arrays, and the result (samples before the
         checkpoint included) equals the uninterrupted run's bit for bit; the recorder
@@ -366,7 +366,7 @@ class Integrator:
         for name, sample in st.probes.items():
             rows = res.outputs.get(name)
             if rows is not None and type(sample) is FramePosition:
-                sample.into(self.t, q, rows[i])         # in place (mbs.probes)
+                sample.into(self.t, q, rows[i])         # in place (mbs.results.probes)
                 continue
             value = np.asarray(sample(self.t, q, u), dtype=float)
             if rows is None:
@@ -388,7 +388,7 @@ class Integrator:
     def _scene_energies(self, q, u):
         """(kinetic, potential) energy [J] of the whole scene at (``self.t``, q, u): the
         body stage's one kernel when it holds every body and force element
-        (:meth:`mbs.body_stage.BodyStage.energies`), else the System's sums over bodies
+        (:meth:`mbs.run.body_stage.BodyStage.energies`), else the System's sums over bodies
         and links; the compliant contacts' springs in the potential."""
         sys, model = self.system, self.model
         energies = model.body_stage.energies(q, u) if len(model.equations.forces) == len(sys.forces) else None

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .driver import Integrator, StepFailure
+from mbs.integrators.driver import Integrator, StepFailure
 
 
 class RK4(Integrator):

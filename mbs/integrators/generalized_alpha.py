@@ -20,9 +20,9 @@ and cannot be resolved (without the floor a small step never converged: a hinged
 failed at Δt = 1e-5 s however many iterations it was given).
 
 Each iteration is allocation-free: M and h come from the body stage
-(:class:`mbs.body_stage.BodyStage`) into a preallocated workspace, the vector algebra
+(:class:`mbs.run.body_stage.BodyStage`) into a preallocated workspace, the vector algebra
 and the Cholesky solve of S from numba kernels (:mod:`mbs.integrators._kernels`,
-:mod:`mbs.linalg_kernels`). S is read from its upper triangle (it is symmetric unless a
+:mod:`mbs.run.linalg_kernels`). S is read from its upper triangle (it is symmetric unless a
 force element's tangent is not); where it is not positive definite the step solves it
 with LAPACK's symmetric indefinite solver instead. With constraints the KKT system is
 solved densely by LAPACK.
@@ -39,8 +39,8 @@ import scipy.linalg
 
 from ffrmbs.errors import ModelError
 
-from ._kernels import combine_into, ga_base, ga_newton_update, ga_predict
-from .driver import Integrator, StepFailure
+from mbs.integrators._kernels import combine_into, ga_base, ga_newton_update, ga_predict
+from mbs.integrators.driver import Integrator, StepFailure
 
 ROUNDOFF = 16 * np.finfo(float).eps     # the constraint residual's relative round-off (module docstring)
 

@@ -1,8 +1,8 @@
 """Moreau's time-stepping for set-valued contacts and impacts (thesis eq. 3.1, 4.1), as the
 θ-method of Moreau–Jean (Acary & Brogliato 2008, Sec. 10.1) on the smooth forces.
 
-One step of size Δt is the eight stages of :mod:`mbs.stages` on the run's
-:class:`~mbs.model.Model` and :class:`~mbs.model.Data` (DESIGN, "the data flow of one
+One step of size Δt is the eight stages of :mod:`mbs.run.stages` on the run's
+:class:`~mbs.run.model.Model` and :class:`~mbs.run.model.Data` (DESIGN, "the data flow of one
 Moreau step"):
 
 1. q_θ = q_k ⊕ θΔt u_k (θ = 1/2: the thesis's midpoint q_m);
@@ -57,7 +57,7 @@ contacts' springs hold a part while closed), total energy E = T + V [J] (gravity
 the compliant contacts' springs in V; the springs' ½ Fᵀδ also on their own as
 ``contact_springs``), the contacts that transmitted a force (non-zero Λ; "closed"
 counts those touching too), the applied loads' work and the damping's loss [J]
-(:mod:`mbs.step_work`); the energy at the start, E(0) of the integrated bodies, is
+(:mod:`mbs.run.step_work`); the energy at the start, E(0) of the integrated bodies, is
 ``Result.stats["initial_energy"]``), ``penetration_bound`` [m] (default None: no
 bound; a penetration max(0, −g_N) at q_θ beyond it, in an accepted step, stops the run). Non-convergence of
 the contact problem stops the run with a SimulationError naming the residual.
@@ -76,10 +76,10 @@ A step is accepted when that weighted error e <= 1 and the next H is
 H · min(2, max(0.2, 0.9 e^(−1/2))) (first order in the positions across impacts);
 a rejected step is retaken with the smaller H. A step taken back (the step of H before
 its two halves, a rejected step) leaves no trace: what a step reads of the steps before
-it — the Data of :data:`mbs.model.CARRIED` (state, closed flags, warm starts, the
+it — the Data of :data:`mbs.run.model.CARRIED` (state, closed flags, warm starts, the
 compliant contacts' springs, counters) and the contours' and contacts' ``run_state``
 (the searches' warm starts and counters) — is copied before it and put back after
-(:class:`mbs.state_arrays.StateCopy`). An impact inside a step separates the
+(:class:`mbs.results.state_arrays.StateCopy`). An impact inside a step separates the
 two solutions by about the approach velocity times the mistimed interval, so the step
 shrinks around contact closing and grows again in free flight and steady contact.
 ``dt`` of ``simulate`` is the initial and largest step; ``dt_min`` the smallest (a step
@@ -97,11 +97,13 @@ import numpy as np
 from contact.solver import ProxSolver
 from ffrmbs.errors import ModelError
 
-from .. import stages, state_arrays
-from ..model import CARRIED, LAST_STEP
-from ..step_work import StepWork
-from .driver import Integrator, StepFailure, non_finite
-from .step_trace import StepTrace
+from mbs.run import stages
+
+from mbs.results import state_arrays
+from mbs.run.model import CARRIED, LAST_STEP
+from mbs.run.step_work import StepWork
+from mbs.integrators.driver import Integrator, StepFailure, non_finite
+from mbs.integrators.step_trace import StepTrace
 
 TRACE_KEYS = ("t", "dt", "closed", "penetration", "iterations", "residual", "impulse_work", "pressed", "load_work",
               "damping_loss", "energy", "contact_springs")      # t, dt, Data.last, energies
@@ -225,7 +227,7 @@ class MoreauTimeStepping(Integrator):
 
     def step(self, dt):
         stages.step(self.model, self.data, dt)
-        if self._trace is not None:                 # the step's energy terms (mbs.step_work)
+        if self._trace is not None:                 # the step's energy terms (mbs.run.step_work)
             data, work = self.data, self._step_work()
             last = data.last
             last[5] = max(last[5], work.pressed(data))
@@ -300,7 +302,7 @@ class AdaptiveMoreauTimeStepping(MoreauTimeStepping):
 
     def _save(self):
         """Keep what a rejected or repeated step puts back: the Data a step reads of the
-        steps before it (:data:`mbs.model.CARRIED`: t, q, u, closed flags, warm starts,
+        steps before it (:data:`mbs.run.model.CARRIED`: t, q, u, closed flags, warm starts,
         compliant springs, counters) and the run state of the contours and contacts
         (searches' warm starts and counters)."""
         self._saved.save()

@@ -8,11 +8,11 @@ the same body data as :class:`~mbs.FlexibleBodyFFR`; loads are ``StepLoads``
 :mod:`mbs.modal.decision`.
 """
 
-from .basis import ModalBasis
-from .coupled_rb import CoupledRB
-from .pure_ma import PureMA
-from .result import ModalResult
-from .simple_rb import SimpleRB
-from .step_loads import StepLoads
+from mbs.modal.basis import ModalBasis
+from mbs.modal.coupled_rb import CoupledRB
+from mbs.modal.pure_ma import PureMA
+from mbs.modal.result import ModalResult
+from mbs.modal.simple_rb import SimpleRB
+from mbs.modal.step_loads import StepLoads
 
 __all__ = ["CoupledRB", "ModalBasis", "ModalResult", "PureMA", "SimpleRB", "StepLoads"]

@@ -37,13 +37,13 @@ import numpy as np
 
 from ffrmbs.errors import ModelError, SimulationError
 
-from ..rotations import skew
-from ._kernels import report_step, workspace
-from .basis import ModalBasis
-from .oscillator import transition
-from .pure_ma import decay_rates, initial_modal_state, loads_on_rows, segment_starts
-from .result import ModalResult
-from .simple_rb import RigidLoads, time_grid
+from mbs.bodies.rotations import skew
+from mbs.modal._kernels import report_step, workspace
+from mbs.modal.basis import ModalBasis
+from mbs.modal.oscillator import transition
+from mbs.modal.pure_ma import decay_rates, initial_modal_state, loads_on_rows, segment_starts
+from mbs.modal.result import ModalResult
+from mbs.modal.simple_rb import RigidLoads, time_grid
 
 _LEVI = np.zeros((3, 3, 3))
 _LEVI[0, 1, 2] = _LEVI[1, 2, 0] = _LEVI[2, 0, 1] = 1.0

@@ -20,9 +20,9 @@ import numpy as np
 
 from ffrmbs.errors import ModelError
 
-from .basis import ModalBasis
-from .oscillator import StepResponse
-from .result import ModalResult
+from mbs.modal.basis import ModalBasis
+from mbs.modal.oscillator import StepResponse
+from mbs.modal.result import ModalResult
 
 
 def decay_rates(omega2, rayleigh=None, zeta=None) -> np.ndarray:

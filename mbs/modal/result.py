@@ -13,9 +13,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..rotations import rotvec_from_matrix
-from ._kernels import place_nodes
-from .basis import ModalBasis
+from mbs.bodies.rotations import rotvec_from_matrix
+from mbs.modal._kernels import place_nodes
+from mbs.modal.basis import ModalBasis
 
 
 @dataclass

@@ -28,11 +28,11 @@ import numpy as np
 
 from ffrmbs.errors import ModelError, SimulationError
 
-from ._kernels import rigid_motion
-from .basis import ModalBasis
-from .oscillator import StepResponse
-from .pure_ma import decay_rates, initial_modal_state, loads_on_rows, projection_rows, segment_starts
-from .result import ModalResult
+from mbs.modal._kernels import rigid_motion
+from mbs.modal.basis import ModalBasis
+from mbs.modal.oscillator import StepResponse
+from mbs.modal.pure_ma import decay_rates, initial_modal_state, loads_on_rows, projection_rows, segment_starts
+from mbs.modal.result import ModalResult
 
 SCHEMES = {"report": 0, "rkmk4": 1}
 

@@ -17,8 +17,8 @@ import numpy as np
 
 from ffrmbs.errors import ModelError
 
-from ..force_file import read_force_file
-from ..step_times import check_times
+from mbs.links.force_file import read_force_file
+from mbs.links.step_times import check_times
 
 FRAMES = ("body", "inertial")
 

@@ -15,7 +15,7 @@ import h5py
 import numpy as np
 import pytest
 
-from mbs.result_file import load_result
+from mbs.results.result_file import load_result
 
 pytestmark = pytest.mark.slow   # seconds each: left out of the fast subset (-m "not slow")
 

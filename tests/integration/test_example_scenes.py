@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from ffrmbs_app.cli import main
-from mbs.result_file import load_result
+from mbs.results.result_file import load_result
 from preprocess import pipeline
 
 import paths

@@ -17,7 +17,7 @@ import pytest
 import scipy.integrate
 import scipy.optimize
 
-from mbs.validity import FFRValidityWarning
+from mbs.bodies.validity import FFRValidityWarning
 from validation.cases import ffr_spinning_free as case
 
 pytestmark = pytest.mark.slow   # seconds: left out of the fast subset (-m "not slow")

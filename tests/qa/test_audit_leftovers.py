@@ -21,7 +21,7 @@ import pytest
 
 from ffrmbs.errors import InputFileError
 from ffrmbs_app import cli
-from mbs.result_file import load_result
+from mbs.results.result_file import load_result
 from qa.fixtures import edited, fixture_text
 
 import paths
@@ -141,7 +141,7 @@ def test_a_fifo_as_the_result_file_is_named_and_not_opened(tmp_path, command):
 
 @pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no FIFOs on this platform")
 def test_load_result_of_a_fifo_is_refused_without_opening_it(tmp_path):
-    """mbs.result_file.load_result handed the FIFO to HDF5, whose open blocks without a
+    """mbs.results.result_file.load_result handed the FIFO to HDF5, whose open blocks without a
     writer (watched: :mod:`fifo_watch`)."""
     fifo = tmp_path / "run.h5"
     os.mkfifo(fifo)

@@ -385,7 +385,7 @@ def test_a_foreign_file_as_a_body_file_is_quoted_in_short(small_body, tmp_path):
 
 
 def test_a_foreign_file_as_a_force_file_is_quoted_in_short(tmp_path):
-    from mbs.force_file import read_force_file
+    from mbs.links.force_file import read_force_file
 
     secret = "root:x:0:0:root:/root:/bin/bash"
     path = tmp_path / "passwd"

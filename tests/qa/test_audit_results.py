@@ -25,7 +25,7 @@ import pytest
 from ffrmbs_app.export import export_paraview
 from mbs import FlexibleBodyFFR, PointMass, System
 from mbs.integrators.moreau import TRACE_KEYS
-from mbs.result_file import ResultRecorder, load_result
+from mbs.results.result_file import ResultRecorder, load_result
 from preprocess import Material, build_body
 from preprocess.geometry import box
 
@@ -209,9 +209,9 @@ def enospc(*args, **kwargs):
 
 
 def test_a_full_disk_at_a_checkpoint_is_one_clear_line_and_status_failed(tmp_path, monkeypatch):
-    import mbs.result_file
+    import mbs.results.result_file
 
-    monkeypatch.setattr(mbs.result_file, "write_checkpoint", enospc)
+    monkeypatch.setattr(mbs.results.result_file, "write_checkpoint", enospc)
     code, _, stderr = run_cli("run", "--no-check", "--no-export", "--t-end", "0.015", "--checkpoint-every", "0.001",
                               "--out", str(tmp_path))
     ckpt = tmp_path / "point_mass_beam.h5.ckpt"
@@ -252,10 +252,10 @@ def test_a_disk_about_to_fill_stops_before_hdf5_writes(tmp_path, monkeypatch):
     """HDF5 cannot close a file after a failed write (the process then crashes as it
     exits, seen on a full 1 MB tmpfs), so the recorder checks the free space before each
     flush and stops with room left to close the file."""
-    import mbs.result_file
+    import mbs.results.result_file
 
     free = iter([50e6] + [1.2e6] * 100)                     # [bytes]: room for the layout, not for 256 samples
-    monkeypatch.setattr(mbs.result_file, "free_bytes", lambda directory: int(next(free)))
+    monkeypatch.setattr(mbs.results.result_file, "free_bytes", lambda directory: int(next(free)))
     code, _, stderr = run_cli("run", "--no-check", "--no-export", "--t-end", "0.015", "--out", str(tmp_path))
     path = tmp_path / "point_mass_beam.h5"
     assert code == 2
@@ -420,7 +420,7 @@ def test_a_non_reading_error_in_a_result_block_is_not_blamed_on_the_file(tmp_pat
     """damaged_result_file turns what h5py or json raise into 'damaged result file', but
     lets an error of other code in the block (here numpy) pass as itself."""
     from ffrmbs.errors import InputFileError
-    from mbs.result_file import damaged_result_file
+    from mbs.results.result_file import damaged_result_file
 
     path = tmp_path / "r.h5"
     h5py.File(path, "w").close()

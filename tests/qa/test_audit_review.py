@@ -6,7 +6,7 @@ from __future__ import annotations
 import pytest
 
 from ffrmbs.errors import InputFileError
-from mbs.checkpoint import read_checkpoint
+from mbs.results.checkpoint import read_checkpoint
 
 
 def test_a_checkpoint_of_the_older_unsigned_format_is_named_as_such(tmp_path):

@@ -14,7 +14,7 @@ from pathlib import Path
 import h5py
 import pytest
 
-from mbs.checkpoint import read_checkpoint
+from mbs.results.checkpoint import read_checkpoint
 from cli_in_process import run_cli
 from qa.fixtures import edited, fixture_text
 

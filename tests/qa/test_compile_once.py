@@ -188,8 +188,9 @@ TWO_LANDINGS = textwrap.dedent("""
     from contact.solver import ProxSolver
     from contours import PointContour
     from ffrmbs_app.scenes import point_mass_beam as pmb
-    from mbs import FlexibleBodyFFR, PointMass, System, stages
-    from mbs.model import Data, compile_model
+    from mbs import FlexibleBodyFFR, PointMass, System
+    from mbs.run import stages
+    from mbs.run.model import Data, compile_model
 
     scene = pmb.build(residual_flexibility=True)
     second = scene.system.add(PointMass(pmb.MASS, position=(0.15, pmb.HEIGHT + 0.003, 0.02), velocity=pmb.VELOCITY,
@@ -227,7 +228,7 @@ TWO_LANDINGS = textwrap.dedent("""
 @pytest.mark.slow
 def test_a_scene_whose_contact_problem_changes_size_compiles_each_kernel_once():
     """The scratch and problem arrays of every size are C-contiguous views
-    (:meth:`mbs.model.Data.problem`, ``solver_scratch``, ``compliance``), block factors are
+    (:meth:`mbs.run.model.Data.problem`, ``solver_scratch``, ``compliance``), block factors are
     indexed in place, and a contact's W block is written into the whole W: the kernels see
     one array layout for every problem size, and a body's mass kernel writes a C-contiguous
     block of its own. Before, a problem of fewer rows than the most a scene can have

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from ffrmbs.errors import InputFileError
-from mbs.checkpoint import read_checkpoint
+from mbs.results.checkpoint import read_checkpoint
 from qa import fault_audit as fa
 from qa import fault_cases as fc
 from qa import planted_files as pf

@@ -226,7 +226,7 @@ def test_the_rules_catch_upward_imports(tmp_path):
     (tmp_path / "contours").mkdir()
     (tmp_path / "ffrmbs_app").mkdir()
     probe = tmp_path / "contours" / "probe.py"
-    probe.write_text("from mbs.rotations import skew\nfrom ..ffrmbs_app import job\n")
+    probe.write_text("from mbs.bodies.rotations import skew\nfrom ..ffrmbs_app import job\n")
     job = tmp_path / "ffrmbs_app" / "job.py"
     job.write_text("def run():\n    import validation.harness\n")
     cli = tmp_path / "ffrmbs_app" / "cli.py"

@@ -1,7 +1,7 @@
 """The default scene (thesis Sec. 5.2, setup A) with another contact of the same point
 mass: its point or a sphere about it, against the beam's top face (2s), its band, or a
 curve along the top face's centre line (1s) — one scene per pair kind with a fused
-detection (mbs.fused_detection), for the tests that compare or time them."""
+detection (mbs.run.fused_detection), for the tests that compare or time them."""
 
 import dataclasses
 

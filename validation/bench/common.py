@@ -11,7 +11,7 @@ import platform
 import numba
 import numpy as np
 
-from mbs.rotations import quat_from_rotvec
+from mbs.bodies.rotations import quat_from_rotvec
 
 THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS")
 

@@ -34,7 +34,7 @@ from validation.cases import _wobble as wb
 from validation.cases import ffr_free_flight as ff
 
 # Our configurations to choose from: (integrator name, step [s], options of System.simulate).
-# "plan": True lets the planner choose the formulation (SimpleRB here, mbs.plan); the
+# "plan": True lets the planner choose the formulation (SimpleRB here, mbs.run.plan); the
 # others integrate the full FFR equations (plan=False).
 CANDIDATES = (
     ("generalized-alpha", 1e-3, {"plan": True}),

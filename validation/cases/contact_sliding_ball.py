@@ -12,7 +12,7 @@ no gravity; 5 s; Moreau time-stepping (θ = 0.5: elastic energy conserved, θ = 
 **Residual flexibility** (:mod:`contours.residual`, issue 21): with
 ``residual_flexibility`` on, the axis contour carries the static compliance C of the
 modes the beam leaves out, and the ball's constraint acts through it as a massless spring
-in series in its rows [n, t2] (:mod:`mbs.residual_contact`, :mod:`contact.compliance`).
+in series in its rows [n, t2] (:mod:`mbs.run.residual_contact`, :mod:`contact.compliance`).
 Every row's config says ``"residual_flexibility": "on"`` or ``"off"``; only checks 3 and 5
 run both: 1 and 2 have no contact, and 4 checks the contour's smoothness at its knots,
 which the correction leaves alone (it adds no geometry; its C(η) = N(η)ᵀ G_P N(η) is as
@@ -27,7 +27,7 @@ Checks (rows: error against CPU seconds of the simulation):
    (rel. error ω_FE/ω_EB − 1; CPU: meshing + assembly + eigen solve).
 2. **Moving load** (:mod:`validation.moving_load`): the beam without the ball under a
    force P = −0.1 N (along −y) moving along the axis at x_P = x0 + c t, applied as
-   J_T(η(t))ᵀ F through the axis contour (:class:`mbs.moving_force.MovingContourForce`),
+   J_T(η(t))ᵀ F through the axis contour (:class:`mbs.links.moving_force.MovingContourForce`),
    against the Euler–Bernoulli modal series (60 modes, closed-form Duhamel integrals).
    Three loads: c = 0.01 m/s (the ball's speed) from x0 = 0.75 m for 3 s — suddenly
    applied, so mode 1 rings with an amplitude ≈ its static share; c = 0.5 m/s and
@@ -50,7 +50,7 @@ Checks (rows: error against CPU seconds of the simulation):
      diag(ω_n²) q = λ (1 + m φ(x̄) φ(x̄)ᵀ) q) — the ball moves only 0.05 m, so the
      quasi-stationary frequency applies (it changes by 0.7 % between x = 0.75 and 0.8 m);
    - *energy drift*: max_k |E_k − E_1| / E_vib with E = beam kinetic + elastic + ball
-     kinetic energy + the residual spring's ½ Fᵀδ (:func:`mbs.residual_contact.spring_energy`,
+     kinetic energy + the residual spring's ½ Fᵀδ (:func:`mbs.run.residual_contact.spring_energy`,
      part of the potential energy the run records; zero without the correction; its
      largest share is sampled by :class:`SpringEnergy`), E_1 after the first step (the first step projects the ball's
      −0.002 m/s normal velocity inelastically onto the beam) and E_vib = E_1 − ½ m
@@ -99,7 +99,7 @@ import scipy.linalg
 from scipy.optimize import minimize_scalar
 
 from mbs import Force
-from mbs.residual_contact import spring_energy
+from mbs.run.residual_contact import spring_energy
 from preprocess import solve_static
 from validation import CaseResult, make_row, timed
 from ffrmbs.errors import ModelError
@@ -160,7 +160,7 @@ def on_off(residual_flexibility) -> str:
 class SpringEnergy:
     """A recorder for ``System.simulate(recorder=...)`` (:meth:`mbs.integrators.driver.Integrator.run`)
     that samples the springs' energy ½ Σ Fᵀ δ [J] of the compliant contacts
-    (:func:`mbs.residual_contact.spring_energy`) from the integrator's Model and Data at each
+    (:func:`mbs.run.residual_contact.spring_energy`) from the integrator's Model and Data at each
     output sample — the part of the total energy that lives in no body's coordinates
     (zero without residual flexibility). ``values`` (n_out,) [J] after the run."""
 

@@ -28,7 +28,7 @@ are such load):
 * ``update_full``: ``update`` plus the full control-point update of the reference route
   (``contour.position_field`` brought up to date);
 * ``evaluate``: ``contour.evaluate(point, η, ξ)`` — position, derivatives, frame — by the
-  span-local compiled kernel, the route of the step's detection (:mod:`mbs.fused_detection`
+  span-local compiled kernel, the route of the step's detection (:mod:`mbs.run.fused_detection`
   calls the same kernel inside numba);
 * ``evaluate_J``: the same with ``jacobians=True`` (J_T, J_R: what a closed contact needs).
 

@@ -3,11 +3,11 @@
 An FFR body's inertia (thesis eq. 2.53, 2.54, 2.65) comes either from the lumped node
 masses (row sums for tet4, HRZ for tet10, :func:`preprocess.fe.lumped_masses`) or from
 the consistent mass matrix M_s (:func:`preprocess.fe.consistent_mass_matrix`; shape
-integrals eq. C1 of :mod:`mbs.shape_integrals`). Three measurements, each with both
+integrals eq. C1 of :mod:`mbs.bodies.shape_integrals`). Three measurements, each with both
 masses (config ``mass``: "lumped" / "consistent"; ``body``: the mesh):
 
 1. **Rigid-body inertia** — mass m, centre of mass c and inertia tensor J about c, taken
-   from the shape integrals (m, I1, I_kl, :class:`mbs.shape_integrals.ShapeIntegrals`)
+   from the shape integrals (m, I1, I_kl, :class:`mbs.bodies.shape_integrals.ShapeIntegrals`)
    of a 0.1 x 0.2 x 0.5 m steel box (tet4 and tet10, a structured 1 x 2 x 5 mesh and an
    unstructured one) and of the stepped beam (:func:`preprocess.stepped_beam`), against
    the exact values of the solid blocks: a block [0, a] x [0, b] x [0, c] of density ρ
@@ -38,7 +38,7 @@ from __future__ import annotations
 import numpy as np
 
 from mbs import FlexibleBodyFFR, System
-from mbs.shape_integrals import ShapeIntegrals
+from mbs.bodies.shape_integrals import ShapeIntegrals
 from preprocess import Material, box, build_body, fe, stepped_beam
 from validation import CaseResult, make_row, timed
 from validation.cases.complex_beam import MATERIAL_MM

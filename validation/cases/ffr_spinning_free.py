@@ -24,7 +24,7 @@ Beam theory: ω² ≈ ω1² + K Ω² with the Southwell-type coefficient K = ∫
 N̂ = (L²/4 − s²)/2, of the free-free Euler–Bernoulli mode (≈ 3.05; the test compares).
 
 FFR: ``FlexibleBodyFFR(data, n, frame="free")`` with and without ``geometric_stiffening``
-(eq. S1 of :mod:`mbs.geometric_stiffening`: on a free frame the centrifugal cases
+(eq. S1 of :mod:`mbs.bodies.geometric_stiffening`: on a free frame the centrifugal cases
 K_geo = Ω_z² Φᵀ K_σ,zz Φ), initial spin ω = (0, 0, Ω), q_f = 0 and q̇_f exciting the first
 (flatwise) mode alone with a flatwise tip velocity ``TIP_VELOCITY`` (amplitude about
 0.1–0.3 mm, 1–3 % of h). Generalized-α with ρ∞ = 1 (the trapezoidal rule, no numerical

@@ -144,7 +144,7 @@ def _tumble_reference(basis, F_B, T_B, Om0, t_out):
     equations with constant body-frame loads: an independent formulation."""
     from scipy.integrate import solve_ivp
 
-    from mbs.rotations import quat_multiply, quat_to_matrix
+    from mbs.bodies.rotations import quat_multiply, quat_to_matrix
 
     I = basis.inertia
 

@@ -1,4 +1,4 @@
-"""A scene for the planner (:mod:`mbs.plan`): every rule has something to do.
+"""A scene for the planner (:mod:`mbs.run.plan`): every rule has something to do.
 
 Built on the point mass dropped on the clamped beam (thesis Sec. 5.2, setup A,
 :mod:`ffrmbs_app.scenes.point_mass_beam`, 20 modes, Moreau), plus

@@ -25,8 +25,8 @@ from scipy.special import ellipk
 
 from ffrmbs.errors import SimulationError
 from mbs import FlexibleBodyFFR, PrescribedFrameMotion, RigidBody, System
-from mbs.rotations import rotvec_from_matrix
-from mbs.validity import SPIN_RATIO, FFRValidityWarning, SpinMonitor
+from mbs.bodies.rotations import rotvec_from_matrix
+from mbs.bodies.validity import SPIN_RATIO, FFRValidityWarning, SpinMonitor
 from preprocess import Material, box, build_body
 from validation.stability.core import StabilityRow, Stopwatch, graceful_row, stability_case
 
@@ -646,7 +646,7 @@ def run_spin_up(final_ratio, alpha_periods=10, samples=501):
     """Spin the cantilever up to |Ω| = final_ratio ω1 in ``alpha_periods`` periods of its
     first bending mode (generalized-α, Δt = T1/100) and collect the validity warnings:
     from the driver's hook (``result.stats["validity_warnings"]``) when it exists, else by
-    running :class:`~mbs.validity.SpinMonitor` over the result's samples (what the hook
+    running :class:`~mbs.bodies.validity.SpinMonitor` over the result's samples (what the hook
     does). Returns a dict with the events, the warnings seen, ω1 and the analytic
     crossing time t* = ratio ω1/α."""
     data = spun_beam_data()
@@ -678,7 +678,7 @@ def spin_near_bending(quick: bool) -> StabilityRow:
     """Two spin-ups of a clamped cantilever about an axis normal to it: to 0.5 · ratio · ω1
     (no warning allowed) and to 1.5 · ratio · ω1 (exactly one FFRValidityWarning and one
     event, first sampled at or after the analytic crossing t* = ratio ω1/α and within one
-    output interval of it). ratio = mbs.validity.SPIN_RATIO."""
+    output interval of it). ratio = mbs.bodies.validity.SPIN_RATIO."""
     periods = 6 if quick else 20
     below = run_spin_up(0.5 * SPIN_RATIO, periods)
     above = run_spin_up(1.5 * SPIN_RATIO, periods)

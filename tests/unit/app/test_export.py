@@ -55,7 +55,7 @@ def deformed_by_hand(k):
 
 
 def write_result(path, **overrides):
-    """A small result file per the layout of mbs.result_file: a flexible square 'plate'
+    """A small result file per the layout of mbs.results.result_file: a flexible square 'plate'
     (2 triangles, 2 modes), a point mass 'ball' and one contact 'impact'."""
     with h5py.File(path, "w") as f:
         f.attrs.update(format="ffrmbs-result", format_version=1, status="complete", scene="square",

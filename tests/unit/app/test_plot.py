@@ -15,7 +15,7 @@ T = np.linspace(0.0, 0.4, 41)
 
 
 def write_result(path, status="complete", energy=True):
-    """A result file per mbs.result_file with two outputs, energies and one contact."""
+    """A result file per mbs.results.result_file with two outputs, energies and one contact."""
     with h5py.File(path, "w") as f:
         f.attrs.update(format="ffrmbs-result", format_version=1, status=status, scene="drop test",
                        integrator="moreau", dt=1e-4, t_end=0.4, n_out=len(T))

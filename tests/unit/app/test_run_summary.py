@@ -1,6 +1,6 @@
 """The summary of ``ffrmbs run`` (:mod:`ffrmbs_app.job`) for every kind of scene — with and
 without contacts, gravity, loads and damping — against hand calculations: the energy
-balance E(t) − E(0) = W_loads − D_damping + W_impulses + residual (:mod:`mbs.step_work`)
+balance E(t) − E(0) = W_loads − D_damping + W_impulses + residual (:mod:`mbs.run.step_work`)
 and the intervals in which a contact transmits a force.
 
 The scenes are small TOML files in ``fixtures/summary_scenes``: point masses, and a
@@ -199,10 +199,10 @@ def test_contact_intervals_are_where_the_contact_force_acts(tmp_path):
     assert s["final"]["z"] == 0.0
 
 
-# --- the per-step terms (mbs.step_work) --------------------------------------------------------
+# --- the per-step terms (mbs.run.step_work) --------------------------------------------------------
 
 def test_the_energy_term_kernels_are_their_numpy_references():
-    from mbs import _stage_kernels as SK
+    from mbs.run import _stage_kernels as SK
 
     rng = np.random.default_rng(7)
     u, u_prev, Q = rng.normal(size=(3, 9))
@@ -235,9 +235,9 @@ def test_the_trace_terms_allocate_no_more_than_the_step_s_own_loads(cantilever):
     from numpy_allocations import NumpyAllocations
 
     from contact.solver import ProxSolver
-    from mbs import stages
-    from mbs.model import Data, compile_model
-    from mbs.step_work import StepWork
+    from mbs.run import stages
+    from mbs.run.model import Data, compile_model
+    from mbs.run.step_work import StepWork
 
     scene = load_scene(cantilever, ["scene.plan=false"])
     model = compile_model(scene.system, None, theta=0.5, solver=ProxSolver("gauss-seidel"))

@@ -1,5 +1,5 @@
-"""The planned broad phase and the step's bookkeeping as kernels (mbs.bounding_spheres,
-mbs._sphere_kernels, mbs._stage_kernels, the point-mass kernels of mbs.body_stage)
+"""The planned broad phase and the step's bookkeeping as kernels (mbs.run.bounding_spheres,
+mbs.run._sphere_kernels, mbs.run._stage_kernels, the point-mass kernels of mbs.run.body_stage)
 against their plain-Python references: the sphere callables and the pair test
 d·d > (r1 + r2 + margin)², list comprehensions, the System's assembly."""
 
@@ -9,9 +9,9 @@ import pytest
 from contact import Contact, ContactKinematicsPointContour2s, UnilateralNewtonImpact
 from contours import PointContour
 from mbs import PointMass, RigidBody, System
-from mbs import _stage_kernels as SK
-from mbs.body_stage import BodyStage
-from mbs.bounding_spheres import SphereTable, sphere_pair
+from mbs.run import _stage_kernels as SK
+from mbs.run.body_stage import BodyStage
+from mbs.run.bounding_spheres import SphereTable, sphere_pair
 
 
 def far_pairs_scene(n):

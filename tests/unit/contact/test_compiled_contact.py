@@ -23,8 +23,8 @@ from contact import _detection_kernels as DK
 from contact.search import Contact1sSearch, Contact2sSearch
 from contours import Contour1sNeutralFFR, Contour2sNeutralFFR, FlexibleBand, PointContour, SphereContour
 from mbs import FlexibleBodyFFR, PointMass, PrescribedFrameMotion, System
-from mbs.body import Frame
-from mbs.rotations import quat_from_rotvec, quat_to_matrix
+from mbs.bodies.body import Frame
+from mbs.bodies.rotations import quat_from_rotvec, quat_to_matrix
 from validation.bench.common import moving_state
 
 import test_contact_search as search_tests

@@ -1,5 +1,5 @@
 """Contacts on contours with residual flexibility in the Moreau step (contact.compliance,
-mbs.residual_contact), against analytic and full-FE oracles.
+mbs.run.residual_contact), against analytic and full-FE oracles.
 
 * A mass dropped on a beam kept with NO modes: the contour's residual compliance is then
   the beam's whole static compliance c, and the mass meets a massless spring of stiffness
@@ -27,9 +27,10 @@ from contact.solver import ProxSolver
 from contours import Contour2sNeutralFFR, PointContour
 from contours.residual import residual_compliance, transfer_matrix
 from ffrmbs.errors import ModelError
-from mbs import FlexibleBodyFFR, Force, PointMass, PrescribedFrameMotion, System, stages
-from mbs.model import Data, compile_model
-from mbs.residual_contact import spring_energy
+from mbs import FlexibleBodyFFR, Force, PointMass, PrescribedFrameMotion, System
+from mbs.run import stages
+from mbs.run.model import Data, compile_model
+from mbs.run.residual_contact import spring_energy
 from preprocess import Material, build_body
 from preprocess.geometry import box
 from preprocess.modes import all_modes, clamped_dofs

@@ -11,7 +11,7 @@ from contours import (Contour1sNeutralFFR, Contour2sNeutralFFR, FlexibleCylinder
                       SphereContour)
 from ffrmbs.errors import ModelError
 from mbs import PointMass, ground_frame
-from mbs.rotations import quat_from_rotvec, quat_to_matrix
+from mbs.bodies.rotations import quat_from_rotvec, quat_to_matrix
 from validation.bench.common import moving_state
 
 L, H, W = 0.25, 0.05, 0.05

@@ -33,10 +33,11 @@ from contact import (Contact, ContactKinematicsPointContour2s, ContactKinematics
 from contact.laws import UnilateralNewtonImpact as Impact
 from contact.solver import ProxSolver
 from contours import Contour2sNeutralFFR, PlaneContour, PointContour
-from mbs import FlexibleBodyFFR, System, ground_frame, stages
-from mbs.loads import Force
-from mbs.model import Data, compile_model
-from mbs.step_failure import StepFailure
+from mbs import FlexibleBodyFFR, System, ground_frame
+from mbs.run import stages
+from mbs.links.loads import Force
+from mbs.run.model import Data, compile_model
+from mbs.run.step_failure import StepFailure
 from preprocess import Material, build_body
 from preprocess.geometry import box
 

@@ -1,4 +1,4 @@
-"""The fused detection (mbs.fused_detection) against the Python path it replaces:
+"""The fused detection (mbs.run.fused_detection) against the Python path it replaces:
 ``contour.update`` of both contours, then ``Contact.locate`` — on two copies of the
 default scene (its point, or a sphere on the same point mass; its 2s contour, its band, or
 a curve along the top face's centre line) driven through the same
@@ -13,8 +13,8 @@ from contact import Contact, ContactKinematicsPointPlane, UnilateralNewtonImpact
 from contours import PlaneContour, PointContour
 from contours.neutral import _kernels as NK
 from mbs import PointMass, System, ground_frame
-from mbs.fused_detection import CentreOnNeutral1s, CentreOnNeutral2s, CentreOnOffset, fused_detection
-from mbs.model import compile_model
+from mbs.run.fused_detection import CentreOnNeutral1s, CentreOnNeutral2s, CentreOnOffset, fused_detection
+from mbs.run.model import compile_model
 
 
 def _python_locate(scene, q, u, t):

@@ -11,7 +11,7 @@ from contours import (Contour1sNeutralFFR, FlexibleBand, FlexibleCylinder, Plane
 from contours.derived import offset_frame
 from ffrmbs.errors import ModelError
 from mbs import PointMass, RigidBody, ground_frame
-from mbs.rotations import quat_from_rotvec
+from mbs.bodies.rotations import quat_from_rotvec
 from validation.bench.common import moving_state
 
 L, H, W = 0.25, 0.05, 0.05

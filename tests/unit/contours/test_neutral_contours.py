@@ -11,7 +11,7 @@ from contours.nurbs import SurfaceInterpolation
 from contours.nurbs.basis import curve_point, surface_point
 from ffrmbs.errors import ModelError
 from mbs import FlexibleBodyFFR, RigidBody
-from mbs.rotations import quat_from_rotvec, quat_to_matrix
+from mbs.bodies.rotations import quat_from_rotvec, quat_to_matrix
 from preprocess import Material, box, build_body
 from validation.bench.common import moving_state
 

@@ -1,5 +1,5 @@
 """The body stage and its kernels against independent references: the shape-integral
-formulas in numpy (:class:`mbs.shape_integrals.ShapeIntegrals`), the rigid body's and
+formulas in numpy (:class:`mbs.bodies.shape_integrals.ShapeIntegrals`), the rigid body's and
 the quaternion's numpy formulas, J_T written out (thesis eq. 2.70), scipy's Cholesky,
 the System's numpy assembly, and generalized-α's previous algorithm (System assembly and
 LAPACK) recomputed here; plus a count of numpy allocations in a steady step."""
@@ -12,12 +12,12 @@ import scipy.linalg
 
 from mbs import (DistributedForce, FlexibleBodyFFR, Force, PointMass, PrescribedFrameMotion, RigidBody,
                  SpringDamper, System, Tabulated)
-from mbs import _kernels as kern
-from mbs import rotations as rot
-from mbs.body_stage import BodyStage
-from mbs.equations import Equations
+from mbs.bodies import _kernels as kern
+from mbs.bodies import rotations as rot
+from mbs.run.body_stage import BodyStage
+from mbs.run.equations import Equations
 from mbs.integrators.generalized_alpha import GeneralizedAlpha
-from mbs.linalg_kernels import (block_cho_solve_matrix, block_cho_solve_vector, block_cholesky_into,
+from mbs.run.linalg_kernels import (block_cho_solve_matrix, block_cho_solve_vector, block_cholesky_into,
                                 block_iteration_factor, cho_solve_into, cholesky_into)
 from preprocess import box, build_body
 from validation.cases.cantilever import MATERIAL

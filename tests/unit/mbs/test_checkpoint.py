@@ -1,4 +1,4 @@
-"""Checkpoints are the run's state as arrays (mbs.checkpoint, mbs.state_arrays): a run
+"""Checkpoints are the run's state as arrays (mbs.results.checkpoint, mbs.results.state_arrays): a run
 stopped at an output sample and continued from its checkpoint — the scene built afresh,
 the arrays loaded into it — gives the uninterrupted run's result bit for bit, for every
 integrator, with contacts closed at the checkpoint, and for a scene of every registered
@@ -25,12 +25,12 @@ from ffrmbs.errors import InputFileError, RunInterrupted
 from ffrmbs_app.scenes import point_mass_beam as pmb
 from ffrmbs_app.scenes.cache import cache_dir
 from mbs import FlexibleBodyFFR, Joint, PointMass, PrescribedFrameMotion, RigidBody, System, ground_frame
-from mbs import state_arrays
-from mbs.checkpoint import read_checkpoint
+from mbs.results import state_arrays
+from mbs.results.checkpoint import read_checkpoint
 from mbs.integrators import INTEGRATORS, driver, integrator_class
-from mbs.joints import JOINTS
+from mbs.links.joints import JOINTS
 from mbs.registry import BODIES, LOADS, ROTATIONS
-from mbs.result_file import ResultRecorder
+from mbs.results.result_file import ResultRecorder
 from mechanism import mechanism
 
 

@@ -1,6 +1,6 @@
-"""The contact recorder (mbs.contact_record) samples an open contact at the sample's
+"""The contact recorder (mbs.results.contact_record) samples an open contact at the sample's
 state: for the pair kinds with a fused detection in the probe's own arrays
-(mbs.fused_detection.Probe). Oracles: the default scene's gap before the impact, while
+(mbs.run.fused_detection.Probe). Oracles: the default scene's gap before the impact, while
 the beam is still at rest and undeformed, is the falling point's height over the top face,
 g(t) = 2 mm − 0.2 m/s · t; and the Python path (contours updated, the search run, the run
 state put back) records the same to rounding and leaves the same trajectory."""
@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from centre_scenes import PAIRS, centre_scene
-from mbs import contact_record
-from mbs.fused_detection import _FusedCentre
+from mbs.results import contact_record
+from mbs.run.fused_detection import _FusedCentre
 
 T_END, N_OUT = 0.012, 25            # [s]: the impact is at 10 ms; samples every 0.5 ms
 GAP0, SPEED = 0.002, 0.2            # [m], [m/s]: setup A's point, 2 mm above the top face

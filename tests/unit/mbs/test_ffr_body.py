@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from mbs import FlexibleBodyFFR, PrescribedFrameMotion, RigidBody
-from mbs import rotations as rot
+from mbs.bodies import rotations as rot
 from preprocess import box, build_body
 from validation.cases.cantilever import MATERIAL
 
@@ -94,7 +94,7 @@ def test_mass_matrix_and_quadratic_velocity_equal_node_sums(bodies, seed, rotati
 @settings(max_examples=10, deadline=None)
 @given(seed=seeds)
 def test_numba_kernel_equals_numpy_reference(bodies, seed):
-    """mbs._kernels.ffr_mass_and_qv against ShapeIntegrals.deformed / quadratic_velocity."""
+    """mbs.bodies._kernels.ffr_mass_and_qv against ShapeIntegrals.deformed / quadratic_velocity."""
     body = bodies["quaternion"]
     q, u = random_state(body, seed)
     A, si = rot.quat_to_matrix(q[3:7]), body.integrals
@@ -314,9 +314,9 @@ def test_bounding_sphere_holds_every_node_by_the_public_constants(data, bodies, 
 
 
 def test_point_jacobian_kernel_matches_the_formula():
-    """mbs._kernels.point_jacobian_T against J_T = [1, −A ũ T, A Φ] (thesis eq. 2.70) in numpy."""
-    from mbs._kernels import point_jacobian_T
-    from mbs.rotations import quat_from_rotvec, quat_to_matrix, skew
+    """mbs.bodies._kernels.point_jacobian_T against J_T = [1, −A ũ T, A Φ] (thesis eq. 2.70) in numpy."""
+    from mbs.bodies._kernels import point_jacobian_T
+    from mbs.bodies.rotations import quat_from_rotvec, quat_to_matrix, skew
 
     rng = np.random.default_rng(3)
     A = quat_to_matrix(quat_from_rotvec(rng.normal(size=3)))

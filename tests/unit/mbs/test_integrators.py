@@ -157,12 +157,12 @@ def test_simulate_rejects_bad_requests(clamped_data):
 
 def test_unconstrained_accelerations_are_scipys_cholesky_solve(free_data):
     """u̇ = M⁻¹ h of a free flexible body in motion (the explicit integrators' right-hand
-    side) by :func:`mbs.equations.solve_spd`: the same bits as
+    side) by :func:`mbs.run.equations.solve_spd`: the same bits as
     ``scipy.linalg.solve(M, h, assume_a="pos")``; a mass matrix that is not positive
     definite is a LinAlgError, as there."""
     import scipy.linalg
 
-    from mbs.equations import Equations, solve_spd
+    from mbs.run.equations import Equations, solve_spd
 
     system = System()
     body = system.add(FlexibleBodyFFR(free_data, 4))

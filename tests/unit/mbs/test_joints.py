@@ -10,11 +10,11 @@ from scipy.integrate import solve_ivp
 from scipy.spatial.transform import Rotation
 
 from ffrmbs.errors import ModelError
-from mbs.body import Frame, ground_frame
-from mbs.flexible_body import FlexibleBodyFFR
-from mbs.floating_frame import PrescribedFrameMotion
-from mbs.joints import Joint
-from mbs.rigid_body import PointMass, RigidBody
+from mbs.bodies.body import Frame, ground_frame
+from mbs.bodies.flexible_body import FlexibleBodyFFR
+from mbs.bodies.floating_frame import PrescribedFrameMotion
+from mbs.links.joints import Joint
+from mbs.bodies.rigid_body import PointMass, RigidBody
 from mbs.system import System
 
 KINDS = ["spherical", "revolute", "prismatic", "fixed"]

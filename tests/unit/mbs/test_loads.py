@@ -12,13 +12,13 @@ import numpy as np
 import pytest
 
 from ffrmbs.errors import InputFileError, ModelError
-from mbs.body import ground_frame
-from mbs.flexible_body import FlexibleBodyFFR
-from mbs.floating_frame import PrescribedFrameMotion
-from mbs.force_file import read_force_file, write_force_file
-from mbs.loads import DistributedForce, Force, NodalForces, Tabulated, Torque
-from mbs.rigid_body import RigidBody
-from mbs.rotations import cardan_to_matrix
+from mbs.bodies.body import ground_frame
+from mbs.bodies.flexible_body import FlexibleBodyFFR
+from mbs.bodies.floating_frame import PrescribedFrameMotion
+from mbs.links.force_file import read_force_file, write_force_file
+from mbs.links.loads import DistributedForce, Force, NodalForces, Tabulated, Torque
+from mbs.bodies.rigid_body import RigidBody
+from mbs.bodies.rotations import cardan_to_matrix
 from mbs.system import System
 from preprocess import box, build_body, face_load
 from validation.cases.cantilever import MATERIAL

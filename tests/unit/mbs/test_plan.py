@@ -1,4 +1,4 @@
-"""The scene planner (mbs.plan): each rule fires on a scene built for it, and the planned
+"""The scene planner (mbs.run.plan): each rule fires on a scene built for it, and the planned
 run matches the unplanned one (or an independent oracle) within the plan's tolerance."""
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from mbs import DistributedForce, FlexibleBodyFFR, Force, PrescribedFrameMotion, System, Tabulated
-from mbs.plan import INTEGRATED, MODAL_EXACT, SIMPLE_RB
+from mbs.run.plan import INTEGRATED, MODAL_EXACT, SIMPLE_RB
 from validation.cases import _wobble as wb
 from validation.cases import ffr_free_flight as ff
 from validation.scenes import planner_scene as ps

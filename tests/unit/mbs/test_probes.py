@@ -1,4 +1,4 @@
-"""Output probes (mbs.probes): a frame's position written in place equals the frames'
+"""Output probes (mbs.results.probes): a frame's position written in place equals the frames'
 own numpy formulas, on every kind of body, and sampling it allocates no array."""
 
 from __future__ import annotations
@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from mbs import FlexibleBodyFFR, PointMass, PrescribedFrameMotion, RigidBody, System, ground_frame
-from mbs import _kernels as kern
-from mbs.probes import FREE_QUATERNION, GENERIC, POINT_MASS, FramePosition, probe
+from mbs.bodies import _kernels as kern
+from mbs.results.probes import FREE_QUATERNION, GENERIC, POINT_MASS, FramePosition, probe
 from preprocess import box, build_body
 from validation.cases.cantilever import MATERIAL
 

@@ -13,7 +13,7 @@ from scipy.integrate import solve_ivp
 from ffrmbs.errors import ModelError
 from mbs.modal import CoupledRB, ModalBasis, PureMA, SimpleRB, StepLoads
 from mbs.modal.coupled_rb import CouplingIntegrals
-from mbs.rotations import quat_to_matrix
+from mbs.bodies.rotations import quat_to_matrix
 from preprocess import box, build_body, face_load
 from validation.cases.cantilever import MATERIAL
 

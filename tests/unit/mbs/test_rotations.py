@@ -6,8 +6,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
-from mbs import rotations as rot
-from mbs.parametrization import Cardan, Quaternion
+from mbs.bodies import rotations as rot
+from mbs.bodies.parametrization import Cardan, Quaternion
 
 angles = st.lists(st.floats(-3.1, 3.1), min_size=3, max_size=3).map(np.array)
 quats = st.lists(st.floats(-1, 1), min_size=4, max_size=4).map(np.array).filter(

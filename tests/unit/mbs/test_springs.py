@@ -7,11 +7,11 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from ffrmbs.errors import ModelError
-from mbs.body import ground_frame
-from mbs.flexible_body import FlexibleBodyFFR
-from mbs.rigid_body import PointMass, RigidBody
-from mbs.rotations import cardan_to_matrix
-from mbs.springs import SpringDamper
+from mbs.bodies.body import ground_frame
+from mbs.bodies.flexible_body import FlexibleBodyFFR
+from mbs.bodies.rigid_body import PointMass, RigidBody
+from mbs.bodies.rotations import cardan_to_matrix
+from mbs.links.springs import SpringDamper
 from mbs.system import System
 from preprocess import box, build_body
 from validation.cases.cantilever import MATERIAL

@@ -1,4 +1,4 @@
-"""The Moreau step as stages over Model/Data (mbs.model, mbs.stages): no numpy array is
+"""The Moreau step as stages over Model/Data (mbs.run.model, mbs.run.stages): no numpy array is
 allocated in a steady step, the in-place kernels agree with their numpy references,
 and a planned run leaves the System as it was."""
 
@@ -8,8 +8,8 @@ import pytest
 from centre_scenes import PAIRS, centre_scene
 from contact import _kernels as kern
 from contact.solver import ProxSolver, _diagonal
-from mbs import stages
-from mbs.model import Data, compile_model
+from mbs.run import stages
+from mbs.run.model import Data, compile_model
 
 from numpy_allocations import NumpyAllocations
 
@@ -91,9 +91,9 @@ def test_a_planned_run_leaves_the_system_as_it_was():
 
 
 def test_contact_problem_velocity_and_work_kernels_equal_numpy():
-    """Stage kernels (mbs._stage_kernels) against numpy's products, W and M̂⁻¹W in the
+    """Stage kernels (mbs.run._stage_kernels) against numpy's products, W and M̂⁻¹W in the
     layout of Data.problem (C order), m = 1..3 rows."""
-    from mbs import _stage_kernels as SK
+    from mbs.run import _stage_kernels as SK
 
     rng = np.random.default_rng(3)
     for m in (1, 2, 3):
@@ -119,8 +119,8 @@ def test_free_velocity_kernels_equal_numpy_and_scipy():
     active rows (zero increment on a left-out row), and stage 7's open update."""
     import scipy.linalg
 
-    from mbs import _stage_kernels as SK
-    from mbs.linalg_kernels import block_cholesky_into
+    from mbs.run import _stage_kernels as SK
+    from mbs.run.linalg_kernels import block_cholesky_into
 
     rng = np.random.default_rng(4)
     blocks = np.array([[0, 4], [4, 7]], dtype=np.int64)
@@ -149,7 +149,7 @@ def test_free_velocity_kernels_equal_numpy_and_scipy():
 def test_warm_start_kernels_equal_the_loops_over_the_closed_contacts():
     """warm_start_into / keep_warm_start_into against the Python loops over the closed
     contacts (blocks of dims 1, 3, 2, 1 at lam_at in lam_prev; two joint rows first)."""
-    from mbs import _stage_kernels as SK
+    from mbs.run import _stage_kernels as SK
 
     rng = np.random.default_rng(6)
     dims = [1, 3, 2, 1]

@@ -1,4 +1,4 @@
-"""Static equilibrium as the initial state (issue 30, item 16; :mod:`mbs.static`).
+"""Static equilibrium as the initial state (issue 30, item 16; :mod:`mbs.run.static`).
 
 Oracles: the clamped beam's modal static deflection K_ff q_f = Φᵀ f (f the nodes' lumped
 weights, from the body data), the full FE static solve K u = f with the body's own K, and

@@ -1,4 +1,4 @@
-"""mbs.validity.SpinMonitor against an independent ω1 and hand-set spins: no warning below
+"""mbs.bodies.validity.SpinMonitor against an independent ω1 and hand-set spins: no warning below
 ratio · ω1, exactly one above, one event per body, frames that cannot rotate ignored."""
 
 import logging
@@ -11,7 +11,7 @@ from scipy.spatial.transform import Rotation
 
 from ffrmbs.errors import ModelError
 from mbs import FlexibleBodyFFR, PrescribedFrameMotion, RigidBody, System
-from mbs.validity import SPIN_RATIO, FFRValidityWarning, SpinMonitor
+from mbs.bodies.validity import SPIN_RATIO, FFRValidityWarning, SpinMonitor
 from preprocess import Material, box, build_body
 
 STEEL = Material(7850.0, 210e9, 0.3)

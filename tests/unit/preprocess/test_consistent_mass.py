@@ -11,7 +11,7 @@ import scipy.sparse as sp
 
 from ffrmbs.errors import InputFileError, ModelError
 from mbs import FlexibleBodyFFR
-from mbs.shape_integrals import ShapeIntegrals
+from mbs.bodies.shape_integrals import ShapeIntegrals
 from preprocess import Material, box, build_body, fe, modes, read_body
 from preprocess.body import mass_times
 from preprocess.hdf5file import read_hdf5, write_hdf5
@@ -130,7 +130,7 @@ def test_from_mass_matrix_of_a_diagonal_equals_from_nodes():
 
 
 def test_from_mass_matrix_equals_the_double_sums():
-    """Eq. C1 of mbs.shape_integrals by explicit loops over node pairs, M_s dense symmetric."""
+    """Eq. C1 of mbs.bodies.shape_integrals by explicit loops over node pairs, M_s dense symmetric."""
     rng = np.random.default_rng(4)
     n, nf = 6, 2
     u0, phi = rng.standard_normal((n, 3)), rng.standard_normal((3 * n, nf))

@@ -1,4 +1,4 @@
-"""Geometric stiffening (preprocess.geometric, mbs.geometric_stiffening) against beam theory,
+"""Geometric stiffening (preprocess.geometric, mbs.bodies.geometric_stiffening) against beam theory,
 finite differences and the numpy references.
 
 Oracles: the Rayleigh quotients of the Euler–Bernoulli cantilever's first mode under the
@@ -12,9 +12,9 @@ import scipy.integrate
 
 from ffrmbs.errors import InputFileError, ModelError
 from mbs import FlexibleBodyFFR, PrescribedFrameMotion, System
-from mbs.geometric_stiffening import (add_geometric_tangents, geometric_force, load_parameters,
+from mbs.bodies.geometric_stiffening import (add_geometric_tangents, geometric_force, load_parameters,
                                       load_parameters_into, sub_geometric_force)
-from mbs.validity import SpinMonitor
+from mbs.bodies.validity import SpinMonitor
 from preprocess import Material, box, build_body, read_body, write_body
 from preprocess.geometric import LOAD_CASES
 

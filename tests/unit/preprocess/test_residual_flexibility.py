@@ -255,7 +255,7 @@ def test_singular_supports_are_one_clear_error(clamped_data):
 def test_rigid_contour_is_refused(clamped_data):
     from contours import PlaneContour
     from contours.residual import neutral_of
-    from mbs.body import ground_frame
+    from mbs.bodies.body import ground_frame
 
     with pytest.raises(ModelError, match="neutral contour"):
         neutral_of(PlaneContour(ground_frame()))

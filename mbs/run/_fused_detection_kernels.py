@@ -1,0 +1,305 @@
+"""numba kernel of a fused detection (:mod:`mbs.run.fused_detection`): the contour stage
+and the detection stage of one contact in one call, composed of the kernels of the
+contours (:mod:`contours.neutral._kernels`), the contact search and kinematics
+(:mod:`contact._detection_kernels`) and the bodies (:func:`mbs.bodies._kernels.point_jacobian_T`).
+
+:func:`centre_on_neutral_2s` serves a point or a sphere on a point mass against a
+neutral 2s contour of a body on a frame fixed in space, :func:`centre_on_offset` the same
+against an offset contour (band, cylinder: :mod:`contours.derived`) of such a body (a
+:class:`~contact.kinematics.ContactKinematicsPointContour2s` or
+:class:`~contact.kinematics.ContactKinematicsSphereContour2s` with its compiled
+:class:`~contact.search.Contact2sSearch`), :func:`centre_on_neutral_1s` against a neutral
+1s contour (:class:`~contact.kinematics.ContactKinematicsPointContour1s`,
+``ContactKinematicsSphereContour1s`` with a compiled :class:`~contact.search.Contact1sSearch`).
+All three share the states and broad phase (:func:`_begin`) and the gap, the sphere's point
+and the frame's pieces (:func:`_finish`). Their reference is the Python path they replace —
+``contour.update`` of both contours, then :meth:`contact.Contact.locate` (bounding boxes, ``search.solve`` warm-started,
+``contour.evaluate``, :func:`~contact._detection_kernels.normal_gap`,
+:func:`~contact._detection_kernels.frame_rates_jacobians`) — which
+``tests/unit/contact/test_fused_detection.py`` compares them against.
+
+The kernel takes each object's arrays as the one vector their views share
+(:attr:`contours.base.ContourPoint.buffer`, :attr:`contact.kinematics.ContactKinematics.buffer`,
+the frame contour's ``state``), the surface's ``kernel_data`` (knots … span cache), the
+constants of the pair as one int table ``itab`` and one float table ``ftab`` (layouts
+below, written by :mod:`mbs.run.fused_detection`), a small work vector, and the work arrays the
+search's Newton (``newton_work``) and the contour's evaluation (``contour_work``) use on the
+Python path.
+
+Constant arguments of nested kernel calls are passed as typed values (``np.int64(0)``,
+``np.bool_(True)``): numba compiles a callee apart for every literal argument, once more
+beside the runtime-typed version the other callers use (``tests/qa/test_compile_once.py``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from contact._detection_kernels import (boxes_overlap, frame_rates_jacobians, newton_1s, newton_2s, newton_offset,
+                                       normal_gap)
+from contact.search import LAST_ITERATIONS, NEWTON_ITERATIONS, NEWTON_SOLVES
+from contours import rigid
+from contours._offset_kernels import evaluate_offset, offsets
+from contours._rigid_kernels import sphere_point
+from contours.rigid import sphere_angles
+from contours.base import DERIVS_AT, FRAME_AT, J_AT, V_AT
+from contours.neutral._kernels import (A_AT, Q_AT, STAMP_AT, bounding_box, contract_surface, evaluate_1s, frame_2s,
+                                      point_velocity)
+
+from mbs.bodies._kernels import point_jacobian_T
+
+APART, LOCATED, FALLBACK = 0, 1, 2          # outcomes of a fused detection
+
+# itab: the point's rows of q and u, the body's q_f and q̇_f rows, n_f, nu of the two
+# bodies, velocity wanted (0/1), broad phase on (0/1), Newton iterations, an offset
+# contour's offset law (contours._offset_kernels.offsets) and whether its ξ is closed, the
+# offsets of the kinematics buffer (contact.kinematics.buffer_layout, 8). The surface's
+# own kernel data (knots, ints, floats, control points, state, span cache) are arguments.
+QP, UP, QF, UF, NF, NU1, NU2, VELOCITY, BOX, MAX_ITER, LAW, XI_CLOSED, KIN_AT = range(13)
+ITAB_SIZE = KIN_AT + 8
+# ftab: margin [m], tol2 [m²] (NaN until the search knows its length scale), the largest
+# Newton steps in η and ξ, the normal's sign (2s), edge2 [m²] (contact.search: how far
+# beyond the domain's boundary a point still projects onto it, squared), the point frame's
+# offset ū0 (3) [m], an offset contour's law size [m], ξ domain (2) and reach (the largest
+# offset [m], which grows the neutral curve's box), the sphere's radius ρ [m] (0: a point),
+# then the undeformed control points' box (lo (3), hi (3)) [m] and the bound of P_Φ
+# (3, n_f) [m] (contours.neutral._kernels.bounding_box)
+MARGIN, TOL2, MAX_STEP_E, MAX_STEP_X, SIGN, EDGE2 = range(6)
+OFFSET_AT, FLOATS_AT, RADIUS, BOX_AT = 6, 9, 13, 14
+SIZE, XI_A, XI_B, REACH = FLOATS_AT, FLOATS_AT + 1, FLOATS_AT + 2, FLOATS_AT + 3
+
+
+WORK_SIZE = 15     # the work vector: two boxes (2, 3) and the direction −n (3,); Newton and the
+                   # contour's evaluation work in the search's and the contour's own work arrays
+
+
+@njit(cache=True)
+def _begin(q, u, itab, ftab, box0, reach, state, frame1, point1, centre, axes1, work):
+    """Steps 1–3 of a fused detection (:func:`centre_on_neutral_2s`): the contours'
+    states, the broad phase against the surface's box (``box0``: its undeformed control
+    points' lo (3), hi (3) and the bound of P_Φ (3, n_f); grown by ``reach`` [m]), the
+    centre, a point's C1 or a sphere's axes. False when the boxes are apart."""
+    n_f, nu1 = itab[NF], itab[NU1]
+    velocity = itab[VELOCITY] != 0
+    radius = ftab[RADIUS]
+    qp, up, qf, uf = itab[QP], itab[UP], itab[QF], itab[UF]
+    for c in range(3):
+        frame1[rigid.R_AT + c] = q[qp + c] + ftab[OFFSET_AT + c]
+        frame1[rigid.V_AT + c] = u[up + c]
+    for k in range(n_f):
+        state[Q_AT + k] = q[qf + k]
+        state[Q_AT + n_f + k] = u[uf + k]
+    state[STAMP_AT] += 1.0
+    if itab[BOX] != 0:
+        box1, box2 = work[0:6].reshape(2, 3), work[6:12].reshape(2, 3)
+        for c in range(3):
+            box1[0, c] = frame1[rigid.R_AT + c] - radius
+            box1[1, c] = frame1[rigid.R_AT + c] + radius
+        bounding_box(box0[0:3], box0[3:6], box0[6:6 + 3 * n_f].reshape(3, n_f), state, box2)
+        for c in range(3):
+            box2[0, c] -= reach
+            box2[1, c] += reach
+        if not boxes_overlap(box1, box2, ftab[MARGIN]):
+            return False
+    if radius > 0.0:
+        for k in range(9):
+            axes1[k // 3, k % 3] = frame1[rigid.A_AT + k]
+    else:
+        for k in range(V_AT - DERIVS_AT):
+            point1[DERIVS_AT + k] = 0.0
+        for c in range(3):
+            point1[DERIVS_AT + c] = frame1[rigid.R_AT + c]
+        for k in range(9):
+            point1[FRAME_AT + k] = frame1[rigid.A_AT + k]
+        for k in range(6 * nu1):
+            point1[J_AT + k] = frame1[rigid.J_AT + k]
+        if velocity:
+            for c in range(3):
+                point1[V_AT + c] = frame1[rigid.V_AT + c]
+    for c in range(3):
+        centre[c] = frame1[rigid.R_AT + c]
+    return True
+
+
+@njit(cache=True)
+def _finish(itab, ftab, frame1, point1, point2, kin, centre, axes1, work):
+    """Step 6 of a fused detection (:func:`centre_on_neutral_2s`) once C2 is in ``point2``:
+    g_N, a sphere's C1, the frame's pieces into ``kin``. Returns (g_N [m], ġ_N [m/s],
+    the sphere's C1 η, ξ [rad] (NaN for a point))."""
+    nan = np.nan
+    nu1, nu2 = itab[NU1], itab[NU2]
+    velocity = itab[VELOCITY] != 0
+    radius = ftab[RADIUS]
+    D2 = point2[DERIVS_AT:FRAME_AT].reshape(6, 3)
+    F2 = point2[FRAME_AT:V_AT].reshape(3, 3)
+    g_N = normal_gap(F2, centre, D2, radius)
+    eta1 = xi1 = nan
+    if radius > 0.0:
+        m = work[12:15]
+        for c in range(3):
+            m[c] = -F2[c, 2]
+        eta1, xi1 = sphere_angles(axes1, m)
+        sphere_point(frame1, radius, eta1, xi1, velocity, np.bool_(True), point1)
+    ko = KIN_AT
+    T = kin[itab[ko + 1]:itab[ko + 2]].reshape(3, 2)
+    w_T1 = kin[itab[ko + 5]:itab[ko + 6]].reshape(nu1, 2)
+    w_T2 = kin[itab[ko + 6]:itab[ko + 7]].reshape(nu2, 2)
+    J1 = point1[J_AT:J_AT + 3 * nu1].reshape(3, nu1)
+    J2 = point2[J_AT:J_AT + 3 * nu2].reshape(3, nu2)
+    gd_N = frame_rates_jacobians(F2, point1[V_AT:J_AT], point2[V_AT:J_AT], J1, J2, velocity, np.bool_(True),
+                                 kin[itab[ko]:itab[ko + 1]], T, kin[itab[ko + 2]:itab[ko + 3]],
+                                 kin[itab[ko + 3]:itab[ko + 4]], kin[itab[ko + 4]:itab[ko + 5]], w_T1, w_T2)
+    return g_N, gd_N if velocity else nan, eta1, xi1
+
+
+@njit(cache=True)
+def _count(counts, k, steps):
+    """A converged Newton's counters (as the searches of :mod:`contact.search` keep them)."""
+    counts[NEWTON_SOLVES] += 1
+    counts[NEWTON_ITERATIONS] += steps
+    counts[LAST_ITERATIONS] = k
+
+
+@njit(cache=True)
+def _jacobian_at_rest(state, local, phi_point, n_f, point2, nu2):
+    """C2's J_T = A Φ_P of a body on a frame at rest (eq. 2.70 on a prescribed frame,
+    :func:`mbs.bodies._kernels.point_jacobian_T`) and J_R = 0 into ``point2``."""
+    A = state[A_AT:A_AT + 9].reshape(3, 3)
+    J2 = point2[J_AT:J_AT + 3 * nu2].reshape(3, nu2)
+    point_jacobian_T(A, A, local, phi_point.reshape(3, n_f), np.bool_(False), np.int64(0), J2)
+    for k in range(3 * nu2):
+        point2[J_AT + 3 * nu2 + k] = 0.0
+
+
+@njit(cache=True)
+def centre_on_neutral_2s(q, u, itab, ftab, knots_e, knots_x, ints, floats, ctrl0, phi, state, span, frame1, point1,
+                         point2, kin, centre, axes1, start, counts, work, newton_work, contour_work):
+    """Stages 3 and 4 for one contact (module docstring) at the global (q, u) [m, m/s]:
+
+    1. the contours' states: the point r = q_P + ū0, ṙ = u_P into ``frame1`` (the
+       frame contour's state); q_f, q̇_f and a new stamp into the neutral contour's
+       ``state`` (as :func:`~contours.neutral._kernels.store_state`, ``store_velocity``;
+       R, A, v, ω̄ of the frame at rest stay);
+    2. broad phase (with ``itab[BOX]``): the point's box (the sphere's, ``ftab[RADIUS]``
+       around its centre) and the contour's (:func:`~contours.neutral._kernels.bounding_box`)
+       grown by the margin (:func:`~contact._detection_kernels.boxes_overlap`) — apart: APART;
+    3. the centre c into ``centre`` (the kinematics' copy; a point's C1 also into ``point1``:
+       r, frame, J_T = 1, J_R = 0 of a point-mass frame, ṙ with ``itab[VELOCITY]``;
+       a sphere's axes into ``axes1``);
+    4. Newton on eq. 3.31–3.32 for c from the warm start ``start`` (η, ξ)
+       (:func:`~contact._detection_kernels.newton_2s` on the surface's kernel data, in the
+       search's ``newton_work`` = B, ū rows, r rows, g), the search's ``counts`` and
+       ``start`` updated — no warm start, no tolerance yet or no root: FALLBACK (the
+       caller runs the Python path, which searches the coarse grid);
+    5. C2 into ``point2``: r and its derivatives (eq. 3.23, 3.25, 3.26: those of Newton's
+       last evaluation, at the root), the frame (eq. 3.27–3.29), ṙ (eq. 2.32)
+       with ``itab[VELOCITY]`` — what :func:`~contours.neutral._kernels.evaluate_2s`
+       gives at the root, its Φ rows in the third of the contour's ``contour_work`` —,
+       J_T = A Φ (eq. 2.70 on a prescribed frame, :func:`mbs.bodies._kernels.point_jacobian_T`),
+       J_R = 0;
+    6. g_N = nᵀ (c − r_C2) − ρ (eq. 3.4); a sphere's C1 = c − ρ n into ``point1``
+       (:func:`contours._rigid_kernels.sphere_point` at the coordinates of −n); n, T, ġ_T,
+       w_N1, w_N2, w_T1, w_T2 (eq. 3.8) into ``kin``.
+
+    Returns (outcome, g_N [m], ġ_N [m/s] (NaN without velocity), C2's η, ξ, a sphere's
+    C1 η, ξ [rad] (NaN for a point)).
+    """
+    nan = np.nan
+    n_f = itab[NF]
+    if not _begin(q, u, itab, ftab, ftab[BOX_AT:BOX_AT + 6 + 3 * n_f], 0.0, state, frame1, point1, centre, axes1,
+                  work):
+        return APART, nan, nan, nan, nan, nan, nan
+    if np.isnan(start[0]) or np.isnan(ftab[TOL2]):
+        return FALLBACK, nan, nan, nan, nan, nan, nan
+    B, local, D, g = newton_work
+    found, eta, xi, gg, k, steps = newton_2s(centre, start[0], start[1], knots_e, knots_x, ints, floats, ctrl0, phi,
+                                             state, span, ftab[MAX_STEP_E], ftab[MAX_STEP_X], ftab[TOL2], ftab[EDGE2],
+                                             itab[MAX_ITER], B, local, D, g)
+    if not found:
+        return FALLBACK, nan, nan, nan, nan, nan, nan
+    _count(counts, k, steps)
+    start[0], start[1] = eta, xi
+    # C2: the r rows of Newton's last evaluation, then the rest of evaluate_2s at the root
+    for k in range(18):
+        point2[DERIVS_AT + k] = D[k // 3, k % 3]
+    frame_2s(point2[DERIVS_AT:FRAME_AT].reshape(6, 3), ftab[SIGN], point2[FRAME_AT:V_AT].reshape(3, 3))
+    phi_rows = contour_work[2]
+    contract_surface(B[0], int(span[1]), ints[0], B[1], int(span[2]), ints[3], phi, np.int64(1), phi_rows)
+    if itab[VELOCITY] != 0:
+        point_velocity(state, local[0], phi_rows[0], point2[V_AT:J_AT])
+    _jacobian_at_rest(state, local[0], phi_rows[0], n_f, point2, itab[NU2])
+    g_N, gd_N, eta1, xi1 = _finish(itab, ftab, frame1, point1, point2, kin, centre, axes1, work)
+    return LOCATED, g_N, gd_N, eta, xi, eta1, xi1
+
+
+@njit(cache=True)
+def centre_on_offset(q, u, itab, ftab, knots, ints, floats, ctrl0, phi, state, span, n0, frame1, point1, point2,
+                     kin, centre, axes1, start, counts, work, newton_work, contour_work):
+    """:func:`centre_on_neutral_2s` against an offset contour (band, cylinder) of a body
+    at rest, from its neutral curve's kernel data (knots … span) and reference normal n0:
+    the broad phase against the curve's box grown by the reach, Newton on the offset
+    surface (:func:`~contact._detection_kernels.newton_offset`, the search's work arrays
+    ``newton_work`` = B, local, rows, frame, D, g), C2 by
+    :func:`~contours._offset_kernels.evaluate_offset` at the root (the contour's own work
+    arrays ``contour_work`` = B, local, rows, frame, Φ rows, Φ_P, as
+    :meth:`contours.derived.OffsetContour.evaluate` fills them) with J_T = A Φ_P, J_R = 0.
+    Returns as :func:`centre_on_neutral_2s`."""
+    nan = np.nan
+    n_f = itab[NF]
+    if not _begin(q, u, itab, ftab, ftab[BOX_AT:BOX_AT + 6 + 3 * n_f], ftab[REACH], state, frame1, point1, centre,
+                  axes1, work):
+        return APART, nan, nan, nan, nan, nan, nan
+    if np.isnan(start[0]) or np.isnan(ftab[TOL2]):
+        return FALLBACK, nan, nan, nan, nan, nan, nan
+    B, local, rows, frame, D, g = newton_work
+    law, size = itab[LAW], ftab[SIZE]
+    found, eta, xi, gg, k, steps = newton_offset(centre, start[0], start[1], knots, ints, floats, ctrl0, phi, state,
+                                                 span, n0, law, size, ftab[XI_A], ftab[XI_B], itab[XI_CLOSED] != 0,
+                                                 ftab[MAX_STEP_E], ftab[MAX_STEP_X], ftab[TOL2], ftab[EDGE2],
+                                                 itab[MAX_ITER], B, local, rows, frame, D, g)
+    if not found:
+        return FALLBACK, nan, nan, nan, nan, nan, nan
+    _count(counts, k, steps)
+    start[0], start[1] = eta, xi
+    B, local, rows, frame, phi_rows, phi_point = contour_work
+    al, be, al1, be1, al2, be2 = offsets(law, size, xi)
+    evaluate_offset(eta, knots, ints, floats, ctrl0, phi, state, span, n0, al, be, al1, be1, al2, be2,
+                    np.bool_(True), itab[VELOCITY] != 0, B, local, rows, frame, phi_rows, phi_point,
+                    point2[DERIVS_AT:FRAME_AT].reshape(6, 3), point2[FRAME_AT:V_AT].reshape(3, 3), point2[V_AT:J_AT])
+    _jacobian_at_rest(state, rows[0], phi_point, n_f, point2, itab[NU2])
+    g_N, gd_N, eta1, xi1 = _finish(itab, ftab, frame1, point1, point2, kin, centre, axes1, work)
+    return LOCATED, g_N, gd_N, eta, xi, eta1, xi1
+
+
+@njit(cache=True)
+def centre_on_neutral_1s(q, u, itab, ftab, knots, ints, floats, ctrl0, phi, state, span, n_ref, frame1, point1,
+                         point2, kin, centre, axes1, start, counts, work, newton_work, contour_work):
+    """:func:`centre_on_neutral_2s` against a neutral 1s contour of a body at rest, from its
+    kernel data (knots … span) and its reference normal in world axes ``n_ref`` (A n̄_ref,
+    constant at rest): Newton on t_ηᵀ (c − r(η)) = 0 from the warm start η = ``start[0]``
+    (:func:`~contact._detection_kernels.newton_1s`, the search's work arrays
+    ``newton_work`` = B, local, D, g), C2 by :func:`~contours.neutral._kernels.evaluate_1s`
+    at the root (the contour's work arrays ``contour_work`` = B, ū rows, Φ rows) with
+    J_T = A Φ, J_R = 0. Returns as :func:`centre_on_neutral_2s` (C2's ξ = 0)."""
+    nan = np.nan
+    n_f = itab[NF]
+    if not _begin(q, u, itab, ftab, ftab[BOX_AT:BOX_AT + 6 + 3 * n_f], 0.0, state, frame1, point1, centre, axes1,
+                  work):
+        return APART, nan, nan, nan, nan, nan, nan
+    if np.isnan(start[0]) or np.isnan(ftab[TOL2]):
+        return FALLBACK, nan, nan, nan, nan, nan, nan
+    B, local, D, g = newton_work
+    found, eta, gg, k, steps = newton_1s(centre, start[0], knots, ints, floats, ctrl0, phi, state, span,
+                                         ftab[MAX_STEP_E], ftab[TOL2], ftab[EDGE2], itab[MAX_ITER], B, local, D, g)
+    if not found:
+        return FALLBACK, nan, nan, nan, nan, nan, nan
+    _count(counts, k, steps)
+    start[0] = eta
+    B, local, phi_rows = contour_work
+    evaluate_1s(eta, knots, ints, floats, ctrl0, phi, state, span, n_ref, np.bool_(True), itab[VELOCITY] != 0, B,
+                local, phi_rows, point2[DERIVS_AT:FRAME_AT].reshape(6, 3), point2[FRAME_AT:V_AT].reshape(3, 3),
+                point2[V_AT:J_AT])
+    _jacobian_at_rest(state, local[0], phi_rows[0], n_f, point2, itab[NU2])
+    g_N, gd_N, eta1, xi1 = _finish(itab, ftab, frame1, point1, point2, kin, centre, axes1, work)
+    return LOCATED, g_N, gd_N, eta, 0.0, eta1, xi1

@@ -1,0 +1,185 @@
+"""numba kernels of the step's stages (:mod:`mbs.run.stages`): which contours and contacts
+the contour and detection stages visit, in one call each instead of a Python loop over
+every contact (far-apart pairs cost nothing per step); the contact problem's products
+(G, ξ_free, γ⁻), the velocity update and the impulses' work, each one call.
+
+Plain-Python or numpy references in the docstrings; ``tests/unit/mbs/test_stages.py`` compares them.
+"""
+
+from __future__ import annotations
+
+from numba import njit
+
+from mbs.run.linalg_kernels import block_cho_solve_vector
+
+
+@njit(cache=True)
+def contours_in_use(owner_at, owners, live, out):
+    """Indices of the contours with a live owner into ``out``; returns their number.
+    Contour k's owning contacts are owners[owner_at[k]:owner_at[k + 1]]. Reference:
+    ``[k for k in range(n) if any(live[i] for i in owners of k)]``."""
+    n = 0
+    for k in range(owner_at.shape[0] - 1):
+        for j in range(owner_at[k], owner_at[k + 1]):
+            if live[owners[j]]:
+                out[n] = k
+                n += 1
+                break
+    return n
+
+
+@njit(cache=True)
+def live_contacts(live, out):
+    """Indices i of the live contacts (live[i] True) into ``out``, in order; returns
+    their number. Reference: ``np.flatnonzero(live)``."""
+    n = 0
+    for i in range(live.shape[0]):
+        if live[i]:
+            out[n] = i
+            n += 1
+    return n
+
+
+@njit(cache=True)
+def contact_problem_into(W, MW, u_free, u, offset, closing, G, xi_free, gamma_pre):
+    """The contact problem of stage 5 from W (nu, m) and M̂⁻¹W (nu, m): G = Wᵀ M̂⁻¹ W
+    (m, m) [1/kg], ξ_free = Wᵀ u_free + offset + closing, γ⁻ = Wᵀ u_k + offset (m,)
+    [m/s]. Numpy reference: ``W.T @ MW``, ``W.T @ u_free`` ... (``tests/unit/mbs/test_stages.py``)."""
+    nu, m = W.shape
+    for i in range(m):
+        for j in range(m):
+            s = 0.0
+            for k in range(nu):
+                s += W[k, i] * MW[k, j]
+            G[i, j] = s
+        a = 0.0
+        b = 0.0
+        for k in range(nu):
+            a += W[k, i] * u_free[k]
+            b += W[k, i] * u[k]
+        xi_free[i] = a + offset[i] + closing[i]
+        gamma_pre[i] = b + offset[i]
+
+
+@njit(cache=True)
+def velocity_into(u_free, MW, lam, u):
+    """u = u_free + M̂⁻¹W Λ (nu,) [m/s] (stage 7; numpy reference ``u_free + MW @ lam``)."""
+    nu, m = MW.shape
+    for k in range(nu):
+        s = 0.0
+        for j in range(m):
+            s += MW[k, j] * lam[j]
+        u[k] = u_free[k] + s
+
+
+@njit(cache=True)
+def impulse_work(lam, gamma_plus, closing, gamma_pre):
+    """Λᵀ(γ⁺ − closing + γ⁻)/2 [J]: the impulses' work over the step (stage 6)."""
+    s = 0.0
+    for i in range(lam.shape[0]):
+        s += lam[i] * ((gamma_plus[i] - closing[i]) + gamma_pre[i])
+    return 0.5 * s
+
+
+@njit(cache=True)
+def free_velocity(L, blocks, idle, h, dt, u, u_free):
+    """u_free = u_k + M̂⁻¹ h Δt (nu,) [m/s] (stage 5) with M̂'s block factor ``L``
+    (:func:`mbs.run.linalg_kernels.block_cholesky_into` over ``blocks``, zero on the rows
+    ``idle``), h [N], Δt [s]. Numpy reference: ``u + cho_solve(L, h * dt)`` with the same
+    roundings (h Δt, the solve in place, the sum)."""
+    for i in range(h.shape[0]):
+        u_free[i] = h[i] * dt
+    block_cho_solve_vector(L, blocks, idle, u_free, u_free)
+    for i in range(u.shape[0]):
+        u_free[i] = u[i] + u_free[i]
+
+
+@njit(cache=True)
+def free_velocity_update(u, u_free, u_prev):
+    """Stage 7 with nothing closed: u_prev = u_k, u = u_free (nu,) [m/s]."""
+    for i in range(u.shape[0]):
+        u_prev[i] = u[i]
+        u[i] = u_free[i]
+
+
+@njit(cache=True)
+def warm_start_into(lam_rows, closed_idx, n_closed, warm, lam_prev, n_c, lam):
+    """Λ (m,) of stage 6 from the last step's: the block of each of the first ``n_closed``
+    contacts of ``closed_idx`` (rows n_c.. in order, contact i's block at
+    lam_prev[lam_rows[i, 0]:][:lam_rows[i, 1]]) when ``warm[i]``, else zero; the joints'
+    rows [0, n_c) zero (the caller copies theirs). Python reference:
+    :func:`mbs.run.stages.warm_start`'s loop."""
+    for r in range(lam.shape[0]):
+        lam[r] = 0.0
+    row = n_c
+    for j in range(n_closed):
+        i = closed_idx[j]
+        at, dim = lam_rows[i, 0], lam_rows[i, 1]
+        if warm[i]:
+            for k in range(dim):
+                lam[row + k] = lam_prev[at + k]
+        row += dim
+
+
+@njit(cache=True)
+def keep_warm_start_into(lam_rows, closed_idx, n_closed, lam, n_c, warm, lam_prev):
+    """The closed contacts' blocks of Λ (rows n_c.. in order) into ``lam_prev`` and
+    ``warm[i]`` True for them, False for every other contact (the inverse of
+    :func:`warm_start_into`)."""
+    for i in range(warm.shape[0]):
+        warm[i] = False
+    row = n_c
+    for j in range(n_closed):
+        i = closed_idx[j]
+        at, dim = lam_rows[i, 0], lam_rows[i, 1]
+        for k in range(dim):
+            lam_prev[at + k] = lam[row + k]
+        warm[i] = True
+        row += dim
+
+
+@njit(cache=True)
+def path_power(theta, u, u_prev, Q):
+    """vᵀQ with v = θ u_{k+1} + (1 − θ) u_k (nu,) [m/s] the velocity the step's positions
+    advance with (stage 8: q_{k+1} = q_k ⊕ Δt v) and Q (nu,) [N] generalized forces:
+    their power [W] along the step (:mod:`mbs.run.step_work`). Numpy reference:
+    ``(theta * u + (1 - theta) * u_prev) @ Q``."""
+    s = 0.0
+    for i in range(Q.shape[0]):
+        s += (theta * u[i] + (1.0 - theta) * u_prev[i]) * Q[i]
+    return s
+
+
+@njit(cache=True)
+def damping_power(theta, u, u_prev, rows, D):
+    """vᵀ D v [W] over the damped rows ``rows`` (k,) of u, D (k, k) [N s/m] the damping
+    on them and v = θ u_{k+1} + (1 − θ) u_k as in :func:`path_power`. Numpy reference:
+    ``v[rows] @ D @ v[rows]``."""
+    s = 0.0
+    for a in range(rows.shape[0]):
+        va = theta * u[rows[a]] + (1.0 - theta) * u_prev[rows[a]]
+        t = 0.0
+        for b in range(rows.shape[0]):
+            t += D[a, b] * (theta * u[rows[b]] + (1.0 - theta) * u_prev[rows[b]])
+        s += va * t
+    return s
+
+
+@njit(cache=True)
+def pressed_contacts(warm, lam_rows, lam_prev, comp_force, closed, force_N, set_valued):
+    """The contacts that transmit a force in the last step: a set-valued contact closed
+    in it (``warm``) with a non-zero impulse Λ or spring force F (compliant contacts) in
+    its block lam_prev[lam_rows[i, 0]:][:lam_rows[i, 1]], a single-valued one closed with
+    a non-zero normal force. Reference: the same loop in Python."""
+    n = 0
+    for i in range(warm.shape[0]):
+        if set_valued[i]:
+            if warm[i]:
+                at, dim = lam_rows[i, 0], lam_rows[i, 1]
+                for k in range(dim):
+                    if lam_prev[at + k] != 0.0 or comp_force[at + k] != 0.0:
+                        n += 1
+                        break
+        elif closed[i] and force_N[i] != 0.0:
+            n += 1
+    return n

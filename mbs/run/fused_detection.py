@@ -1,0 +1,276 @@
+"""Fused detection: the contour update and the detection of one contact in one compiled
+call per step (stages 3 and 4 of :mod:`mbs.run.stages` for the pair kinds that have one).
+
+The Python path of a contact is ``contour.update`` of its two contours (contour stage)
+and :meth:`contact.Contact.locate` (detection stage): a dozen numba calls glued by
+Python. For the pair kinds below :func:`fused_detection` gives an object whose
+:meth:`~CentreOnNeutral2s.locate` does both in one kernel
+(:mod:`._fused_detection_kernels`), on the same objects' arrays, so that the contours,
+the contact points, the kinematics (g_N, frame, Jacobian pieces), the search's warm
+start and counters hold afterwards what the Python path leaves there. It returns to the
+Python path whenever the kernel cannot finish the step: no warm start (the first
+search, or the last one found nothing) or Newton from it failed — the Python path then
+searches the coarse grid (:mod:`contact.search`).
+
+Kinds with a fused detection:
+
+* :class:`CentreOnNeutral2s`: a point (``PointContour``) or a sphere (``SphereContour``)
+  on a point mass against a compiled neutral 2s contour — nodal or fitted,
+  :class:`~contours.neutral.factory.Contour2sNeutralFactory` — of a body on a frame fixed
+  in space, ``ContactKinematicsPointContour2s`` or ``ContactKinematicsSphereContour2s``
+  with a compiled ``Contact2sSearch``, any law of :class:`contact.Contact`;
+* :class:`CentreOnOffset`: the same against a band or a cylinder
+  (:class:`~contours.derived.OffsetContour`) on a compiled 1s neutral curve;
+* :class:`CentreOnNeutral1s`: the same against a compiled neutral 1s contour (a curve),
+  ``ContactKinematicsPointContour1s`` or ``ContactKinematicsSphereContour1s`` with a
+  compiled ``Contact1sSearch``.
+
+Every other contact keeps the Python path (which stays the reference of the fused ones,
+``tests/unit/contact/test_fused_detection.py``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from contact.contact import Contact
+from contact.kinematics import (ContactKinematicsPointContour1s, ContactKinematicsPointContour2s,
+                                ContactKinematicsSphereContour1s, ContactKinematicsSphereContour2s, buffer_layout)
+from contact.search import Contact1sSearch, Contact2sSearch
+from contours.derived import OffsetContour
+from contours.neutral.factory import Contour1sNeutralFactory, Contour2sNeutralFactory
+from contours.rigid import PointContour, SphereContour
+
+from mbs.run import _fused_detection_kernels as K
+
+
+def fused_detection(contact):
+    """The fused detection of ``contact`` (:class:`CentreOnNeutral2s`,
+    :class:`CentreOnOffset`, :class:`CentreOnNeutral1s`) when its kind has one and its
+    bodies belong to a System, else None (the Python path)."""
+    for kind in (CentreOnNeutral2s, CentreOnOffset, CentreOnNeutral1s):
+        if kind.applies(contact):
+            return kind(contact)
+    return None
+
+
+ON_SURFACE = {ContactKinematicsPointContour2s: PointContour, ContactKinematicsSphereContour2s: SphereContour}
+ON_CURVE = {ContactKinematicsPointContour1s: PointContour, ContactKinematicsSphereContour1s: SphereContour}
+# ^ the kinematics of a centre searched on a 2s contour / a curve and the contour of its side 1
+
+
+class _FusedCentre:
+    """What the fused detections of a centre (a point or a sphere on a point mass) on a
+    surface of a body at rest share: the tables' common entries (the layouts of
+    :mod:`._fused_detection_kernels`), Newton's settings, and :meth:`locate` around the
+    kernel (:attr:`kernel` with the arguments :attr:`_args` after q and u). ``neutral``: the
+    neutral contour whose state the kernel writes (the surface, or a band's curve);
+    ``offset_floats``: an offset contour's law size [m], ξ domain and reach [m] (ftab)."""
+
+    kernel = None
+
+    @staticmethod
+    def _applies(contact, surface_ok, kinds=ON_SURFACE, search=Contact2sSearch) -> bool:
+        """A :class:`~contact.Contact` of a point or a sphere on a point mass (``kinds``:
+        {kinematics: side 1's contour}) against a contour for which ``surface_ok(contour)``
+        holds, on a body whose frame is fixed in space, searched by a compiled ``search``,
+        both bodies in a System."""
+        if type(contact) is not Contact:
+            return False
+        k = contact.kinematics
+        side1 = kinds.get(type(k))
+        if side1 is None:
+            return False
+        point, surface = k.contour1, k.contour2
+        body1, body2 = point.body, surface.body
+        return (type(point) is side1 and body1 is not None and body1.translation_only and surface_ok(surface)
+                and body2 is not None and getattr(body2, "frame_at_rest", False)
+                and type(k.search) is search and k.search.compiled
+                and body1.q_slice is not None and body2.q_slice is not None)
+
+    def __init__(self, contact, neutral, offset_floats=(0.0, 0.0, 0.0, 0.0)):
+        self.contact = contact
+        k = self.kinematics = contact.kinematics
+        point, surface = k.contour1, k.contour2
+        self.search, self.neutral = k.search, neutral
+        self.velocity = not contact.set_valued
+        self.closing_tol = contact.closing_tol
+        body1, body2 = point.body, surface.body
+        n_f = neutral.n_modes
+        itab = np.zeros(K.ITAB_SIZE, dtype=np.int64)
+        itab[K.QP], itab[K.UP] = body1.q_slice.start, body1.u_slice.start
+        itab[K.QF] = body2.q_slice.start + body2.q_f_slice.start
+        itab[K.UF] = body2.u_slice.start + body2.u_f_slice.start
+        itab[K.NF], itab[K.NU1], itab[K.NU2] = n_f, point.nu, surface.nu
+        itab[K.VELOCITY], itab[K.BOX] = self.velocity, contact.margin is not None
+        itab[K.KIN_AT:K.KIN_AT + 8] = buffer_layout(point.nu, surface.nu)
+        lo0, hi0 = neutral.rest_box
+        ftab = np.concatenate((np.zeros(K.BOX_AT), lo0, hi0, neutral.mode_box_growth.ravel()))
+        ftab[K.MARGIN] = 0.0 if contact.margin is None else contact.margin
+        ftab[K.OFFSET_AT:K.OFFSET_AT + 3] = point.frame_ref.u0
+        ftab[K.RADIUS] = k.radius
+        ftab[K.FLOATS_AT:K.FLOATS_AT + 4] = offset_floats
+        self._itab, self._ftab = itab, ftab
+        self._newton_settings()
+        self._work = np.zeros(K.WORK_SIZE)
+        self._points = (point.state, k.point1.buffer, k.point2.buffer, k.buffer, k.centre, k.axes1, k.start,
+                        k.search.counts)
+        self.sphere = k.radius > 0.0
+        self._updates = [(c, c.body.q_slice, c.body.u_slice) for c in (point, surface)]
+
+    def _newton_settings(self):
+        """Newton's step caps and tolerance from the search (NaN tolerance while its
+        length scale is not known: the kernel falls back)."""
+        settings = self.search.newton_settings()
+        if settings is None:
+            self._ftab[K.TOL2] = np.nan
+            return
+        steps, self._ftab[K.TOL2], self._ftab[K.EDGE2], self._itab[K.MAX_ITER] = settings
+        self._ftab[K.MAX_STEP_E:K.MAX_STEP_E + len(steps)] = steps
+
+    def locate(self, q, u, t) -> bool:
+        """Both contours updated at the global (q, u, t) and the contact located, as
+        ``contour.update`` then :meth:`Contact.locate` (the Python path when the kernel
+        falls back): True when closed (g_N <= closing_tol)."""
+        outcome, g_N, gd_N, eta, xi, eta1, xi1 = type(self).kernel(q, u, *self._args)
+        self.neutral.kernel_updated(velocity=True)
+        if outcome == K.LOCATED:
+            k = self.kinematics
+            k.active = True
+            k.g_N = g_N
+            if self.velocity:
+                k.gd_N = gd_N
+            k.point2.eta, k.point2.xi = eta, xi
+            if self.sphere:
+                k.point1.eta, k.point1.xi = eta1, xi1
+            return g_N <= self.closing_tol
+        if outcome == K.APART:
+            return False
+        for contour, qs, us in self._updates:
+            contour.update(q[qs], u[us], t)
+        closed = self.contact.locate()
+        if np.isnan(self._ftab[K.TOL2]):
+            self._newton_settings()
+        return closed
+
+    def probe(self) -> "Probe":
+        """A :class:`Probe` of this contact."""
+        return Probe(self)
+
+
+def _copied(args):
+    """The arrays of a kernel's argument tuple copied (nested tuples of work arrays too)."""
+    return tuple(_copied(a) if isinstance(a, tuple) else a.copy() for a in args)
+
+
+class Probe:
+    """The gap of a contact with a fused detection at a given state, located into copies
+    of the detection's arrays (contour states, contact points, kinematics, warm start,
+    counters, work), so that the run's own stay as they are: what the contact recorder
+    (:mod:`mbs.results.contact_record`) samples of an open contact, without the save and restore
+    of the run state around the Python path. Newton starts from the run's last contact
+    point; the broad phase is left out (the recorder wants the gap however far).
+
+    Parameters
+    ----------
+    fused : _FusedCentre
+    """
+
+    def __init__(self, fused):
+        self.fused = fused
+        self.args = _copied(fused._args)
+        position = {id(a): i for i, a in enumerate(fused._args)}
+        k = fused.kinematics
+        self._start = self.args[position[id(k.start)]]
+        self._point2 = self.args[position[id(k.point2.buffer)]]
+        self._kin = self.args[position[id(k.buffer)]]
+
+    def locate(self, q, u):
+        """(g_N [m], contact point C2 (3,) [m], normal n (3,)) at the global (q, u) — views
+        of the probe's arrays —, or None when the kernel cannot locate it from the run's
+        warm start (then the caller takes the Python path)."""
+        fused, args = self.fused, self.args
+        itab, ftab = args[0], args[1]
+        np.copyto(itab, fused._itab)
+        itab[K.BOX] = 0
+        np.copyto(ftab, fused._ftab)
+        np.copyto(self._start, fused.kinematics.start)
+        outcome, g_N = type(fused).kernel(q, u, *args)[:2]
+        if outcome != K.LOCATED:
+            return None
+        return g_N, self._point2[:3], self._kin[:3]
+
+
+class CentreOnNeutral2s(_FusedCentre):
+    """Stages 3 and 4 of a point or a sphere on a point mass against a neutral 2s contour
+    on a body at rest (module docstring) in one call of
+    :func:`._fused_detection_kernels.centre_on_neutral_2s`.
+
+    Parameters
+    ----------
+    contact : Contact
+        With ``ContactKinematicsPointContour2s`` or ``ContactKinematicsSphereContour2s``
+        (:meth:`applies`).
+    """
+
+    kernel = K.centre_on_neutral_2s
+
+    @staticmethod
+    def applies(contact) -> bool:
+        """True for a point or a sphere on a point mass against a compiled neutral 2s
+        contour on a body at rest, not trimmed (a face with holes takes the Python path,
+        whose search tests the trim) (:meth:`_FusedCentre._applies`)."""
+        return _FusedCentre._applies(contact, lambda s: isinstance(s, Contour2sNeutralFactory) and s.compiled
+                                     and s.trim is None)
+
+    def __init__(self, contact):
+        surface = contact.kinematics.contour2
+        super().__init__(contact, surface)
+        self._ftab[K.SIGN] = surface.sign
+        self._args = (self._itab, self._ftab, *surface.kernel_data, *self._points, self._work, self.search.newton_work,
+                      surface.evaluate_work)
+
+
+class CentreOnOffset(_FusedCentre):
+    """Stages 3 and 4 of a point or a sphere on a point mass against a band or a cylinder
+    (:class:`~contours.derived.OffsetContour`) on a compiled 1s neutral curve of a body at
+    rest, in one call of :func:`._fused_detection_kernels.centre_on_offset`."""
+
+    kernel = K.centre_on_offset
+
+    @staticmethod
+    def applies(contact) -> bool:
+        """True for a point or a sphere on a point mass against a compiled offset contour
+        on a compiled 1s neutral curve on a body at rest (:meth:`_FusedCentre._applies`)."""
+        return _FusedCentre._applies(contact, lambda s: isinstance(s, OffsetContour) and s.compiled
+                                     and isinstance(s.neutral, Contour1sNeutralFactory) and s.neutral.compiled)
+
+    def __init__(self, contact):
+        surface = contact.kinematics.contour2
+        neutral = surface.neutral
+        law, size = surface.offset_law
+        xi_axis = contact.kinematics.search.axes[1]
+        super().__init__(contact, neutral, (size, xi_axis.a, xi_axis.b, surface.reach))
+        self._itab[K.LAW], self._itab[K.XI_CLOSED] = law, xi_axis.closed
+        self._args = (self._itab, self._ftab, *neutral.kernel_data, neutral.normal_ref,
+                      *self._points, self._work, self.search.newton_work, surface.evaluate_work)
+
+
+class CentreOnNeutral1s(_FusedCentre):
+    """Stages 3 and 4 of a point or a sphere on a point mass against a compiled neutral 1s
+    contour of a body at rest, in one call of :func:`._fused_detection_kernels.centre_on_neutral_1s`."""
+
+    kernel = K.centre_on_neutral_1s
+
+    @staticmethod
+    def applies(contact) -> bool:
+        """True for a point or a sphere on a point mass against a compiled neutral 1s
+        contour on a body at rest (:meth:`_FusedCentre._applies`)."""
+        return _FusedCentre._applies(contact, lambda s: isinstance(s, Contour1sNeutralFactory) and s.compiled,
+                                     ON_CURVE, Contact1sSearch)
+
+    def __init__(self, contact):
+        curve = contact.kinematics.contour2
+        super().__init__(contact, curve)
+        self._args = (self._itab, self._ftab, *curve.kernel_data, curve.n_ref,
+                      *self._points, self._work, self.search.newton_work, curve.evaluate_work)
