@@ -1,11 +1,11 @@
 """numba kernels of the integrators' vector algebra, allocation-free (plain-numpy
 references: the formulas in the docstrings, written out in the tests).
 
-Generalized-α (:mod:`mbs.integrators.generalized_alpha`, Arnold & Brüls 2007), per step h:
+Generalized-α (:mod:`mbs.integrators.generalized_alpha`, Arnold & Brüls 2007), per step Δt:
 
-    base_u  = u_n + h (1 − γ) ā_n,      base_dq = h u_n + h² (½ − β) ā_n
+    base_u  = u_n + Δt (1 − γ) ā_n,     base_dq = Δt u_n + Δt² (½ − β) ā_n
     ā_{n+1} = (α_f u̇_n + (1 − α_f) u̇_{n+1} − α_m ā_n) / (1 − α_m)
-    u_{n+1} = base_u + h γ ā_{n+1},     Δq = base_dq + h² β ā_{n+1}
+    u_{n+1} = base_u + Δt γ ā_{n+1},    Δq = base_dq + Δt² β ā_{n+1}
 
 and one Newton correction of u̇_{n+1} with the iteration matrix S = M + stiff:
 r = M u̇ − h, S Δu̇ = −r (Cholesky), u̇ += Δu̇.
@@ -24,22 +24,22 @@ from mbs.run.linalg_kernels import cho_solve_vector, cholesky_into
 
 @njit(cache=True)
 def ga_base(u, abar, c_u, c_du, c_da, base_u, base_dq):
-    """base_u = u + c_u ā, base_dq = c_du u + c_da ā (c_u = h (1 − γ), c_du = h,
-    c_da = h² (½ − β))."""
+    """base_u = u + c_u ā, base_dq = c_du u + c_da ā (c_u = Δt (1 − γ), c_du = Δt,
+    c_da = Δt² (½ − β))."""
     for i in range(u.shape[0]):
         base_u[i] = u[i] + c_u * abar[i]
         base_dq[i] = c_du * u[i] + c_da * abar[i]
 
 
 @njit(cache=True)
-def ga_predict(a, a1, abar, base_u, base_dq, af, am, hg, hhb, abar1, u1, dq):
-    """ā_{n+1}, u_{n+1} and Δq from the iterate a1 = u̇_{n+1} (module docstring; hg = h γ,
-    hhb = h² β)."""
+def ga_predict(a, a1, abar, base_u, base_dq, af, am, g_dt, b_dt2, abar1, u1, dq):
+    """ā_{n+1}, u_{n+1} and Δq from the iterate a1 = u̇_{n+1} (module docstring; g_dt = Δt γ,
+    b_dt2 = Δt² β)."""
     for i in range(a.shape[0]):
         ab = (af * a[i] + (1 - af) * a1[i] - am * abar[i]) / (1 - am)
         abar1[i] = ab
-        u1[i] = base_u[i] + hg * ab
-        dq[i] = base_dq[i] + hhb * ab
+        u1[i] = base_u[i] + g_dt * ab
+        dq[i] = base_dq[i] + b_dt2 * ab
 
 
 @njit(cache=True)

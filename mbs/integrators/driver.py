@@ -100,7 +100,7 @@ class RunState:
 
 
 class Integrator:
-    """Base class: subclasses implement ``start(t, q, u)`` and ``step(h)`` on ``self.t``,
+    """Base class: subclasses implement ``start(t, q, u)`` and ``step(dt)`` on ``self.t``,
     ``self.q``, ``self.u`` (the run's Data: assigning copies into it) and count Newton
     iterations in ``self.iterations``; accepted steps are counted in ``self.steps``. The
     equations of the active bodies are ``self.model.equations``. :meth:`advance` takes
@@ -171,14 +171,14 @@ class Integrator:
         """Step from ``self.t`` to ``end`` [s] in ceil((end − t)/dt) equal steps."""
         gap = end - self.t
         k = math.ceil(gap / dt - 1e-9) if gap > 1e-14 * max(1.0, abs(end)) else 0
-        h = gap / k if k else 0.0
+        dt = gap / k if k else 0.0
         step, accepted = self.step, self.accepted
         for _ in range(k):
-            step(h)
-            accepted(h)
+            step(dt)
+            accepted(dt)
 
-    def accepted(self, h):
-        """Book an accepted step of size ``h``; a NaN or infinite state stops the run, so
+    def accepted(self, dt):
+        """Book an accepted step of size ``dt`` [s]; a NaN or infinite state stops the run, so
         does a requested stop (:func:`request_stop`)."""
         self.steps += 1
         data = self.data
@@ -212,7 +212,7 @@ class Integrator:
     def start(self, t, q, u):
         raise NotImplementedError
 
-    def step(self, h):
+    def step(self, dt):
         raise NotImplementedError
 
     def run(self, q0, u0, t_end, dt, t_out, outputs, energies, breakpoints=(), plan=None,

@@ -1,25 +1,25 @@
 """Generalized-α for constrained multibody systems on Lie groups (Arnold & Brüls 2007;
 Brüls, Cardona & Arnold 2012), with the parameters of Chung & Hulbert (1993).
 
-Per step h, with the pseudo-acceleration ā, unknowns u̇_{n+1} and λ_{n+1}:
+Per step Δt, with the pseudo-acceleration ā, unknowns u̇_{n+1} and λ_{n+1}:
 
     (1 − α_m) ā_{n+1} + α_m ā_n = (1 − α_f) u̇_{n+1} + α_f u̇_n
-    u_{n+1} = u_n + h (1 − γ) ā_n + h γ ā_{n+1}
-    q_{n+1} = q_n ⊕ (h u_n + h² (½ − β) ā_n + h² β ā_{n+1})
+    u_{n+1} = u_n + Δt (1 − γ) ā_n + Δt γ ā_{n+1}
+    q_{n+1} = q_n ⊕ (Δt u_n + Δt² (½ − β) ā_n + Δt² β ā_{n+1})
     M(q_{n+1}) u̇_{n+1} = h(q_{n+1}, u_{n+1}, t_{n+1}) + C_qᵀ λ_{n+1},    g(q_{n+1}) = 0
 
-solved by Newton with the iteration matrix S = M + β h² c K_t + γ h c D_t,
-c = (1 − α_f)/(1 − α_m), and the constraint rows scaled by 1/(β h² c). K_t, D_t are the
+solved by Newton with the iteration matrix S = M + β Δt² c K_t + γ Δt c D_t,
+c = (1 − α_f)/(1 − α_m), and the constraint rows scaled by 1/(β Δt² c). K_t, D_t are the
 constant elastic, damping and link tangents; the gyroscopic tangents are left out
 (a quasi-Newton method), which only slows convergence for fast rotation.
 
 Newton stops when the correction Δu̇ is below ``tol`` |u̇| or, with constraints, below
 their round-off floor: g(q) is known to about ε max(1, |q|∞) and its rows are scaled by
-1/(β h² c), so Δu̇ < 16 ε max(1, |q|∞) / (β h² c) moves q by less than its own round-off
+1/(β Δt² c), so Δu̇ < 16 ε max(1, |q|∞) / (β Δt² c) moves q by less than its own round-off
 and cannot be resolved (without the floor a small step never converged: a hinged beam
 failed at Δt = 1e-5 s however many iterations it was given).
 
-Each iteration is allocation-free: M and h come from the body stage
+Each iteration is allocation-free: M and the forces h come from the body stage
 (:class:`mbs.run.body_stage.BodyStage`) into a preallocated workspace, the vector algebra
 and the Cholesky solve of S from numba kernels (:mod:`mbs.integrators._kernels`,
 :mod:`mbs.run.linalg_kernels`). S is read from its upper triangle (it is symmetric unless a
@@ -27,7 +27,7 @@ force element's tangent is not); where it is not positive definite the step solv
 with LAPACK's symmetric indefinite solver instead. With constraints the KKT system is
 solved densely by LAPACK.
 
-ρ∞ ∈ [0, 1] is the spectral radius at h ω → ∞: α_m = (2ρ∞ − 1)/(ρ∞ + 1),
+ρ∞ ∈ [0, 1] is the spectral radius at Δt ω → ∞: α_m = (2ρ∞ − 1)/(ρ∞ + 1),
 α_f = ρ∞/(ρ∞ + 1), γ = ½ − α_m + α_f, β = ¼ (γ + ½)²; second-order accurate,
 unconditionally stable for linear problems.
 """
@@ -53,7 +53,7 @@ class _Workspace:
         self.base_u, self.base_dq, self.h1, self.res, self.da = (np.zeros(nu) for _ in range(5))
         self.q1 = np.zeros(nq)
         self.M, self.K, self.D, self.stiff, self.L = (np.zeros((nu, nu)) for _ in range(5))
-        self.stiff_h = None     # the step size ``stiff`` was built for (constant tangents)
+        self.stiff_dt = None     # the step size ``stiff`` was built for (constant tangents)
 
 
 class GeneralizedAlpha(Integrator):
@@ -87,36 +87,36 @@ class GeneralizedAlpha(Integrator):
         self.bodies = self.model.body_stage
         self.work = _Workspace(sys.nq, sys.nu)
 
-    def _stiffness(self, t1, h, c):
-        """stiff = βh²c K + γhc D (nu, nu) with the tangents at (t1, q_n, u_n); built once
+    def _stiffness(self, t1, dt, c):
+        """stiff = βΔt²c K + γΔtc D (nu, nu) with the tangents at (t1, q_n, u_n); built once
         per step size when they are constant."""
         w, bodies = self.work, self.bodies
-        if bodies.constant_tangents and w.stiff_h == h:
+        if bodies.constant_tangents and w.stiff_dt == dt:
             return w.stiff
         bodies.tangents(t1, self.q, self.u, w.K, w.D)
-        combine_into(w.K, self.beta * h * h * c, w.D, self.gamma * h * c, w.stiff)
-        w.stiff_h = h
+        combine_into(w.K, self.beta * dt * dt * c, w.D, self.gamma * dt * c, w.stiff)
+        w.stiff_dt = dt
         return w.stiff
 
-    def step(self, h):
+    def step(self, dt):
         sys, bodies, w = self.model.equations, self.bodies, self.work
         am, af, gm, bt = self.alpha_m, self.alpha_f, self.gamma, self.beta
         c = (1 - af) / (1 - am)
-        t1 = self.t + h
-        stiff = self._stiffness(t1, h, c)
+        t1 = self.t + dt
+        stiff = self._stiffness(t1, dt, c)
         a1 = w.a1
         a1[:] = self.a
         lam = self.lam.copy() if sys.n_c else self.lam
         nc = sys.n_c
-        hg, hhb = h * gm, h * h * bt
-        floor = ROUNDOFF * max(1.0, float(np.abs(self.q).max())) / (hhb * c) if nc else 0.0
-        ga_base(self.u, self.abar, h * (1 - gm), h, h * h * (0.5 - bt), w.base_u, w.base_dq)
+        g_dt, b_dt2 = dt * gm, dt * dt * bt
+        floor = ROUNDOFF * max(1.0, float(np.abs(self.q).max())) / (b_dt2 * c) if nc else 0.0
+        ga_base(self.u, self.abar, dt * (1 - gm), dt, dt * dt * (0.5 - bt), w.base_u, w.base_dq)
         for it in range(1, self.max_iter + 1):
-            ga_predict(self.a, a1, self.abar, w.base_u, w.base_dq, af, am, hg, hhb, w.abar1, w.u1, w.dq)
+            ga_predict(self.a, a1, self.abar, w.base_u, w.base_dq, af, am, g_dt, b_dt2, w.abar1, w.u1, w.dq)
             bodies.increment(self.q, w.dq, w.q1)
             bodies.mass_and_h(t1, w.q1, w.u1, w.M, w.h1)
             if nc:
-                da, lam = self._constrained_correction(t1, w, stiff, lam, bt * h * h * c)
+                da, lam = self._constrained_correction(t1, w, stiff, lam, bt * dt * dt * c)
                 a1 += da
                 err, scale, finite = np.abs(da).max(), np.abs(a1).max(), bool(np.all(np.isfinite(a1)))
             else:
@@ -133,7 +133,7 @@ class GeneralizedAlpha(Integrator):
         else:
             raise StepFailure(f"generalized-α Newton did not converge in {self.max_iter} iterations "
                               f"(last correction {err:.3g}); reduce dt")
-        ga_predict(self.a, a1, self.abar, w.base_u, w.base_dq, af, am, hg, hhb, w.abar1, w.u1, w.dq)
+        ga_predict(self.a, a1, self.abar, w.base_u, w.base_dq, af, am, g_dt, b_dt2, w.abar1, w.u1, w.dq)
         bodies.increment(self.q, w.dq, w.q1)
         bodies.normalize(w.q1)
         # the new state: q and u copied into the run's Data, the accelerations' buffers swapped
@@ -145,7 +145,7 @@ class GeneralizedAlpha(Integrator):
 
     def _constrained_correction(self, t1, w, stiff, lam, scale):
         """(Δu̇, λ) of one Newton correction of the KKT system with the constraint rows
-        scaled by 1/``scale`` = 1/(βh²c) (LAPACK, allocating)."""
+        scaled by 1/``scale`` = 1/(βΔt²c) (LAPACK, allocating)."""
         sys = self.model.equations
         nu, nc = sys.nu, sys.n_c
         res = w.M @ w.a1 - w.h1

@@ -161,18 +161,18 @@ class MoreauTimeStepping(Integrator):
             energy = sys.kinetic_energy(data.t, data.q, data.u) + sys.potential_energy(data.t, data.q)
         return energy
 
-    def accepted(self, h):
+    def accepted(self, dt):
         last = self.data.last
         if self.penetration_bound is not None and last[1] > self.penetration_bound:
             raise StepFailure(f"penetration {last[1]:.3g} m beyond the bound {self.penetration_bound:.3g} m "
                               "(a contact tunnelled, or a penalty stiffness is too soft for the load)")
-        super().accepted(h)
+        super().accepted(dt)
         if self._trace is not None:
             springs = self.spring_energy()
             energy = self._bodies_energy() + springs
             if not math.isfinite(energy):
                 raise non_finite(self.t, self.steps, "energy")
-            self._trace.append((self.t, h, *last, energy, springs))
+            self._trace.append((self.t, dt, *last, energy, springs))
         last[:] = LAST_STEP
 
     def _step_work(self) -> StepWork:
@@ -314,43 +314,43 @@ class AdaptiveMoreauTimeStepping(MoreauTimeStepping):
     def advance(self, end, dt):
         """Controlled steps of at most ``dt`` from ``self.t`` to exactly ``end``."""
         stats = lambda: self.data.stats      # noqa: E731  (restored steps replace the dict)
-        h = dt if self.h_next is None else min(self.h_next, dt)
+        dt_try = dt if self.h_next is None else min(self.h_next, dt)
         while end - self.t > 1e-14 * max(1.0, abs(end)):
             rest = end - self.t
-            h = h_ctrl = min(max(h, self.dt_min), dt)
-            if h >= rest * (1.0 - 1e-9):              # within rounding of ``end``: land on it
-                h = rest
-            elif h > 0.5 * rest:                      # avoid a sliver before ``end``
-                h = 0.5 * rest
+            dt_try = dt_ctrl = min(max(dt_try, self.dt_min), dt)
+            if dt_try >= rest * (1.0 - 1e-9):              # within rounding of ``end``: land on it
+                dt_try = rest
+            elif dt_try > 0.5 * rest:                      # avoid a sliver before ``end``
+                dt_try = 0.5 * rest
             self._save()
             try:
-                self.step(h)
+                self.step(dt_try)
                 self._q_full[:] = self.q
                 self._restore()
-                self.step(0.5 * h)
-                self.step(0.5 * h)
+                self.step(0.5 * dt_try)
+                self.step(0.5 * dt_try)
             except StepFailure:
-                if h <= self.dt_min * (1 + 1e-12):
+                if dt_try <= self.dt_min * (1 + 1e-12):
                     raise
                 self._restore()                 # e.g. a penalty contact too stiff for H: retake smaller
                 stats()["rejected_steps"] += 1
-                h = self.h_next = max(0.2 * h, self.dt_min)
+                dt_try = self.h_next = max(0.2 * dt_try, self.dt_min)
                 continue
             dq = np.abs(self.q - self._q_full)
             err = float(np.max(dq / (self.atol + self.rtol * np.abs(self.q)))) if dq.size else 0.0
             pen = self._penetration()
             err = max(err, (pen - self._pen) / self.gap_tol)
             factor = 2.0 if err == 0.0 else min(2.0, max(0.2, 0.9 * err ** -0.5))
-            if err <= 1.0 or h <= self.dt_min * (1 + 1e-12):
+            if err <= 1.0 or dt_try <= self.dt_min * (1 + 1e-12):
                 if err > 1.0:
                     stats()["forced_steps"] += 1
-                stats()["smallest_dt"] = min(stats()["smallest_dt"], h)
-                stats()["largest_dt"] = max(stats()["largest_dt"], h)
-                self.accepted(h)
+                stats()["smallest_dt"] = min(stats()["smallest_dt"], dt_try)
+                stats()["largest_dt"] = max(stats()["largest_dt"], dt_try)
+                self.accepted(dt_try)
                 self._pen = pen
-                self.h_next = max(h * factor, h_ctrl)        # landing on ``end`` does not shrink H
+                self.h_next = max(dt_try * factor, dt_ctrl)        # landing on ``end`` does not shrink H
             else:
                 self._restore()
                 stats()["rejected_steps"] += 1
-                self.h_next = h * factor
-            h = self.h_next
+                self.h_next = dt_try * factor
+            dt_try = self.h_next

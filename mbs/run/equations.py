@@ -172,6 +172,12 @@ class Equations:
         M, h = self.mass_and_h(t, q, u)
         if not self.n_c:
             return solve_spd(M, h), np.zeros(0)
+        return self.constrained_accelerations(t, q, u, M, h, baumgarte)
+
+    def constrained_accelerations(self, t, q, u, M, h, baumgarte=(0.0, 0.0)):
+        """(u̇, λ) of :meth:`accelerations` with M (nu, nu) and h (nu,) at (t, q, u) given
+        (an integrator's body stage computed them): the constraint rows and the dense
+        solve (LAPACK, allocating)."""
         C = self.constraint_jacobian(t, q)
         a, b = baumgarte
         rhs_c = -self.constraint_bias(t, q, u)

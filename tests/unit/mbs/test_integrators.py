@@ -6,7 +6,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from ffrmbs.errors import ModelError, SimulationError
-from mbs import FlexibleBodyFFR, PrescribedFrameMotion, RigidBody, System
+from mbs import FlexibleBodyFFR, Joint, PrescribedFrameMotion, RigidBody, System
 from preprocess import box, build_body
 from validation.cases.cantilever import MATERIAL
 
@@ -175,3 +175,26 @@ def test_unconstrained_accelerations_are_scipys_cholesky_solve(free_data):
     assert lam.size == 0 and np.array_equal(a, scipy.linalg.solve(M, h, assume_a="pos", check_finite=False))
     with pytest.raises(np.linalg.LinAlgError, match="not positive definite"):
         solve_spd(np.diag([1.0, -1.0, 2.0]), np.ones(3))
+
+
+@pytest.mark.parametrize("constrained", [False, True])
+def test_rk4_accelerations_on_the_body_stage_equal_the_numpy_reference(free_data, constrained):
+    """RK4's right-hand side u̇ comes from the body stage's kernels (M, h) and, without
+    constraints, a Cholesky solve in numba; with a revolute joint the index-1 system. Both
+    equal :meth:`mbs.run.equations.Equations.accelerations` (Python per body, LAPACK) to
+    rounding, for a free flexible body in motion, gravity and a spinning rigid body."""
+    from mbs.integrators import integrator_class
+
+    system = System(gravity=(0.0, -9.81, 0.0))
+    body = system.add(FlexibleBodyFFR(free_data, 4))
+    body.set_initial(A=Rotation.from_euler("XYZ", [0.2, -0.3, 0.1]).as_matrix(), v=[0.1, 0.0, 0.2],
+                     omega=[0.3, 0.2, 0.5], q_f=[1e-3, -2e-3, 0.0, 5e-4], qdot_f=[0.02, 0.01, 0.0, 0.01])
+    system.add(RigidBody(3.0, np.diag([0.2, 0.3, 0.4]), rotation="cardan").set_initial(omega=(0.0, 2.0, 0.5)))
+    if constrained:
+        system.add(Joint.revolute(system.ground, body.origin, axis=(0.0, 0.0, 1.0)))
+    rk4 = integrator_class("rk4")(system)
+    rk4.compile()
+    q, u = system.initial_state()
+    rk4.start(0.0, q, u)
+    reference, _ = rk4.model.equations.accelerations(0.0, q, u)
+    np.testing.assert_allclose(rk4._acc(0.0, q, u), reference, rtol=1e-12, atol=1e-12 * np.abs(reference).max())
