@@ -171,11 +171,11 @@ class Integrator:
         """Step from ``self.t`` to ``end`` [s] in ceil((end − t)/dt) equal steps."""
         gap = end - self.t
         k = math.ceil(gap / dt - 1e-9) if gap > 1e-14 * max(1.0, abs(end)) else 0
-        dt = gap / k if k else 0.0
+        dt_k = gap / k if k else 0.0
         step, accepted = self.step, self.accepted
         for _ in range(k):
-            step(dt)
-            accepted(dt)
+            step(dt_k)
+            accepted(dt_k)
 
     def accepted(self, dt):
         """Book an accepted step of size ``dt`` [s]; a NaN or infinite state stops the run, so
