@@ -122,6 +122,15 @@ class Body:
         """The centre of mass as a frame: gravity acts there with the whole mass."""
         raise NotImplementedError
 
+    def point_kinematics(self, q, frame, t=0.0):
+        """(r (3,) [m], A (3, 3), J_T (3, nu), J_R (3, nu)) of ``frame`` at (q, t): its
+        position, orientation and Jacobians (thesis eq. 2.70, 2.72), the values of
+        :meth:`Frame.position`, :meth:`Frame.orientation`, :meth:`Frame.J_T` and
+        :meth:`Frame.J_R`. A body that builds them from one evaluation of its frame
+        overrides this (:class:`mbs.bodies.floating_frame.FloatingFrameBody`)."""
+        return (self.point_position(q, frame, t), self.orientation(q, t) @ frame.A_rel,
+                self.point_J_T(q, frame, t), self.J_R(q, t))
+
     def __repr__(self):
         return f"{type(self).__name__}({self.name!r}, nq={self.nq}, nu={self.nu})"
 
@@ -184,6 +193,13 @@ class Frame:
     def J_R(self, q, t=0.0):
         """∂ω/∂u (3, nu) (thesis eq. 2.72)."""
         return self._owner().J_R(q, t)
+
+    def kinematics(self, q, t=0.0):
+        """(r, A, J_T, J_R) of :meth:`Body.point_kinematics` for the body's own q; the
+        Jacobians None for a ground frame."""
+        if self.body is None:
+            return self.u0.copy(), self.A_rel.copy(), None, None
+        return self.body.point_kinematics(q, self, t)
 
     def _owner(self):
         if self.body is None:

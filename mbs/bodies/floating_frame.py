@@ -257,6 +257,14 @@ class FloatingFrameBody(Body):
         _, A, _, _, T, *_ = self._frame(q, None, t)
         return self.fill_J_T(A, T, self._u_bar(q, frame), frame.phi, np.empty((3, self.nu)))
 
+    def point_kinematics(self, q, frame, t=0.0):
+        """(r, A, J_T, J_R) of ``frame`` (:meth:`mbs.bodies.body.Body.point_kinematics`)
+        from one evaluation of the body frame."""
+        R, A, _, _, T, *_ = self._frame(q, None, t)
+        u_bar = self._u_bar(q, frame)
+        return (R + A @ u_bar, A @ frame.A_rel, self.fill_J_T(A, T, u_bar, frame.phi, np.empty((3, self.nu))),
+                self.fill_J_R(A, T, np.empty((3, self.nu))))
+
     def fill_J_T(self, A, T, u_bar, phi, out):
         """Write J_T = [1, −A ũ T, A Φ] (thesis eq. 2.70; only A Φ on a prescribed frame)
         of the body point at ū = ``u_bar`` with mode-shape rows ``phi`` (3, n_f) into

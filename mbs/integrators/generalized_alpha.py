@@ -149,9 +149,8 @@ class GeneralizedAlpha(Integrator):
         sys = self.model.equations
         nu, nc = sys.nu, sys.n_c
         res = w.M @ w.a1 - w.h1
-        C = sys.constraint_jacobian(t1, w.q1)
+        g, C = sys.constraint_residual_and_jacobian(t1, w.q1)
         res -= C.T @ lam
-        g = sys.constraint_residual(t1, w.q1)
         KKT = np.zeros((nu + nc, nu + nc))
         KKT[:nu, :nu] = w.M + stiff
         KKT[:nu, nu:] = -C.T

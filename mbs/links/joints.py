@@ -171,18 +171,29 @@ class Joint(Constraint):
         f1, f2 = self.frame1, self.frame2
         q1, q2 = body_q(f1, q), body_q(f2, q)
         A1, A2 = f1.orientation(q1, t), f2.orientation(q2, t)
-        return (f1.position(q1, t), f2.position(q2, t),
-                self._dot_e @ A1.T, self._dot_f @ A2.T, self._offsets @ A1.T)
+        return self._pose_of(f1.position(q1, t), A1, f2.position(q2, t), A2)
+
+    def _pose_of(self, r1, A1, r2, A2):
+        """:meth:`_pose` from the frames' positions and orientations."""
+        return r1, r2, self._dot_e @ A1.T, self._dot_f @ A2.T, self._offsets @ A1.T
 
     def residual(self, t, q):
         """g(q, t) (n_c,) [m for d and offsets, 1 for dot products]."""
-        r1, r2, E, F, O = self._pose(t, q)
+        return self._residual_of(self._pose(t, q))
+
+    def _residual_of(self, pose):
+        r1, r2, E, F, O = pose
         d = r2 - r1
         return np.concatenate((d if self._point else np.zeros(0), O @ d, np.sum(E * F, axis=1)))
 
     def _coefficients(self, t, q):
         """G (n_c, 12) with ġ = G (v1, ω1, v2, ω2) (module docstring), plus the pose."""
-        pose = r1, r2, E, F, O = self._pose(t, q)
+        pose = self._pose(t, q)
+        return self._coefficients_of(pose), pose
+
+    def _coefficients_of(self, pose):
+        """G of :meth:`_coefficients` at ``pose``."""
+        r1, r2, E, F, O = pose
         d = r2 - r1
         G = np.zeros((self.n_c, 12))
         i = 0
@@ -197,16 +208,28 @@ class Joint(Constraint):
         n = _cross_rows(E, F)
         G[i + k:, 3:6] = n
         G[i + k:, 9:12] = -n
-        return G, pose
+        return G
 
     def jacobian(self, t, q, C_q):
         """Write C_q = Σ_i (G_Ti J_Ti + G_Ri J_Ri) into the zeroed rows (n_c, nu)."""
-        G, _ = self._coefficients(t, q)
-        for f, cols in ((self.frame1, slice(0, 6)), (self.frame2, slice(6, 12))):
+        self._jacobian_into(t, q, C_q)
+
+    def residual_and_jacobian(self, t, q, C_q):
+        """g(q, t) (n_c,) of :meth:`residual`, and C_q written as by :meth:`jacobian`."""
+        return self._residual_of(self._jacobian_into(t, q, C_q))
+
+    def _jacobian_into(self, t, q, C_q):
+        """:meth:`jacobian`, each frame's position, orientation and Jacobians from one
+        evaluation of its body (:meth:`mbs.bodies.body.Frame.kinematics`); returns the
+        pose."""
+        f1, f2 = self.frame1, self.frame2
+        k1, k2 = f1.kinematics(body_q(f1, q), t), f2.kinematics(body_q(f2, q), t)
+        pose = self._pose_of(k1[0], k1[1], k2[0], k2[1])
+        G = self._coefficients_of(pose)
+        for f, (_, _, J_T, J_R), cols in ((f1, k1, slice(0, 6)), (f2, k2, slice(6, 12))):
             if f.body is not None:
-                qb = body_q(f, q)
-                J = np.vstack((f.J_T(qb, t), f.J_R(qb, t)))
-                C_q[:, f.body.u_slice] += G[:, cols] @ J
+                C_q[:, f.body.u_slice] += G[:, cols] @ np.vstack((J_T, J_R))
+        return pose
 
     def _frame_rates(self, t, q, u):
         """(v1, ω1, v2, ω2) (12,); at u = None the prescribed-motion part (u = 0)."""

@@ -106,6 +106,12 @@ class Constraint:
         (the caller passes a zeroed view)."""
         raise NotImplementedError
 
+    def residual_and_jacobian(self, t, q, C_q) -> np.ndarray:
+        """g(q, t) of :meth:`residual`, with C_q written as by :meth:`jacobian` (what a
+        Newton iteration needs; a constraint may share work between the two)."""
+        self.jacobian(t, q, C_q)
+        return self.residual(t, q)
+
     def velocity_term(self, t, q) -> np.ndarray:
         """g_t = ∂g/∂t (n_c,); zero for constraints that do not depend on time."""
         return np.zeros(self.n_c)

@@ -155,6 +155,17 @@ class Equations:
             i += c.n_c
         return C
 
+    def constraint_residual_and_jacobian(self, t, q, out=None):
+        """(g (n_c,), C_q (n_c, nu)) of :meth:`constraint_residual` and
+        :meth:`constraint_jacobian` in one pass over the constraints."""
+        C = np.zeros((self.n_c, self.nu)) if out is None else out
+        g = np.empty(self.n_c)
+        i = 0
+        for c in self.constraints:
+            g[i:i + c.n_c] = c.residual_and_jacobian(t, q, C[i:i + c.n_c])
+            i += c.n_c
+        return g, C
+
     def constraint_velocity_term(self, t, q):
         """∂g/∂t (n_c,): ġ = C_q u + ∂g/∂t."""
         return np.concatenate([c.velocity_term(t, q) for c in self.constraints]) \

@@ -119,6 +119,27 @@ def test_jacobian_is_the_rate_of_g_along_the_motion(beam_data, kind, rotation, p
 @pytest.mark.parametrize("pair", PAIRS)
 @pytest.mark.parametrize("rotation", ["quaternion", "cardan"])
 @pytest.mark.parametrize("kind", KINDS)
+def test_one_pass_kinematics_equal_the_frame_by_frame_values(beam_data, kind, rotation, pair):
+    """A frame's (r, A, J_T, J_R) from one evaluation of its body (what the joints'
+    Jacobian uses) are the bits of Frame.position, orientation, J_T and J_R, on every
+    body kind (free and prescribed flexible, rigid, point mass, ground); and g from
+    ``residual_and_jacobian`` (the Newton iteration's call) is ``residual``'s."""
+    system, joint, q, _, _ = random_case(beam_data, kind, rotation, pair)
+    t = 0.3
+    for f in (joint.frame1, joint.frame2):
+        qb = q if f.body is None else q[f.body.q_slice]
+        r, A, J_T, J_R = f.kinematics(qb, t)
+        assert np.array_equal(r, f.position(qb, t)) and np.array_equal(A, f.orientation(qb, t))
+        if f.body is not None:
+            assert np.array_equal(J_T, f.J_T(qb, t)) and np.array_equal(J_R, f.J_R(qb, t))
+    C = np.zeros((joint.n_c, system.nu))
+    assert np.array_equal(joint.residual_and_jacobian(t, q, C), joint.residual(t, q))
+    assert np.abs(C).max() > 0.0
+
+
+@pytest.mark.parametrize("pair", PAIRS)
+@pytest.mark.parametrize("rotation", ["quaternion", "cardan"])
+@pytest.mark.parametrize("kind", KINDS)
 def test_bias_gives_the_second_derivative_of_g(beam_data, kind, rotation, pair):
     """g̈ = C_q u̇ + γ against the central difference of ġ(s) = C_q(q(s)) u(s) + g_t along
     q(s) = q ⊕ (s u + s²/2 u̇), u(s) = u + s u̇, t = t0 + s. Its derivative at s = 0 is
