@@ -16,8 +16,8 @@ constant elastic, damping and link tangents; the gyroscopic tangents are left ou
 Newton stops when the correction Δu̇ is below ``tol`` |u̇| or, with constraints, below
 their round-off floor: g(q) is known to about ε max(1, |q|∞) and its rows are scaled by
 1/(β Δt² c), so Δu̇ < 16 ε max(1, |q|∞) / (β Δt² c) moves q by less than its own round-off
-and cannot be resolved (without the floor a small step never converged: a hinged beam
-failed at Δt = 1e-5 s however many iterations it was given).
+and cannot be resolved: at small steps (a hinged beam at Δt = 1e-5 s) the correction
+stalls there, above ``tol`` |u̇|, however many iterations are taken.
 
 Each iteration is allocation-free: M and the forces h come from the body stage
 (:class:`mbs.run.body_stage.BodyStage`) into a preallocated workspace, the vector algebra
