@@ -132,6 +132,8 @@ class Joint(Constraint):
         self._dot_e = self.triad[[i for i, _ in pairs]]
         self._dot_f = self.triad[[j for _, j in pairs]]
         self.n_c = 3 * self._point + len(offsets) + len(pairs)
+        # a frame on a body whose frame motion is prescribed moves at u = 0 (g_t ≠ 0)
+        self._prescribed = any(getattr(f.body, "motion", None) is not None for f in (frame1, frame2))
 
     # --- constructors -----------------------------------------------------------------
     @classmethod
@@ -243,7 +245,9 @@ class Joint(Constraint):
 
     def velocity_term(self, t, q):
         """g_t = G (v1⁰, ω1⁰, v2⁰, ω2⁰) (n_c,): nonzero only for frames on bodies with a
-        prescribed frame motion."""
+        prescribed frame motion (zeros, without evaluating G, when neither frame is)."""
+        if not self._prescribed:
+            return np.zeros(self.n_c)
         G, _ = self._coefficients(t, q)
         return G @ self._frame_rates(t, q, None)
 
