@@ -108,6 +108,10 @@ class Body:
     #: True when the body adds tangents that change with (t, q, u) (:meth:`add_tangents`)
     varying_tangents = False
 
+    #: True when the body's points move at u = 0 (a prescribed frame motion that is not at
+    #: rest): a constraint on them depends on t explicitly (∂g/∂t ≠ 0)
+    rheonomic = False
+
     def add_tangents(self, t, q, u, K, D) -> None:
         """Add the varying −∂h/∂q and −∂h/∂u at the body's (q, u, t) into its blocks ``K``,
         ``D`` (nu, nu) (nothing unless :attr:`varying_tangents`)."""

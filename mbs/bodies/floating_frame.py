@@ -141,6 +141,12 @@ class FloatingFrameBody(Body):
         return self.motion is not None and self.motion.at_rest
 
     @property
+    def rheonomic(self) -> bool:
+        """A prescribed frame motion that is not at rest moves the body's points at u = 0
+        (:attr:`mbs.bodies.body.Body.rheonomic`)."""
+        return self.motion is not None and not self.motion.at_rest
+
+    @property
     def constant_mass(self) -> bool:
         """A prescribed frame leaves M = M_ff = Φᵀ M Φ, constant (thesis eq. 2.69)."""
         return self.motion is not None

@@ -43,7 +43,7 @@ class RK4(Integrator):
         self.t, self.q, self.u = t, q.copy(), u.copy()
         self.bodies = self.model.body_stage
         nu = self.model.equations.nu
-        self._M, self._L, self._h = np.zeros((nu, nu)), np.zeros((nu, nu)), np.zeros(nu)
+        self._M, self._h = np.zeros((nu, nu)), np.zeros(nu)
 
     def _acc(self, t, q, u):
         """u̇ (nu,) at (t, q, u) (module docstring)."""
@@ -52,10 +52,10 @@ class RK4(Integrator):
         sys = self.model.equations
         if sys.n_c:
             return sys.constrained_accelerations(t, q, u, M, h, self.baumgarte)[0]
-        if cholesky_into(M, self._L):
+        if cholesky_into(M, M):         # factored in place: the body stage writes M afresh
             raise StepFailure(f"the mass matrix is not positive definite at t = {t:.6g} s")
         a = np.empty(sys.nu)
-        cho_solve_vector(self._L, h, a)
+        cho_solve_vector(M, h, a)
         return a
 
     def step(self, dt):

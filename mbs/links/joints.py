@@ -132,8 +132,7 @@ class Joint(Constraint):
         self._dot_e = self.triad[[i for i, _ in pairs]]
         self._dot_f = self.triad[[j for _, j in pairs]]
         self.n_c = 3 * self._point + len(offsets) + len(pairs)
-        # a frame on a body whose frame motion is prescribed moves at u = 0 (g_t ≠ 0)
-        self._prescribed = any(getattr(f.body, "motion", None) is not None for f in (frame1, frame2))
+        self._rheonomic = any(f.body is not None and f.body.rheonomic for f in (frame1, frame2))   # g_t ≠ 0
 
     # --- constructors -----------------------------------------------------------------
     @classmethod
@@ -245,8 +244,9 @@ class Joint(Constraint):
 
     def velocity_term(self, t, q):
         """g_t = G (v1⁰, ω1⁰, v2⁰, ω2⁰) (n_c,): nonzero only for frames on bodies with a
-        prescribed frame motion (zeros, without evaluating G, when neither frame is)."""
-        if not self._prescribed:
+        prescribed frame motion (zeros, without evaluating G, when neither body is
+        :attr:`~mbs.bodies.body.Body.rheonomic`)."""
+        if not self._rheonomic:
             return np.zeros(self.n_c)
         G, _ = self._coefficients(t, q)
         return G @ self._frame_rates(t, q, None)
