@@ -347,10 +347,7 @@ class _PlaneProjection(_CentreContact):
         super().__init__(contour1, _require(plane, PlaneContour, "a PlaneContour"), nu_total)
 
     def _project(self, c, velocity, jacobians):
-        p2 = self.contour2.evaluate(self.point2, 0.0, 0.0)
-        d = c - p2.r
-        eta, xi = float(p2.frame[:, 0] @ d), float(p2.frame[:, 1] @ d)
-        self.contour2.evaluate(p2, eta, xi, velocity=velocity, jacobians=jacobians)
+        self.contour2.evaluate(self.point2, *self.contour2.coordinates(c), velocity=velocity, jacobians=jacobians)
         return True
 
 

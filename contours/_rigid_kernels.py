@@ -1,8 +1,9 @@
-"""numba kernels of the rigid contours (:mod:`contours.rigid`): a sphere's surface
-coordinates of a direction and its point at given coordinates — the one implementation
-that :meth:`contours.rigid.SphereContour.evaluate`, the contact kinematics of spheres
-(:mod:`contact.kinematics`) and the compiled detection (:mod:`mbs.run._fused_detection_kernels`)
-share. The frame contour's ``state`` and the point's ``buffer`` are the flat vectors
+"""numba kernels of the rigid contours (:mod:`contours.rigid`): the frame origin as a
+contour point, a plane's point at given coordinates and the coordinates of a point's
+foot on it, a sphere's surface coordinates of a direction and its point at given
+coordinates — the one implementation that the contours' ``evaluate``, the contact
+kinematics of planes and spheres (:mod:`contact.kinematics`) and the compiled detection
+(:mod:`mbs.run._fused_detection_kernels`) share. The frame contour's ``state`` and the point's ``buffer`` are the flat vectors
 their arrays are views of (layouts below and :data:`contours.base.DERIVS_AT` …).
 """
 
@@ -37,7 +38,6 @@ def sphere_point(state, radius, eta, xi, velocity, jacobians, point):
     derivatives in η and ξ (rows VALUE … D_XI_XI), the frame (t_η/|t_η|, n × t_η/|t_η|, n);
     with ``velocity`` ṙ_C = v + ω × ρn, with ``jacobians`` J_T = J_T,O − ρñ J_R,O and
     J_R = J_R,O (thesis eq. 2.70, 2.72)."""
-    nu = (state.size - J_AT) // 6
     ce, se, cx, sx = math.cos(eta), math.sin(eta), math.cos(xi), math.sin(xi)
     local = ((cx * ce, cx * se, sx), (-cx * se, cx * ce, 0.0), (-sx * ce, -sx * se, cx),
              (-cx * ce, -cx * se, 0.0), (sx * se, -sx * ce, 0.0), (-se, ce, 0.0))
@@ -65,6 +65,15 @@ def sphere_point(state, radius, eta, xi, velocity, jacobians, point):
     point[FRAME_AT + 1] = n[1] * t[2] - n[2] * t[1]         # n × t_η/|t_η|
     point[FRAME_AT + 4] = n[2] * t[0] - n[0] * t[2]
     point[FRAME_AT + 7] = n[0] * t[1] - n[1] * t[0]
+    _offset_rates(state, d, velocity, jacobians, point)
+
+
+@njit(cache=True)
+def _offset_rates(state, d, velocity, jacobians, point):
+    """ṙ = v + ω × d (with ``velocity``) and J_T = J_T,O − d̃ J_R,O, J_R = J_R,O (with
+    ``jacobians``) of the body point at the inertial offset d (3,) [m] from the frame
+    origin into ``point`` (thesis eq. 2.70, 2.72)."""
+    nu = (state.size - J_AT) // 6
     if velocity:
         w = state[W_AT:J_AT]
         point[POINT_V_AT] = state[V_AT] + (w[1] * d[2] - w[2] * d[1])
@@ -80,3 +89,54 @@ def sphere_point(state, radius, eta, xi, velocity, jacobians, point):
             point[POINT_J_AT + 2 * nu + k] = JT[2 * nu + k] - (d[0] * r1 - d[1] * r0)
         for k in range(3 * nu):
             point[POINT_J_AT + 3 * nu + k] = JR[k]
+
+
+@njit(cache=True)
+def frame_point(state, velocity, jacobians, point):
+    """The frame origin as a contour point into ``point``: r (the derivative rows zero),
+    the frame's orientation as its frame, with ``velocity`` ṙ = v, with ``jacobians``
+    J_T = J_T,O and J_R = J_R,O of the frame."""
+    for k in range(FRAME_AT - DERIVS_AT):
+        point[DERIVS_AT + k] = 0.0
+    for c in range(3):
+        point[DERIVS_AT + c] = state[R_AT + c]
+    for k in range(9):
+        point[FRAME_AT + k] = state[A_AT + k]
+    if velocity:
+        for c in range(3):
+            point[POINT_V_AT + c] = state[V_AT + c]
+    if jacobians:
+        for k in range(state.size - J_AT):
+            point[POINT_J_AT + k] = state[J_AT + k]
+
+
+@njit(cache=True)
+def plane_coordinates(state, c):
+    """(η, ξ) [m] of the foot of the point c (3,) [m] on the plane through the frame
+    origin spanned by its x and y axes: (a_x, a_y)ᵀ (c − r_O)."""
+    eta = 0.0
+    xi = 0.0
+    for k in range(3):
+        d = c[k] - state[R_AT + k]
+        eta += state[A_AT + 3 * k] * d
+        xi += state[A_AT + 3 * k + 1] * d
+    return eta, xi
+
+
+@njit(cache=True)
+def plane_point(state, eta, xi, velocity, jacobians, point):
+    """The point of the plane through the frame origin spanned by its x and y axes at
+    (η, ξ) [m] into ``point``: r = r_O + d with d = η a_x + ξ a_y, r_η = a_x, r_ξ = a_y
+    (the second derivatives zero), the frame's orientation as its frame (n = a_z), with
+    ``velocity`` and ``jacobians`` the body point's ṙ, J_T and J_R at d (thesis eq. 2.70, 2.72)."""
+    for k in range(FRAME_AT - DERIVS_AT):
+        point[DERIVS_AT + k] = 0.0
+    d = (eta * state[A_AT] + xi * state[A_AT + 1], eta * state[A_AT + 3] + xi * state[A_AT + 4],
+         eta * state[A_AT + 6] + xi * state[A_AT + 7])
+    for c in range(3):
+        point[DERIVS_AT + c] = state[R_AT + c] + d[c]
+        point[DERIVS_AT + 3 + c] = state[A_AT + 3 * c]          # r_η = a_x
+        point[DERIVS_AT + 6 + c] = state[A_AT + 3 * c + 1]      # r_ξ = a_y
+    for k in range(9):
+        point[FRAME_AT + k] = state[A_AT + k]
+    _offset_rates(state, d, velocity, jacobians, point)

@@ -14,7 +14,8 @@ velocity, J_T, J_R), each of which returns a new array. A frame on a body that o
 translates (``body.translation_only``: a point mass) takes a shortcut that allocates
 nothing: r = q + ū0, ṙ = u, with the constant orientation A_rel, ω = 0, J_T = 1 and
 J_R = 0 set once (the same values the frame's methods give; compared in
-``tests/unit/contact/test_compiled_contact.py``).
+``tests/unit/contact/test_compiled_contact.py``). ``evaluate`` runs the kernels of
+:mod:`contours._rigid_kernels` on the state.
 """
 
 from __future__ import annotations
@@ -22,11 +23,10 @@ from __future__ import annotations
 import numpy as np
 
 from ffrmbs.errors import ModelError
-from ffrmbs.vec3 import cross3
 
 from . import _rigid_kernels as K
 from ._rigid_kernels import A_AT, J_AT, R_AT, V_AT, W_AT, sphere_angles  # noqa: F401  (public: η, ξ of a direction)
-from .base import D_ETA, D_XI, VALUE, Contour
+from .base import Contour
 
 
 class _FrameContour(Contour):
@@ -72,19 +72,6 @@ class _FrameContour(Contour):
             self._J_T[:] = f.J_T(q, t)
             self._J_R[:] = f.J_R(q, t)
 
-    def _fill_offset(self, point, d, velocity, jacobians):
-        """Velocity and Jacobians of the point at inertial offset d from the frame origin
-        (None: the origin itself)."""
-        if velocity:
-            point.v[:] = self._v
-            if d is not None:
-                point.v += cross3(self._w, d)
-        if jacobians:
-            point.J_T[:] = self._J_T
-            if d is not None:
-                point.J_T -= cross3(d, self._J_R)
-            point.J_R[:] = self._J_R
-
 
 class PointContour(_FrameContour):
     """The frame origin as a contour (dim 0): every (η, ξ) is the same point; its frame is
@@ -99,10 +86,7 @@ class PointContour(_FrameContour):
 
     def evaluate(self, point, eta=0.0, xi=0.0, velocity=False, jacobians=False):
         point.eta, point.xi = eta, xi
-        point.derivs[:] = 0.0
-        point.derivs[VALUE] = self._r
-        point.frame[:] = self._A
-        self._fill_offset(point, None, velocity, jacobians)
+        K.frame_point(self.state, bool(velocity), bool(jacobians), point.buffer)
         return point
 
     def bounding_box(self, out=None):
@@ -166,17 +150,16 @@ class PlaneContour(_FrameContour):
         super().__init__(frame, name)
 
     def evaluate(self, point, eta, xi=0.0, velocity=False, jacobians=False):
-        A = self._A
-        d = eta * A[:, 0] + xi * A[:, 1]
+        """The point at (η, ξ) [m] along the frame's x and y axes
+        (:func:`contours._rigid_kernels.plane_point`)."""
         point.eta, point.xi = eta, xi
-        D = point.derivs
-        D[:] = 0.0
-        D[VALUE] = self._r + d
-        D[D_ETA] = A[:, 0]
-        D[D_XI] = A[:, 1]
-        point.frame[:] = A
-        self._fill_offset(point, d, velocity, jacobians)
+        K.plane_point(self.state, float(eta), float(xi), bool(velocity), bool(jacobians), point.buffer)
         return point
+
+    def coordinates(self, c) -> tuple:
+        """(η, ξ) [m] of the foot of the point c (3,) [m] on the plane
+        (:func:`contours._rigid_kernels.plane_coordinates`)."""
+        return K.plane_coordinates(self.state, c)
 
     def bounding_box(self, out=None):
         out = np.empty((2, 3)) if out is None else out

@@ -41,7 +41,7 @@ from contact._detection_kernels import (boxes_overlap, frame_rates_jacobians, ne
 from contact.search import LAST_ITERATIONS, NEWTON_ITERATIONS, NEWTON_SOLVES
 from contours import rigid
 from contours._offset_kernels import evaluate_offset, offsets
-from contours._rigid_kernels import sphere_point
+from contours._rigid_kernels import frame_point, plane_coordinates, plane_point, sphere_point
 from contours.rigid import sphere_angles
 from contours.base import DERIVS_AT, FRAME_AT, J_AT, V_AT
 from contours.neutral._kernels import (A_AT, Q_AT, STAMP_AT, bounding_box, contract_surface, evaluate_1s, frame_2s,
@@ -49,7 +49,8 @@ from contours.neutral._kernels import (A_AT, Q_AT, STAMP_AT, bounding_box, contr
 
 from mbs.bodies._kernels import point_jacobian_T
 
-APART, LOCATED, FALLBACK = 0, 1, 2          # outcomes of a fused detection
+APART, LOCATED, FALLBACK, NO_POINT = 0, 1, 2, 3   # outcomes of a fused detection (NO_POINT: no contact
+                                                 # point exists, the kinematics turn inactive)
 
 # itab: the point's rows of q and u, the body's q_f and q̇_f rows, n_f, nu of the two
 # bodies, velocity wanted (0/1), broad phase on (0/1), Newton iterations, an offset
@@ -58,6 +59,7 @@ APART, LOCATED, FALLBACK = 0, 1, 2          # outcomes of a fused detection
 # own kernel data (knots, ints, floats, control points, state, span cache) are arguments.
 QP, UP, QF, UF, NF, NU1, NU2, VELOCITY, BOX, MAX_ITER, LAW, XI_CLOSED, KIN_AT = range(13)
 ITAB_SIZE = KIN_AT + 8
+Q2, U2 = QF, UF     # the analytic pairs (plane, sphere–sphere): side 2's point-mass rows (−1: not a point mass)
 # ftab: margin [m], tol2 [m²] (NaN until the search knows its length scale), the largest
 # Newton steps in η and ξ, the normal's sign (2s), edge2 [m²] (contact.search: how far
 # beyond the domain's boundary a point still projects onto it, squared), the point frame's
@@ -68,6 +70,7 @@ ITAB_SIZE = KIN_AT + 8
 MARGIN, TOL2, MAX_STEP_E, MAX_STEP_X, SIGN, EDGE2 = range(6)
 OFFSET_AT, FLOATS_AT, RADIUS, BOX_AT = 6, 9, 13, 14
 SIZE, XI_A, XI_B, REACH = FLOATS_AT, FLOATS_AT + 1, FLOATS_AT + 2, FLOATS_AT + 3
+OFFSET2_AT, RADIUS2 = FLOATS_AT, FLOATS_AT + 3    # the analytic pairs: side 2's frame offset ū0 (3) [m], radius [m]
 
 
 WORK_SIZE = 15     # the work vector: two boxes (2, 3) and the direction −n (3,); Newton and the
@@ -80,46 +83,59 @@ def _begin(q, u, itab, ftab, box0, reach, state, frame1, point1, centre, axes1, 
     states, the broad phase against the surface's box (``box0``: its undeformed control
     points' lo (3), hi (3) and the bound of P_Φ (3, n_f); grown by ``reach`` [m]), the
     centre, a point's C1 or a sphere's axes. False when the boxes are apart."""
-    n_f, nu1 = itab[NF], itab[NU1]
-    velocity = itab[VELOCITY] != 0
+    n_f = itab[NF]
     radius = ftab[RADIUS]
-    qp, up, qf, uf = itab[QP], itab[UP], itab[QF], itab[UF]
-    for c in range(3):
-        frame1[rigid.R_AT + c] = q[qp + c] + ftab[OFFSET_AT + c]
-        frame1[rigid.V_AT + c] = u[up + c]
+    qf, uf = itab[QF], itab[UF]
+    _mass_frame(q, u, itab[QP], itab[UP], ftab[OFFSET_AT:OFFSET_AT + 3], frame1)
     for k in range(n_f):
         state[Q_AT + k] = q[qf + k]
         state[Q_AT + n_f + k] = u[uf + k]
     state[STAMP_AT] += 1.0
     if itab[BOX] != 0:
         box1, box2 = work[0:6].reshape(2, 3), work[6:12].reshape(2, 3)
-        for c in range(3):
-            box1[0, c] = frame1[rigid.R_AT + c] - radius
-            box1[1, c] = frame1[rigid.R_AT + c] + radius
+        _sphere_box(frame1, radius, box1)
         bounding_box(box0[0:3], box0[3:6], box0[6:6 + 3 * n_f].reshape(3, n_f), state, box2)
         for c in range(3):
             box2[0, c] -= reach
             box2[1, c] += reach
         if not boxes_overlap(box1, box2, ftab[MARGIN]):
             return False
+    _centre(frame1, radius, itab[VELOCITY] != 0, point1, centre, axes1)
+    return True
+
+
+@njit(cache=True)
+def _mass_frame(q, u, q_at, u_at, offset, frame):
+    """A point-mass frame contour's state at the global (q, u): r = q_P + ū0 and ṙ = u_P
+    (:mod:`contours.rigid`'s shortcut: its orientation and Jacobians are constant);
+    nothing for ``q_at`` < 0 (a ground frame, or a frame whose contour's update wrote it)."""
+    if q_at < 0:
+        return
+    for c in range(3):
+        frame[rigid.R_AT + c] = q[q_at + c] + offset[c]
+        frame[rigid.V_AT + c] = u[u_at + c]
+
+
+@njit(cache=True)
+def _sphere_box(frame, radius, box):
+    """The box (2, 3) [m] of a sphere of ``radius`` (0: a point) about the frame's origin."""
+    for c in range(3):
+        box[0, c] = frame[rigid.R_AT + c] - radius
+        box[1, c] = frame[rigid.R_AT + c] + radius
+
+
+@njit(cache=True)
+def _centre(frame1, radius, velocity, point1, centre, axes1):
+    """Side 1 at its frame: the centre c into ``centre``; a point's C1 into ``point1`` (the
+    frame origin, :func:`~contours._rigid_kernels.frame_point`, ṙ with ``velocity``), a
+    sphere's axes into ``axes1``."""
     if radius > 0.0:
         for k in range(9):
             axes1[k // 3, k % 3] = frame1[rigid.A_AT + k]
     else:
-        for k in range(V_AT - DERIVS_AT):
-            point1[DERIVS_AT + k] = 0.0
-        for c in range(3):
-            point1[DERIVS_AT + c] = frame1[rigid.R_AT + c]
-        for k in range(9):
-            point1[FRAME_AT + k] = frame1[rigid.A_AT + k]
-        for k in range(6 * nu1):
-            point1[J_AT + k] = frame1[rigid.J_AT + k]
-        if velocity:
-            for c in range(3):
-                point1[V_AT + c] = frame1[rigid.V_AT + c]
+        frame_point(frame1, velocity, np.bool_(True), point1)
     for c in range(3):
         centre[c] = frame1[rigid.R_AT + c]
-    return True
 
 
 @njit(cache=True)
@@ -303,3 +319,60 @@ def centre_on_neutral_1s(q, u, itab, ftab, knots, ints, floats, ctrl0, phi, stat
     _jacobian_at_rest(state, local[0], phi_rows[0], n_f, point2, itab[NU2])
     g_N, gd_N, eta1, xi1 = _finish(itab, ftab, frame1, point1, point2, kin, centre, axes1, work)
     return LOCATED, g_N, gd_N, eta, 0.0, eta1, xi1
+
+
+@njit(cache=True)
+def centre_on_plane(q, u, itab, ftab, frame1, plane, point1, point2, kin, centre, axes1, work):
+    """Stages 3 and 4 of a point or a sphere against a plane (analytic, no search) at the
+    global (q, u) [m, m/s]: each side's frame state on a point mass (``itab[QP]``,
+    ``itab[Q2]`` >= 0; else its contour's update wrote it, or it is the ground's);
+    side 1's centre c (a point's C1); C2 the foot of c on the plane, (η, ξ) = (a_x,
+    a_y)ᵀ (c − r_O) (:func:`~contours._rigid_kernels.plane_point`, with J_T, J_R); then
+    g_N, a sphere's C1 and the frame's pieces as :func:`centre_on_neutral_2s` step 6.
+    The plane is unbounded: no broad phase. Returns as :func:`centre_on_neutral_2s`."""
+    velocity = itab[VELOCITY] != 0
+    _mass_frame(q, u, itab[QP], itab[UP], ftab[OFFSET_AT:OFFSET_AT + 3], frame1)
+    _mass_frame(q, u, itab[Q2], itab[U2], ftab[OFFSET2_AT:OFFSET2_AT + 3], plane)
+    _centre(frame1, ftab[RADIUS], velocity, point1, centre, axes1)
+    eta, xi = plane_coordinates(plane, centre)
+    plane_point(plane, eta, xi, velocity, np.bool_(True), point2)
+    g_N, gd_N, eta1, xi1 = _finish(itab, ftab, frame1, point1, point2, kin, centre, axes1, work)
+    return LOCATED, g_N, gd_N, eta, xi, eta1, xi1
+
+
+@njit(cache=True)
+def sphere_on_sphere(q, u, itab, ftab, frame1, frame2, point1, point2, kin, centre, axes1, axes2, work):
+    """Stages 3 and 4 of two spheres (analytic) at the global (q, u): the frame states as
+    :func:`centre_on_plane`; broad phase (with ``itab[BOX]``) on the spheres' boxes;
+    n = (c1 − c2)/|c1 − c2|, C2 = c2 + ρ2 n at sphere 2's coordinates of n
+    (:func:`~contours._rigid_kernels.sphere_point`, its axes into ``axes2``), then g_N,
+    C1 = c1 − ρ1 n and the frame's pieces as :func:`centre_on_neutral_2s` step 6.
+    NO_POINT when the centres coincide. Returns as :func:`centre_on_neutral_2s`."""
+    nan = np.nan
+    velocity = itab[VELOCITY] != 0
+    radius1, radius2 = ftab[RADIUS], ftab[RADIUS2]
+    _mass_frame(q, u, itab[QP], itab[UP], ftab[OFFSET_AT:OFFSET_AT + 3], frame1)
+    _mass_frame(q, u, itab[Q2], itab[U2], ftab[OFFSET2_AT:OFFSET2_AT + 3], frame2)
+    if itab[BOX] != 0:
+        box1, box2 = work[0:6].reshape(2, 3), work[6:12].reshape(2, 3)
+        _sphere_box(frame1, radius1, box1)
+        _sphere_box(frame2, radius2, box2)
+        if not boxes_overlap(box1, box2, ftab[MARGIN]):
+            return APART, nan, nan, nan, nan, nan, nan
+    _centre(frame1, radius1, velocity, point1, centre, axes1)
+    for k in range(9):
+        axes2[k // 3, k % 3] = frame2[rigid.A_AT + k]
+    m = work[12:15]
+    dist2 = 0.0
+    for c in range(3):
+        m[c] = centre[c] - frame2[rigid.R_AT + c]
+        dist2 += m[c] * m[c]
+    dist = np.sqrt(dist2)
+    if dist == 0.0:
+        return NO_POINT, nan, nan, nan, nan, nan, nan
+    for c in range(3):
+        m[c] /= dist
+    eta, xi = sphere_angles(axes2, m)
+    sphere_point(frame2, radius2, eta, xi, velocity, np.bool_(True), point2)
+    g_N, gd_N, eta1, xi1 = _finish(itab, ftab, frame1, point1, point2, kin, centre, axes1, work)
+    return LOCATED, g_N, gd_N, eta, xi, eta1, xi1

@@ -23,7 +23,14 @@ Kinds with a fused detection:
   (:class:`~contours.derived.OffsetContour`) on a compiled 1s neutral curve;
 * :class:`CentreOnNeutral1s`: the same against a compiled neutral 1s contour (a curve),
   ``ContactKinematicsPointContour1s`` or ``ContactKinematicsSphereContour1s`` with a
-  compiled ``Contact1sSearch``.
+  compiled ``Contact1sSearch``;
+* :class:`CentreOnPlane`: a point or a sphere against a plane
+  (``ContactKinematicsPointPlane``, ``ContactKinematicsSpherePlane``) and
+  :class:`SphereOnSphere`: two spheres (``ContactKinematicsSphereSphere``) — analytic,
+  no search, so they never fall back — on frames of any kind: the kernel writes the
+  state of a point mass's frame itself, a ground frame's is constant, and the contour of
+  a frame on another body (a rigid body, a node of an FFR body) is updated by its
+  ``update`` in Python before the kernel.
 
 Every other contact keeps the Python path (which stays the reference of the fused ones,
 ``tests/unit/contact/test_fused_detection.py``).
@@ -35,20 +42,23 @@ import numpy as np
 
 from contact.contact import Contact
 from contact.kinematics import (ContactKinematicsPointContour1s, ContactKinematicsPointContour2s,
-                                ContactKinematicsSphereContour1s, ContactKinematicsSphereContour2s, buffer_layout)
+                                ContactKinematicsPointPlane, ContactKinematicsSphereContour1s,
+                                ContactKinematicsSphereContour2s, ContactKinematicsSpherePlane,
+                                ContactKinematicsSphereSphere, buffer_layout)
 from contact.search import Contact1sSearch, Contact2sSearch
 from contours.derived import OffsetContour
 from contours.neutral.factory import Contour1sNeutralFactory, Contour2sNeutralFactory
-from contours.rigid import PointContour, SphereContour
+from contours.rigid import PlaneContour, PointContour, SphereContour
 
 from mbs.run import _fused_detection_kernels as K
 
 
 def fused_detection(contact):
     """The fused detection of ``contact`` (:class:`CentreOnNeutral2s`,
-    :class:`CentreOnOffset`, :class:`CentreOnNeutral1s`) when its kind has one and its
-    bodies belong to a System, else None (the Python path)."""
-    for kind in (CentreOnNeutral2s, CentreOnOffset, CentreOnNeutral1s):
+    :class:`CentreOnOffset`, :class:`CentreOnNeutral1s`, :class:`CentreOnPlane`,
+    :class:`SphereOnSphere`) when its kind has one and its bodies belong to a System,
+    else None (the Python path)."""
+    for kind in (CentreOnNeutral2s, CentreOnOffset, CentreOnNeutral1s, CentreOnPlane, SphereOnSphere):
         if kind.applies(contact):
             return kind(contact)
     return None
@@ -274,3 +284,111 @@ class CentreOnNeutral1s(_FusedCentre):
         super().__init__(contact, curve)
         self._args = (self._itab, self._ftab, *curve.kernel_data, curve.n_ref,
                       *self._points, self._work, self.search.newton_work, curve.evaluate_work)
+
+
+class _FusedAnalytic:
+    """What the fused detections of the analytic pairs share (:class:`CentreOnPlane`,
+    :class:`SphereOnSphere`): :meth:`applies` by the kinematics' type and the contours'
+    types (``kinds``: {kinematics: (side 1's contour, side 2's contour)}), the tables
+    (side i's point-mass rows and frame offset, or −1 and a Python update of its
+    contour), and :meth:`locate` around the kernel (:attr:`kernel`, :attr:`_args` after q, u)."""
+
+    kernel = None
+    kinds = {}
+
+    @classmethod
+    def applies(cls, contact) -> bool:
+        """True for a :class:`~contact.Contact` of one of :attr:`kinds` whose contours lie
+        on the ground or on bodies in a System."""
+        if type(contact) is not Contact:
+            return False
+        k = contact.kinematics
+        sides = cls.kinds.get(type(k))
+        return sides is not None and all(
+            type(contour) is kind and (contour.body is None or contour.body.q_slice is not None)
+            for contour, kind in zip((k.contour1, k.contour2), sides))
+
+    def __init__(self, contact):
+        self.contact = contact
+        k = self.kinematics = contact.kinematics
+        self.velocity = not contact.set_valued
+        self.closing_tol = contact.closing_tol
+        self.sphere = k.radius > 0.0
+        itab = np.zeros(K.ITAB_SIZE, dtype=np.int64)
+        ftab = np.zeros(K.BOX_AT)
+        self._updates = []          # (contour, q slice, u slice) of the frames on other bodies
+        for contour, (q_at, u_at, offset_at) in zip((k.contour1, k.contour2),
+                                                    ((K.QP, K.UP, K.OFFSET_AT), (K.Q2, K.U2, K.OFFSET2_AT))):
+            body = contour.body
+            itab[q_at] = itab[u_at] = -1
+            if body is None:
+                contour.update(None, None, 0.0)         # a ground frame: constant
+            elif body.translation_only:
+                itab[q_at], itab[u_at] = body.q_slice.start, body.u_slice.start
+                ftab[offset_at:offset_at + 3] = contour.frame_ref.u0
+            else:
+                self._updates.append((contour, body.q_slice, body.u_slice))
+        itab[K.NU1], itab[K.NU2] = k.contour1.nu, k.contour2.nu
+        itab[K.VELOCITY], itab[K.BOX] = self.velocity, contact.margin is not None
+        itab[K.KIN_AT:K.KIN_AT + 8] = buffer_layout(k.contour1.nu, k.contour2.nu)
+        ftab[K.MARGIN] = 0.0 if contact.margin is None else contact.margin
+        ftab[K.RADIUS] = k.radius
+        ftab[K.RADIUS2] = getattr(k.contour2, "radius", 0.0)
+        self._itab, self._ftab = itab, ftab
+        self._work = np.zeros(K.WORK_SIZE)
+
+    def locate(self, q, u, t) -> bool:
+        """Both contours at the global (q, u, t) and the contact located, as
+        ``contour.update`` then :meth:`Contact.locate` do: True when closed
+        (g_N <= closing_tol)."""
+        for contour, qs, us in self._updates:
+            contour.update(q[qs], u[us], t)
+        outcome, g_N, gd_N, eta, xi, eta1, xi1 = type(self).kernel(q, u, *self._args)
+        k = self.kinematics
+        if outcome != K.LOCATED:
+            if outcome == K.NO_POINT:
+                k.active = False
+            return False
+        k.active = True
+        k.g_N = g_N
+        if self.velocity:
+            k.gd_N = gd_N
+        k.point2.eta, k.point2.xi = eta, xi
+        if self.sphere:
+            k.point1.eta, k.point1.xi = eta1, xi1
+        else:
+            k.point1.eta = k.point1.xi = 0.0
+        return g_N <= self.closing_tol
+
+    def probe(self):
+        """None: the contact recorder locates an open analytic pair by the Python path."""
+        return None
+
+
+class CentreOnPlane(_FusedAnalytic):
+    """Stages 3 and 4 of a point or a sphere against a plane in one call of
+    :func:`._fused_detection_kernels.centre_on_plane` (module docstring)."""
+
+    kernel = K.centre_on_plane
+    kinds = {ContactKinematicsPointPlane: (PointContour, PlaneContour),
+             ContactKinematicsSpherePlane: (SphereContour, PlaneContour)}
+
+    def __init__(self, contact):
+        super().__init__(contact)
+        k = self.kinematics
+        self._args = (self._itab, self._ftab, k.contour1.state, k.contour2.state, k.point1.buffer, k.point2.buffer,
+                      k.buffer, k.centre, k.axes1, self._work)
+
+
+class SphereOnSphere(_FusedAnalytic):
+    """Stages 3 and 4 of two spheres in one call of
+    :func:`._fused_detection_kernels.sphere_on_sphere` (module docstring)."""
+
+    kernel = K.sphere_on_sphere
+    kinds = {ContactKinematicsSphereSphere: (SphereContour, SphereContour)}
+
+    def __init__(self, contact):
+        super().__init__(contact)
+        k = self.kinematics
+        self._args = (self._itab, self._ftab, k.contour1.state, k.contour2.state, k.point1.buffer, k.point2.buffer,
+                      k.buffer, k.centre, k.axes1, k.axes2, self._work)

@@ -3,17 +3,22 @@
 default scene (its point, or a sphere on the same point mass; its 2s contour, its band, or
 a curve along the top face's centre line) driven through the same
 random deformed states (warm and cold starts, open, closed, apart by the broad phase,
-outside the contour), and the choice of the path per contact in the Model."""
+outside the contour); the analytic pairs (a point or a sphere on a plane, two spheres) on
+point masses, rigid bodies and the ground through random states; and the choice of the
+path per contact in the Model."""
 
 import numpy as np
 import pytest
 
 from centre_scenes import centre_scene as _scene
-from contact import Contact, ContactKinematicsPointPlane, UnilateralNewtonImpact
-from contours import PlaneContour, PointContour
+from contact import (Contact, ContactKinematicsPointPlane, LinearRegularizedUnilateralConstraint, UnilateralNewtonImpact,
+                     connect)
+from contours import PlaneContour, PointContour, SphereContour
 from contours.neutral import _kernels as NK
-from mbs import PointMass, System, ground_frame
-from mbs.run.fused_detection import CentreOnNeutral1s, CentreOnNeutral2s, CentreOnOffset, fused_detection
+from mbs import PointMass, RigidBody, System, ground_frame
+from mbs.bodies.rotations import quat_from_rotvec, quat_to_matrix
+from mbs.run.fused_detection import (CentreOnNeutral1s, CentreOnNeutral2s, CentreOnOffset, CentreOnPlane,
+                                     SphereOnSphere, fused_detection)
 from mbs.run.model import compile_model
 
 
@@ -139,9 +144,9 @@ def test_fused_contour_products_follow_the_state():
 
 
 def test_the_model_fuses_the_pairs_that_have_a_kernel():
-    """The default scene's contact (2s or band) has a fused detection and its contours are
-    left to it by the contour stage; a point on a plane keeps the Python path (the contour
-    stage updates both its contours)."""
+    """The default scene's contact (2s or band) and a point on a plane have a fused
+    detection and their contours are left to it by the contour stage; a point searched on
+    a sphere's surface keeps the Python path (the contour stage updates both its contours)."""
     for contour, kind in (("2s", CentreOnNeutral2s), ("band", CentreOnOffset)):
         scene = _scene("impact", contour=contour)
         model = compile_model(scene.system, scene.system.plan(0.01))
@@ -152,5 +157,126 @@ def test_the_model_fuses_the_pairs_that_have_a_kernel():
     system.add(Contact(ContactKinematicsPointPlane(PointContour(mass.point), PlaneContour(ground_frame())),
                        UnilateralNewtonImpact(0.5)))
     model = compile_model(system, system.plan(0.01))
-    assert model.fused == (None,)
-    assert model.owners.size == len(model.contours) == 2
+    assert isinstance(model.fused[0], CentreOnPlane)
+    assert model.owners.size == 0 and len(model.contours) == 2
+    system.add(connect(PointContour(mass.point), SphereContour(ground_frame((0.0, 0.0, -1.0)), 0.5), "impact"))
+    model = compile_model(system, system.plan(0.01))
+    assert model.fused[1] is None
+    assert model.owner_at.tolist() == [0, 0, 0, 1, 2]   # the plane's contact's contours: none; the sphere's: its
+    assert model.owners.tolist() == [1, 1]
+
+
+# --- the analytic pairs: a point or a sphere on a plane, two spheres --------------------------------------
+
+TILT = quat_to_matrix(quat_from_rotvec([0.3, -0.2, 0.5]))      # a tilted ground plane's axes
+ANALYTIC = {    # case: (side 1, side 2) as (contour kind, body: "mass", "ball" (rigid), "slab" (rigid), "ground")
+    "point/mass on ground plane": (("point", "mass"), ("plane", "ground")),
+    "sphere/mass on ground plane": (("sphere", "mass"), ("plane", "ground")),
+    "sphere/ball on slab plane": (("sphere", "ball"), ("plane", "slab")),
+    "point/mass on plane/mass": (("point", "mass"), ("plane", "mass2")),
+    "sphere/mass on sphere/mass": (("sphere", "mass"), ("sphere", "mass2")),
+    "sphere/ball on sphere/mass": (("sphere", "ball"), ("sphere", "mass2")),
+    "sphere/mass on ground sphere": (("sphere", "mass"), ("sphere", "ground")),
+}
+RADII = {"mass": 0.02, "mass2": 0.05, "ball": 0.03, "ground": 0.04}     # [m]
+
+
+def _analytic_scene(case, law):
+    """A System of two point masses and two rigid bodies with the contact of ``case``
+    (:data:`ANALYTIC`) under ``law`` ("impact": no velocity asked; "penalty": with it)."""
+    system = System()
+    bodies = {"mass": system.add(PointMass(0.3, name="mass")), "mass2": system.add(PointMass(0.5, name="mass2")),
+              "ball": system.add(RigidBody(1.0, np.diag([0.1, 0.2, 0.3]), name="ball")),
+              "slab": system.add(RigidBody(2.0, np.diag([0.3, 0.2, 0.1]), name="slab"))}
+    frames = {"mass": bodies["mass"].point, "mass2": bodies["mass2"].point, "ball": bodies["ball"].frame_at((0.1, -0.05, 0.02)),
+              "slab": bodies["slab"].origin, "ground": ground_frame((0.1, -0.2, 0.3), TILT)}
+    contours = []
+    for kind, owner in ANALYTIC[case]:
+        frame = frames[owner]
+        contours.append({"point": lambda: PointContour(frame), "plane": lambda: PlaneContour(frame),
+                         "sphere": lambda: SphereContour(frame, RADII[owner])}[kind]())
+    law = UnilateralNewtonImpact(0.5) if law == "impact" else LinearRegularizedUnilateralConstraint(1e4, 10.0)
+    contact = system.add(connect(*contours, law, name=case))
+    return system, bodies, contact
+
+
+def _analytic_states(system, bodies, contact, rng, n):
+    """n global states: the rigid bodies turned and moving at random, side 1's centre
+    placed at a random distance from side 2 (pressed in, just apart, far apart: separated
+    by the broad phase of two spheres), now and then on the other sphere's centre (no
+    normal)."""
+    k = contact.kinematics
+    radii = k.radius + getattr(k.contour2, "radius", 0.0)
+    distances = {"pressed": 0.9 * radii - 1e-3, "apart": radii + 2e-3, "far": radii + 1.0, "centre": 0.0}
+    states = []
+    for i in range(n):
+        q, u = system.initial_state()
+        for body in bodies.values():
+            qs, us = q[body.q_slice], u[body.u_slice]
+            qs[:3] = 0.1 * rng.normal(size=3)
+            if body.nq == 7:
+                qs[3:7] = quat_from_rotvec(rng.normal(size=3))
+            us[:] = rng.normal(size=body.nu)
+        side2 = k.contour2
+        body2 = side2.body
+        side2.update(None if body2 is None else q[body2.q_slice], None if body2 is None else u[body2.u_slice])
+        origin, axes = side2.state[:3], side2.state[3:12].reshape(3, 3)
+        if isinstance(side2, PlaneContour):        # above (or now and then below) a point of the plane
+            target = origin + axes[:, :2] @ rng.normal(size=2) * 0.05
+            direction = axes[:, 2] * rng.choice([1.0, -1.0], p=[0.8, 0.2])
+        else:                                       # about the sphere's centre
+            target = origin.copy()
+            direction = rng.normal(size=3)
+            direction /= np.linalg.norm(direction)
+        centre = target + distances[rng.choice(list(distances), p=[0.4, 0.35, 0.15, 0.1])] * direction
+        frame1 = k.contour1.frame_ref
+        qs = q[frame1.body.q_slice]
+        A = np.eye(3) if frame1.body.nq == 3 else quat_to_matrix(qs[3:7])
+        qs[:3] = centre - A @ frame1.u0
+        states.append((q, u, 1e-3 * i))
+    return states
+
+
+def _python_locate_analytic(contact, q, u, t):
+    for contour in contact.contours():
+        b = contour.body
+        contour.update(None if b is None else q[b.q_slice], None if b is None else u[b.u_slice], t)
+    return contact.locate()
+
+
+@pytest.mark.parametrize("law", ["impact", "penalty"])
+@pytest.mark.parametrize("case", list(ANALYTIC))
+def test_the_analytic_fused_detections_are_the_python_path(case, law):
+    """Closed, open, apart by the broad phase and (two spheres) without a normal: the fused
+    detection of a point or a sphere on a plane or on a sphere — on point masses, rigid
+    bodies (their contours updated in Python) and the ground — leaves the same
+    kinematics, contact points and contour states as the Python path (to 1e-12)."""
+    fused_sys, fused_bodies, fused_contact = _analytic_scene(case, law)
+    python_sys, _, python_contact = _analytic_scene(case, law)
+    fused = fused_detection(fused_contact)
+    assert isinstance(fused, SphereOnSphere if ANALYTIC[case][1][0] == "sphere" else CentreOnPlane)
+    outcomes = set()
+    for q, u, t in _analytic_states(fused_sys, fused_bodies, fused_contact, np.random.default_rng(23), 80):
+        closed_f = fused.locate(q, u, t)
+        closed_p = _python_locate_analytic(python_contact, q, u, t)
+        kf, kp = fused_contact.kinematics, python_contact.kinematics
+        assert closed_f == closed_p and kf.active == kp.active
+        outcomes.add((closed_p, kp.active))
+        same = dict(rtol=1e-12, atol=1e-15)
+        if kp.active:
+            np.testing.assert_allclose(kf.g_N, kp.g_N, **same)
+            if law == "penalty":
+                np.testing.assert_allclose(kf.gd_N, kp.gd_N, **same)
+            for a, b in ((kf.buffer, kp.buffer), (kf.point1.buffer, kp.point1.buffer),
+                         (kf.point2.buffer, kp.point2.buffer), (kf.centre, kp.centre), (kf.axes1, kp.axes1)):
+                np.testing.assert_allclose(a, b, **same)
+            assert (kf.point1.eta, kf.point1.xi, kf.point2.eta, kf.point2.xi) == pytest.approx(
+                (kp.point1.eta, kp.point1.xi, kp.point2.eta, kp.point2.xi), rel=1e-12, abs=1e-15)
+            if hasattr(kp, "axes2"):
+                np.testing.assert_array_equal(kf.axes2, kp.axes2)
+        for cf, cp in zip(fused_contact.contours(), python_contact.contours()):
+            np.testing.assert_allclose(cf.state, cp.state, **same)
+    expected = {(True, True), (False, True)}
+    if ANALYTIC[case][1][0] == "sphere":
+        expected.add((False, False))                 # coincident centres: no normal
+    assert expected <= outcomes

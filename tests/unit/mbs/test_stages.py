@@ -180,3 +180,46 @@ def test_warm_start_kernels_equal_the_loops_over_the_closed_contacts():
     SK.keep_warm_start_into(lam_rows, closed_idx, n_closed, new, n_c, warm, lam_prev)
     np.testing.assert_array_equal(lam_prev, prev_ref)
     np.testing.assert_array_equal(warm, warm_ref)
+
+
+@pytest.mark.parametrize("side, surface", [("point", "plane"), ("sphere", "plane"), ("sphere", "sphere")])
+def test_a_steady_step_of_an_analytic_pair_allocates_no_numpy_array(side, surface):
+    """A ball (a point mass: its point or a sphere of 10 mm about it) dropped from 10 mm
+    onto the ground — a tilted plane, or the top of a sphere of 50 mm — under gravity,
+    Newton's e = 0, Δt = 1e-4 s: 200 steps falling and 200 resting, after warm-up steps:
+    not one array is allocated (the fused detection of the pair, mbs.run.fused_detection)."""
+    from contact import connect
+    from contours import PlaneContour, PointContour, SphereContour
+    from mbs import PointMass, System, ground_frame
+    from mbs.bodies.rotations import quat_from_rotvec, quat_to_matrix
+
+    A = quat_to_matrix(quat_from_rotvec([0.2, -0.1, 0.0]))
+    system = System(gravity=tuple(-9.81 * A[:, 2]))      # gravity along the plane's normal: the ball rests
+    radius = 0.01 if side == "sphere" else 0.0
+    ground = PlaneContour(ground_frame((0.0, 0.0, 0.0), A)) if surface == "plane" else \
+        SphereContour(ground_frame((0.0, 0.0, -0.05)), 0.05)
+    start = (0.0, 0.0, 0.01 + radius) if surface == "sphere" else tuple((0.01 + radius) * A[:, 2])
+    if surface == "sphere":
+        system = System(gravity=(0.0, 0.0, -9.81))
+    ball = system.add(PointMass(0.1, position=start))
+    contour = SphereContour(ball.point, radius) if side == "sphere" else PointContour(ball.point)
+    system.add(connect(contour, ground, "impact"))
+    model = compile_model(system, system.plan(0.2), theta=0.5,
+                          solver=ProxSolver("gauss-seidel", tol=1e-10, max_iter=2000))
+    assert model.fused[0] is not None
+    data = Data(model)
+    data.q[:], data.u[:] = system.initial_state()
+    for _ in range(20):
+        stages.step(model, data, 1e-4)
+    phases = {}
+    while data.t < 0.2 and len(phases) < 2:
+        before = data.stats["closed_contacts"]
+        with NumpyAllocations() as count:
+            for _ in range(200):
+                stages.step(model, data, 1e-4)
+        closed = data.stats["closed_contacts"] - before
+        if closed in (0, 200):
+            phases.setdefault(closed, count.sizes)
+    assert set(phases) == {0, 200}
+    for closed, sizes in phases.items():
+        assert sizes == [], (closed, len(sizes), sorted(set(sizes)))
