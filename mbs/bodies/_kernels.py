@@ -371,16 +371,14 @@ def point_jacobian_T(A, T, u_bar, phi, free, f0, out):
     (f0 = 0, T unused). Numpy reference: the formula, in ``tests/unit/mbs/test_ffr_body.py``."""
     n_f = phi.shape[1]
     if free:
-        # B = −A ũ: column j of ũ is e_j × ū
-        B = np.empty((3, 3))
         for c in range(3):
-            B[c, 0] = -(A[c, 1] * u_bar[2] - A[c, 2] * u_bar[1])
-            B[c, 1] = -(A[c, 2] * u_bar[0] - A[c, 0] * u_bar[2])
-            B[c, 2] = -(A[c, 0] * u_bar[1] - A[c, 1] * u_bar[0])
-        for c in range(3):
+            # row c of B = −A ũ (column j of ũ is e_j × ū)
+            b0 = -(A[c, 1] * u_bar[2] - A[c, 2] * u_bar[1])
+            b1 = -(A[c, 2] * u_bar[0] - A[c, 0] * u_bar[2])
+            b2 = -(A[c, 0] * u_bar[1] - A[c, 1] * u_bar[0])
             for j in range(3):
                 out[c, j] = 1.0 if c == j else 0.0
-                out[c, 3 + j] = B[c, 0] * T[0, j] + B[c, 1] * T[1, j] + B[c, 2] * T[2, j]
+                out[c, 3 + j] = b0 * T[0, j] + b1 * T[1, j] + b2 * T[2, j]
     for c in range(3):
         for k in range(n_f):
             out[c, f0 + k] = A[c, 0] * phi[0, k] + A[c, 1] * phi[1, k] + A[c, 2] * phi[2, k]

@@ -4,15 +4,18 @@ contours (:mod:`contours.neutral._kernels`), the contact search and kinematics
 (:mod:`contact._detection_kernels`) and the bodies (:func:`mbs.bodies._kernels.point_jacobian_T`).
 
 :func:`centre_on_neutral_2s` serves a point or a sphere on a point mass against a
-neutral 2s contour of a body on a frame fixed in space, :func:`centre_on_offset` the same
+neutral 2s contour of a floating-frame body (FFR or rigid; the frame's R, A, v, ω̄ are in
+the contour's state: constant on a frame at rest, written by the contour's update
+otherwise), :func:`centre_on_offset` the same
 against an offset contour (band, cylinder: :mod:`contours.derived`) of such a body (a
 :class:`~contact.kinematics.ContactKinematicsPointContour2s` or
 :class:`~contact.kinematics.ContactKinematicsSphereContour2s` with its compiled
 :class:`~contact.search.Contact2sSearch`), :func:`centre_on_neutral_1s` against a neutral
 1s contour (:class:`~contact.kinematics.ContactKinematicsPointContour1s`,
 ``ContactKinematicsSphereContour1s`` with a compiled :class:`~contact.search.Contact1sSearch`).
-All three share the states and broad phase (:func:`_begin`) and the gap, the sphere's point
-and the frame's pieces (:func:`_finish`). Their reference is the Python path they replace —
+All three share the states and broad phase (:func:`_begin`), C2's Jacobians
+(:func:`_jacobian`) and the gap, the sphere's point and the frame's pieces (:func:`_finish`);
+:func:`centre_on_plane` and :func:`sphere_on_sphere` serve the analytic pairs. Their reference is the Python path they replace —
 ``contour.update`` of both contours, then :meth:`contact.Contact.locate` (bounding boxes, ``search.solve`` warm-started,
 ``contour.evaluate``, :func:`~contact._detection_kernels.normal_gap`,
 :func:`~contact._detection_kernels.frame_rates_jacobians`) — which
@@ -54,10 +57,11 @@ APART, LOCATED, FALLBACK, NO_POINT = 0, 1, 2, 3   # outcomes of a fused detectio
 
 # itab: the point's rows of q and u, the body's q_f and q̇_f rows, n_f, nu of the two
 # bodies, velocity wanted (0/1), broad phase on (0/1), Newton iterations, an offset
-# contour's offset law (contours._offset_kernels.offsets) and whether its ξ is closed, the
-# offsets of the kinematics buffer (contact.kinematics.buffer_layout, 8). The surface's
+# contour's offset law (contours._offset_kernels.offsets) and whether its ξ is closed,
+# whether the surface's body has a free frame (0/1), the offsets of the kinematics buffer
+# (contact.kinematics.buffer_layout, 8). The surface's
 # own kernel data (knots, ints, floats, control points, state, span cache) are arguments.
-QP, UP, QF, UF, NF, NU1, NU2, VELOCITY, BOX, MAX_ITER, LAW, XI_CLOSED, KIN_AT = range(13)
+QP, UP, QF, UF, NF, NU1, NU2, VELOCITY, BOX, MAX_ITER, LAW, XI_CLOSED, FREE, KIN_AT = range(14)
 ITAB_SIZE = KIN_AT + 8
 Q2, U2 = QF, UF     # the analytic pairs (plane, sphere–sphere): side 2's point-mass rows (−1: not a point mass)
 # ftab: margin [m], tol2 [m²] (NaN until the search knows its length scale), the largest
@@ -65,10 +69,11 @@ Q2, U2 = QF, UF     # the analytic pairs (plane, sphere–sphere): side 2's poin
 # beyond the domain's boundary a point still projects onto it, squared), the point frame's
 # offset ū0 (3) [m], an offset contour's law size [m], ξ domain (2) and reach (the largest
 # offset [m], which grows the neutral curve's box), the sphere's radius ρ [m] (0: a point),
-# then the undeformed control points' box (lo (3), hi (3)) [m] and the bound of P_Φ
-# (3, n_f) [m] (contours.neutral._kernels.bounding_box)
+# the map T (3, 3) of a free frame's ω̄ = T u_r at this step (row-major), then the
+# undeformed control points' box (lo (3), hi (3)) [m] and the bound of P_Φ (3, n_f) [m]
+# (contours.neutral._kernels.bounding_box)
 MARGIN, TOL2, MAX_STEP_E, MAX_STEP_X, SIGN, EDGE2 = range(6)
-OFFSET_AT, FLOATS_AT, RADIUS, BOX_AT = 6, 9, 13, 14
+OFFSET_AT, FLOATS_AT, RADIUS, FRAME_T_AT, BOX_AT = 6, 9, 13, 14, 23
 SIZE, XI_A, XI_B, REACH = FLOATS_AT, FLOATS_AT + 1, FLOATS_AT + 2, FLOATS_AT + 3
 OFFSET2_AT, RADIUS2 = FLOATS_AT, FLOATS_AT + 3    # the analytic pairs: side 2's frame offset ū0 (3) [m], radius [m]
 
@@ -178,14 +183,24 @@ def _count(counts, k, steps):
 
 
 @njit(cache=True)
-def _jacobian_at_rest(state, local, phi_point, n_f, point2, nu2):
-    """C2's J_T = A Φ_P of a body on a frame at rest (eq. 2.70 on a prescribed frame,
-    :func:`mbs.bodies._kernels.point_jacobian_T`) and J_R = 0 into ``point2``."""
+def _jacobian(itab, ftab, state, local, phi_point, point2):
+    """C2's J_T and J_R into ``point2`` (thesis eq. 2.70, 2.72;
+    :func:`mbs.bodies._kernels.point_jacobian_T`): on a free frame (``itab[FREE]``, T in
+    ``ftab``) J_T = [1, −A ũ T, A Φ] and J_R = [0, A T, 0], on a prescribed one (at rest or
+    moving) J_T = A Φ and J_R = 0."""
+    n_f, nu2 = itab[NF], itab[NU2]
+    free = itab[FREE] != 0
     A = state[A_AT:A_AT + 9].reshape(3, 3)
+    T = ftab[FRAME_T_AT:FRAME_T_AT + 9].reshape(3, 3)
     J2 = point2[J_AT:J_AT + 3 * nu2].reshape(3, nu2)
-    point_jacobian_T(A, A, local, phi_point.reshape(3, n_f), np.bool_(False), np.int64(0), J2)
+    point_jacobian_T(A, T, local, phi_point.reshape(3, n_f), free, np.int64(6) if free else np.int64(0), J2)
+    JR = point2[J_AT + 3 * nu2:J_AT + 6 * nu2]
     for k in range(3 * nu2):
-        point2[J_AT + 3 * nu2 + k] = 0.0
+        JR[k] = 0.0
+    if free:
+        for c in range(3):
+            for j in range(3):
+                JR[c * nu2 + 3 + j] = A[c, 0] * T[0, j] + A[c, 1] * T[1, j] + A[c, 2] * T[2, j]
 
 
 @njit(cache=True)
@@ -196,7 +211,7 @@ def centre_on_neutral_2s(q, u, itab, ftab, knots_e, knots_x, ints, floats, ctrl0
     1. the contours' states: the point r = q_P + ū0, ṙ = u_P into ``frame1`` (the
        frame contour's state); q_f, q̇_f and a new stamp into the neutral contour's
        ``state`` (as :func:`~contours.neutral._kernels.store_state`, ``store_velocity``;
-       R, A, v, ω̄ of the frame at rest stay);
+       R, A, v, ω̄ of the frame stay as they are);
     2. broad phase (with ``itab[BOX]``): the point's box (the sphere's, ``ftab[RADIUS]``
        around its centre) and the contour's (:func:`~contours.neutral._kernels.bounding_box`)
        grown by the margin (:func:`~contact._detection_kernels.boxes_overlap`) — apart: APART;
@@ -212,8 +227,7 @@ def centre_on_neutral_2s(q, u, itab, ftab, knots_e, knots_x, ints, floats, ctrl0
        last evaluation, at the root), the frame (eq. 3.27–3.29), ṙ (eq. 2.32)
        with ``itab[VELOCITY]`` — what :func:`~contours.neutral._kernels.evaluate_2s`
        gives at the root, its Φ rows in the third of the contour's ``contour_work`` —,
-       J_T = A Φ (eq. 2.70 on a prescribed frame, :func:`mbs.bodies._kernels.point_jacobian_T`),
-       J_R = 0;
+       J_T and J_R (eq. 2.70, 2.72: :func:`_jacobian`);
     6. g_N = nᵀ (c − r_C2) − ρ (eq. 3.4); a sphere's C1 = c − ρ n into ``point1``
        (:func:`contours._rigid_kernels.sphere_point` at the coordinates of −n); n, T, ġ_T,
        w_N1, w_N2, w_T1, w_T2 (eq. 3.8) into ``kin``.
@@ -244,7 +258,7 @@ def centre_on_neutral_2s(q, u, itab, ftab, knots_e, knots_x, ints, floats, ctrl0
     contract_surface(B[0], int(span[1]), ints[0], B[1], int(span[2]), ints[3], phi, np.int64(1), phi_rows)
     if itab[VELOCITY] != 0:
         point_velocity(state, local[0], phi_rows[0], point2[V_AT:J_AT])
-    _jacobian_at_rest(state, local[0], phi_rows[0], n_f, point2, itab[NU2])
+    _jacobian(itab, ftab, state, local[0], phi_rows[0], point2)
     g_N, gd_N, eta1, xi1 = _finish(itab, ftab, frame1, point1, point2, kin, centre, axes1, work)
     return LOCATED, g_N, gd_N, eta, xi, eta1, xi1
 
@@ -252,14 +266,13 @@ def centre_on_neutral_2s(q, u, itab, ftab, knots_e, knots_x, ints, floats, ctrl0
 @njit(cache=True)
 def centre_on_offset(q, u, itab, ftab, knots, ints, floats, ctrl0, phi, state, span, n0, frame1, point1, point2,
                      kin, centre, axes1, start, counts, work, newton_work, contour_work):
-    """:func:`centre_on_neutral_2s` against an offset contour (band, cylinder) of a body
-    at rest, from its neutral curve's kernel data (knots … span) and reference normal n0:
+    """:func:`centre_on_neutral_2s` against an offset contour (band, cylinder), from its neutral curve's kernel data (knots … span) and reference normal n0:
     the broad phase against the curve's box grown by the reach, Newton on the offset
     surface (:func:`~contact._detection_kernels.newton_offset`, the search's work arrays
     ``newton_work`` = B, local, rows, frame, D, g), C2 by
     :func:`~contours._offset_kernels.evaluate_offset` at the root (the contour's own work
     arrays ``contour_work`` = B, local, rows, frame, Φ rows, Φ_P, as
-    :meth:`contours.derived.OffsetContour.evaluate` fills them) with J_T = A Φ_P, J_R = 0.
+    :meth:`contours.derived.OffsetContour.evaluate` fills them) with J_T, J_R at Φ_P.
     Returns as :func:`centre_on_neutral_2s`."""
     nan = np.nan
     n_f = itab[NF]
@@ -283,7 +296,7 @@ def centre_on_offset(q, u, itab, ftab, knots, ints, floats, ctrl0, phi, state, s
     evaluate_offset(eta, knots, ints, floats, ctrl0, phi, state, span, n0, al, be, al1, be1, al2, be2,
                     np.bool_(True), itab[VELOCITY] != 0, B, local, rows, frame, phi_rows, phi_point,
                     point2[DERIVS_AT:FRAME_AT].reshape(6, 3), point2[FRAME_AT:V_AT].reshape(3, 3), point2[V_AT:J_AT])
-    _jacobian_at_rest(state, rows[0], phi_point, n_f, point2, itab[NU2])
+    _jacobian(itab, ftab, state, rows[0], phi_point, point2)
     g_N, gd_N, eta1, xi1 = _finish(itab, ftab, frame1, point1, point2, kin, centre, axes1, work)
     return LOCATED, g_N, gd_N, eta, xi, eta1, xi1
 
@@ -291,13 +304,13 @@ def centre_on_offset(q, u, itab, ftab, knots, ints, floats, ctrl0, phi, state, s
 @njit(cache=True)
 def centre_on_neutral_1s(q, u, itab, ftab, knots, ints, floats, ctrl0, phi, state, span, n_ref, frame1, point1,
                          point2, kin, centre, axes1, start, counts, work, newton_work, contour_work):
-    """:func:`centre_on_neutral_2s` against a neutral 1s contour of a body at rest, from its
-    kernel data (knots … span) and its reference normal in world axes ``n_ref`` (A n̄_ref,
-    constant at rest): Newton on t_ηᵀ (c − r(η)) = 0 from the warm start η = ``start[0]``
+    """:func:`centre_on_neutral_2s` against a neutral 1s contour, from its
+    kernel data (knots … span) and its reference normal in world axes ``n_ref`` (A n̄_ref
+    of the contour's last update): Newton on t_ηᵀ (c − r(η)) = 0 from the warm start η = ``start[0]``
     (:func:`~contact._detection_kernels.newton_1s`, the search's work arrays
     ``newton_work`` = B, local, D, g), C2 by :func:`~contours.neutral._kernels.evaluate_1s`
     at the root (the contour's work arrays ``contour_work`` = B, ū rows, Φ rows) with
-    J_T = A Φ, J_R = 0. Returns as :func:`centre_on_neutral_2s` (C2's ξ = 0)."""
+    J_T, J_R. Returns as :func:`centre_on_neutral_2s` (C2's ξ = 0)."""
     nan = np.nan
     n_f = itab[NF]
     if not _begin(q, u, itab, ftab, ftab[BOX_AT:BOX_AT + 6 + 3 * n_f], 0.0, state, frame1, point1, centre, axes1,
@@ -316,7 +329,7 @@ def centre_on_neutral_1s(q, u, itab, ftab, knots, ints, floats, ctrl0, phi, stat
     evaluate_1s(eta, knots, ints, floats, ctrl0, phi, state, span, n_ref, np.bool_(True), itab[VELOCITY] != 0, B,
                 local, phi_rows, point2[DERIVS_AT:FRAME_AT].reshape(6, 3), point2[FRAME_AT:V_AT].reshape(3, 3),
                 point2[V_AT:J_AT])
-    _jacobian_at_rest(state, local[0], phi_rows[0], n_f, point2, itab[NU2])
+    _jacobian(itab, ftab, state, local[0], phi_rows[0], point2)
     g_N, gd_N, eta1, xi1 = _finish(itab, ftab, frame1, point1, point2, kin, centre, axes1, work)
     return LOCATED, g_N, gd_N, eta, 0.0, eta1, xi1
 

@@ -15,10 +15,11 @@ searches the coarse grid (:mod:`contact.search`).
 Kinds with a fused detection:
 
 * :class:`CentreOnNeutral2s`: a point (``PointContour``) or a sphere (``SphereContour``)
-  on a point mass against a compiled neutral 2s contour — nodal or fitted,
-  :class:`~contours.neutral.factory.Contour2sNeutralFactory` — of a body on a frame fixed
-  in space, ``ContactKinematicsPointContour2s`` or ``ContactKinematicsSphereContour2s``
-  with a compiled ``Contact2sSearch``, any law of :class:`contact.Contact`;
+  against a compiled neutral 2s contour — nodal or fitted,
+  :class:`~contours.neutral.factory.Contour2sNeutralFactory` — of a floating-frame body
+  (an FFR body or a rigid one), ``ContactKinematicsPointContour2s`` or
+  ``ContactKinematicsSphereContour2s`` with a compiled ``Contact2sSearch``, any law of
+  :class:`contact.Contact`;
 * :class:`CentreOnOffset`: the same against a band or a cylinder
   (:class:`~contours.derived.OffsetContour`) on a compiled 1s neutral curve;
 * :class:`CentreOnNeutral1s`: the same against a compiled neutral 1s contour (a curve),
@@ -27,10 +28,15 @@ Kinds with a fused detection:
 * :class:`CentreOnPlane`: a point or a sphere against a plane
   (``ContactKinematicsPointPlane``, ``ContactKinematicsSpherePlane``) and
   :class:`SphereOnSphere`: two spheres (``ContactKinematicsSphereSphere``) — analytic,
-  no search, so they never fall back — on frames of any kind: the kernel writes the
-  state of a point mass's frame itself, a ground frame's is constant, and the contour of
-  a frame on another body (a rigid body, a node of an FFR body) is updated by its
-  ``update`` in Python before the kernel.
+  no search, so they never fall back.
+
+The kernel writes the state of a point mass's frame itself; a ground frame's is
+constant. What moves by a Python function is updated in Python just before the kernel,
+which does the rest: a frame contour on another body (a rigid body, a node of an FFR
+body: its frame's position, orientation, velocities and Jacobians), a neutral contour on
+a moving frame (prescribed: a function of t; free: its R, A, v, ω̄ and the map T of
+ω̄ = T u_r, which the Jacobians take). On a frame at rest the neutral contour's R, A, v,
+ω̄ are constant and the kernel does all.
 
 Every other contact keeps the Python path (which stays the reference of the fused ones,
 ``tests/unit/contact/test_fused_detection.py``).
@@ -50,6 +56,7 @@ from contours.derived import OffsetContour
 from contours.neutral.factory import Contour1sNeutralFactory, Contour2sNeutralFactory
 from contours.rigid import PlaneContour, PointContour, SphereContour
 
+from mbs.bodies.floating_frame import FloatingFrameBody
 from mbs.run import _fused_detection_kernels as K
 
 
@@ -69,22 +76,52 @@ ON_CURVE = {ContactKinematicsPointContour1s: PointContour, ContactKinematicsSphe
 # ^ the kinematics of a centre searched on a 2s contour / a curve and the contour of its side 1
 
 
+def _frame_side(contour, itab, ftab, q_at, u_at, offset_at):
+    """How a kernel gets the state of a frame contour (a point, a sphere, a plane): on a
+    point mass the kernel writes it from the global q, u (its rows into ``itab[q_at]``,
+    ``itab[u_at]``, the frame's offset ū0 into ``ftab[offset_at:+3]``); on the ground it
+    is constant (set here); on another body (a rigid body, a node of an FFR body) its
+    update writes it in Python before the kernel: returns (contour, q slice, u slice)
+    then, else None."""
+    body = contour.body
+    itab[q_at] = itab[u_at] = -1
+    if body is None:
+        contour.update(None, None, 0.0)
+        return None
+    if body.translation_only:
+        itab[q_at], itab[u_at] = body.q_slice.start, body.u_slice.start
+        ftab[offset_at:offset_at + 3] = contour.frame_ref.u0
+        return None
+    return contour, body.q_slice, body.u_slice
+
+
+def _python_updates(updates, q, u, t):
+    """``contour.update`` of each (contour, q slice, u slice) at the global (q, u, t); a
+    contour on the ground (slices None) at t."""
+    for contour, qs, us in updates:
+        if qs is None:
+            contour.update(None, None, t)
+        else:
+            contour.update(q[qs], u[us], t)
+
+
 class _FusedCentre:
     """What the fused detections of a centre (a point or a sphere on a point mass) on a
-    surface of a body at rest share: the tables' common entries (the layouts of
+    surface of a floating-frame body share: the tables' common entries (the layouts of
     :mod:`._fused_detection_kernels`), Newton's settings, and :meth:`locate` around the
-    kernel (:attr:`kernel` with the arguments :attr:`_args` after q and u). ``neutral``: the
-    neutral contour whose state the kernel writes (the surface, or a band's curve);
-    ``offset_floats``: an offset contour's law size [m], ξ domain and reach [m] (ftab)."""
+    kernel (:attr:`kernel` with the arguments :attr:`_args` after q and u), preceded on a
+    moving frame by the surface's update. ``neutral``: the neutral contour whose state the
+    kernel writes (the surface, or a band's curve); ``offset_floats``: an offset contour's
+    law size [m], ξ domain and reach [m] (ftab)."""
 
     kernel = None
 
     @staticmethod
     def _applies(contact, surface_ok, kinds=ON_SURFACE, search=Contact2sSearch) -> bool:
-        """A :class:`~contact.Contact` of a point or a sphere on a point mass (``kinds``:
-        {kinematics: side 1's contour}) against a contour for which ``surface_ok(contour)``
-        holds, on a body whose frame is fixed in space, searched by a compiled ``search``,
-        both bodies in a System."""
+        """A :class:`~contact.Contact` of a point or a sphere (``kinds``: {kinematics: side
+        1's contour}) against a contour for which ``surface_ok(contour)`` holds, on a
+        floating-frame body, searched by a compiled ``search``, the bodies in a System
+        (side 1 may be on the ground)."""
         if type(contact) is not Contact:
             return False
         k = contact.kinematics
@@ -93,10 +130,9 @@ class _FusedCentre:
             return False
         point, surface = k.contour1, k.contour2
         body1, body2 = point.body, surface.body
-        return (type(point) is side1 and body1 is not None and body1.translation_only and surface_ok(surface)
-                and body2 is not None and getattr(body2, "frame_at_rest", False)
+        return (type(point) is side1 and surface_ok(surface) and isinstance(body2, FloatingFrameBody)
                 and type(k.search) is search and k.search.compiled
-                and body1.q_slice is not None and body2.q_slice is not None)
+                and (body1 is None or body1.q_slice is not None) and body2.q_slice is not None)
 
     def __init__(self, contact, neutral, offset_floats=(0.0, 0.0, 0.0, 0.0)):
         self.contact = contact
@@ -105,19 +141,18 @@ class _FusedCentre:
         self.search, self.neutral = k.search, neutral
         self.velocity = not contact.set_valued
         self.closing_tol = contact.closing_tol
-        body1, body2 = point.body, surface.body
+        body2 = surface.body
         n_f = neutral.n_modes
         itab = np.zeros(K.ITAB_SIZE, dtype=np.int64)
-        itab[K.QP], itab[K.UP] = body1.q_slice.start, body1.u_slice.start
+        ftab = np.concatenate((np.zeros(K.BOX_AT), *neutral.rest_box, neutral.mode_box_growth.ravel()))
+        side1 = _frame_side(point, itab, ftab, K.QP, K.UP, K.OFFSET_AT)
         itab[K.QF] = body2.q_slice.start + body2.q_f_slice.start
         itab[K.UF] = body2.u_slice.start + body2.u_f_slice.start
         itab[K.NF], itab[K.NU1], itab[K.NU2] = n_f, point.nu, surface.nu
         itab[K.VELOCITY], itab[K.BOX] = self.velocity, contact.margin is not None
+        itab[K.FREE] = body2.is_free
         itab[K.KIN_AT:K.KIN_AT + 8] = buffer_layout(point.nu, surface.nu)
-        lo0, hi0 = neutral.rest_box
-        ftab = np.concatenate((np.zeros(K.BOX_AT), lo0, hi0, neutral.mode_box_growth.ravel()))
         ftab[K.MARGIN] = 0.0 if contact.margin is None else contact.margin
-        ftab[K.OFFSET_AT:K.OFFSET_AT + 3] = point.frame_ref.u0
         ftab[K.RADIUS] = k.radius
         ftab[K.FLOATS_AT:K.FLOATS_AT + 4] = offset_floats
         self._itab, self._ftab = itab, ftab
@@ -126,7 +161,13 @@ class _FusedCentre:
         self._points = (point.state, k.point1.buffer, k.point2.buffer, k.buffer, k.centre, k.axes1, k.start,
                         k.search.counts)
         self.sphere = k.radius > 0.0
-        self._updates = [(c, c.body.q_slice, c.body.u_slice) for c in (point, surface)]
+        self._updates = [(c, None, None) if c.body is None else (c, c.body.q_slice, c.body.u_slice)
+                         for c in (point, surface)]                        # the Python path's
+        self._before = [side for side, python in ((side1, side1 is not None),
+                                                  (self._updates[1], not body2.frame_at_rest)) if python]
+        # ^ updated in Python before the kernel: side 1 on a body other than a point mass, the
+        #   surface on a moving frame
+        self._free_T = ftab[K.FRAME_T_AT:K.FRAME_T_AT + 9].reshape(3, 3) if body2.is_free else None
 
     def _newton_settings(self):
         """Newton's step caps and tolerance from the search (NaN tolerance while its
@@ -142,6 +183,10 @@ class _FusedCentre:
         """Both contours updated at the global (q, u, t) and the contact located, as
         ``contour.update`` then :meth:`Contact.locate` (the Python path when the kernel
         falls back): True when closed (g_N <= closing_tol)."""
+        if self._before:
+            _python_updates(self._before, q, u, t)
+            if self._free_T is not None:
+                self._free_T[...] = self.neutral.T
         outcome, g_N, gd_N, eta, xi, eta1, xi1 = type(self).kernel(q, u, *self._args)
         self.neutral.kernel_updated(velocity=True)
         if outcome == K.LOCATED:
@@ -156,16 +201,17 @@ class _FusedCentre:
             return g_N <= self.closing_tol
         if outcome == K.APART:
             return False
-        for contour, qs, us in self._updates:
-            contour.update(q[qs], u[us], t)
+        _python_updates(self._updates, q, u, t)
         closed = self.contact.locate()
         if np.isnan(self._ftab[K.TOL2]):
             self._newton_settings()
         return closed
 
-    def probe(self) -> "Probe":
-        """A :class:`Probe` of this contact."""
-        return Probe(self)
+    def probe(self) -> "Probe | None":
+        """A :class:`Probe` of this contact; None when a contour is updated in Python (the
+        probe's copies of the states hold the frames of their construction: the contact
+        recorder then takes the Python path)."""
+        return None if self._before else Probe(self)
 
 
 def _copied(args):
@@ -213,7 +259,7 @@ class Probe:
 
 class CentreOnNeutral2s(_FusedCentre):
     """Stages 3 and 4 of a point or a sphere on a point mass against a neutral 2s contour
-    on a body at rest (module docstring) in one call of
+    on a floating-frame body (module docstring) in one call of
     :func:`._fused_detection_kernels.centre_on_neutral_2s`.
 
     Parameters
@@ -228,7 +274,7 @@ class CentreOnNeutral2s(_FusedCentre):
     @staticmethod
     def applies(contact) -> bool:
         """True for a point or a sphere on a point mass against a compiled neutral 2s
-        contour on a body at rest, not trimmed (a face with holes takes the Python path,
+        contour on a floating-frame body, not trimmed (a face with holes takes the Python path,
         whose search tests the trim) (:meth:`_FusedCentre._applies`)."""
         return _FusedCentre._applies(contact, lambda s: isinstance(s, Contour2sNeutralFactory) and s.compiled
                                      and s.trim is None)
@@ -243,15 +289,15 @@ class CentreOnNeutral2s(_FusedCentre):
 
 class CentreOnOffset(_FusedCentre):
     """Stages 3 and 4 of a point or a sphere on a point mass against a band or a cylinder
-    (:class:`~contours.derived.OffsetContour`) on a compiled 1s neutral curve of a body at
-    rest, in one call of :func:`._fused_detection_kernels.centre_on_offset`."""
+    (:class:`~contours.derived.OffsetContour`) on a compiled 1s neutral curve of a
+    floating-frame body, in one call of :func:`._fused_detection_kernels.centre_on_offset`."""
 
     kernel = K.centre_on_offset
 
     @staticmethod
     def applies(contact) -> bool:
         """True for a point or a sphere on a point mass against a compiled offset contour
-        on a compiled 1s neutral curve on a body at rest (:meth:`_FusedCentre._applies`)."""
+        on a compiled 1s neutral curve of a floating-frame body (:meth:`_FusedCentre._applies`)."""
         return _FusedCentre._applies(contact, lambda s: isinstance(s, OffsetContour) and s.compiled
                                      and isinstance(s.neutral, Contour1sNeutralFactory) and s.neutral.compiled)
 
@@ -268,14 +314,14 @@ class CentreOnOffset(_FusedCentre):
 
 class CentreOnNeutral1s(_FusedCentre):
     """Stages 3 and 4 of a point or a sphere on a point mass against a compiled neutral 1s
-    contour of a body at rest, in one call of :func:`._fused_detection_kernels.centre_on_neutral_1s`."""
+    contour of a floating-frame body, in one call of :func:`._fused_detection_kernels.centre_on_neutral_1s`."""
 
     kernel = K.centre_on_neutral_1s
 
     @staticmethod
     def applies(contact) -> bool:
         """True for a point or a sphere on a point mass against a compiled neutral 1s
-        contour on a body at rest (:meth:`_FusedCentre._applies`)."""
+        contour of a floating-frame body (:meth:`_FusedCentre._applies`)."""
         return _FusedCentre._applies(contact, lambda s: isinstance(s, Contour1sNeutralFactory) and s.compiled,
                                      ON_CURVE, Contact1sSearch)
 
@@ -316,18 +362,9 @@ class _FusedAnalytic:
         self.sphere = k.radius > 0.0
         itab = np.zeros(K.ITAB_SIZE, dtype=np.int64)
         ftab = np.zeros(K.BOX_AT)
-        self._updates = []          # (contour, q slice, u slice) of the frames on other bodies
-        for contour, (q_at, u_at, offset_at) in zip((k.contour1, k.contour2),
-                                                    ((K.QP, K.UP, K.OFFSET_AT), (K.Q2, K.U2, K.OFFSET2_AT))):
-            body = contour.body
-            itab[q_at] = itab[u_at] = -1
-            if body is None:
-                contour.update(None, None, 0.0)         # a ground frame: constant
-            elif body.translation_only:
-                itab[q_at], itab[u_at] = body.q_slice.start, body.u_slice.start
-                ftab[offset_at:offset_at + 3] = contour.frame_ref.u0
-            else:
-                self._updates.append((contour, body.q_slice, body.u_slice))
+        sides = (_frame_side(k.contour1, itab, ftab, K.QP, K.UP, K.OFFSET_AT),
+                 _frame_side(k.contour2, itab, ftab, K.Q2, K.U2, K.OFFSET2_AT))
+        self._before = [side for side in sides if side is not None]     # updated in Python first
         itab[K.NU1], itab[K.NU2] = k.contour1.nu, k.contour2.nu
         itab[K.VELOCITY], itab[K.BOX] = self.velocity, contact.margin is not None
         itab[K.KIN_AT:K.KIN_AT + 8] = buffer_layout(k.contour1.nu, k.contour2.nu)
@@ -341,8 +378,7 @@ class _FusedAnalytic:
         """Both contours at the global (q, u, t) and the contact located, as
         ``contour.update`` then :meth:`Contact.locate` do: True when closed
         (g_N <= closing_tol)."""
-        for contour, qs, us in self._updates:
-            contour.update(q[qs], u[us], t)
+        _python_updates(self._before, q, u, t)
         outcome, g_N, gd_N, eta, xi, eta1, xi1 = type(self).kernel(q, u, *self._args)
         k = self.kinematics
         if outcome != K.LOCATED:

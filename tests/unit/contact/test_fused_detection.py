@@ -7,19 +7,23 @@ outside the contour); the analytic pairs (a point or a sphere on a plane, two sp
 point masses, rigid bodies and the ground through random states; and the choice of the
 path per contact in the Model."""
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 
 from centre_scenes import centre_scene as _scene
 from contact import (Contact, ContactKinematicsPointPlane, LinearRegularizedUnilateralConstraint, UnilateralNewtonImpact,
                      connect)
-from contours import PlaneContour, PointContour, SphereContour
+from contours import (Contour1sNeutralFFR, Contour1sNeutralRigid, Contour2sNeutralFFR, Contour2sNeutralRigid,
+                      FlexibleBand, PlaneContour, PointContour, SphereContour)
 from contours.neutral import _kernels as NK
-from mbs import PointMass, RigidBody, System, ground_frame
+from mbs import FlexibleBodyFFR, PointMass, PrescribedFrameMotion, RigidBody, System, ground_frame
 from mbs.bodies.rotations import quat_from_rotvec, quat_to_matrix
 from mbs.run.fused_detection import (CentreOnNeutral1s, CentreOnNeutral2s, CentreOnOffset, CentreOnPlane,
                                      SphereOnSphere, fused_detection)
 from mbs.run.model import compile_model
+from validation.bench.common import moving_state
 
 
 def _python_locate(scene, q, u, t):
@@ -31,31 +35,35 @@ def _python_locate(scene, q, u, t):
     return contact.locate()
 
 
-def _states(scene, rng, n):
-    """n global states (q, u): the beam deformed at random (nodal displacements up to
-    ~1 mm) and the point (a sphere's surface) near a random point of the top surface —
-    above it, pressed into it, high above (apart), beyond its edge — with random
-    velocities; runs of small moves between jumps, so that Newton starts warm from the
-    last contact point."""
-    system, beam, mass = scene.system, scene.beam, scene.mass
+def _states(scene, rng, n, body_state=None):
+    """n global states (q, u, t): the surface's body at ``body_state(rng, k)`` = (q_b, u_b,
+    t) (default: the beam deformed at random, nodal displacements up to ~1 mm, random
+    rates, t = k ms) and the point (a sphere's surface) near a random point of the
+    surface — above it, pressed into it, high above (apart), beyond its edge — with
+    random velocities; runs of small moves between jumps, so that Newton starts warm
+    from the last contact point."""
+    system, mass = scene.system, scene.mass
     surface = scene.contact.kinematics.contour2
+    body = surface.body
     radius = scene.contact.kinematics.radius
     q0, u0 = system.initial_state()
     (a, b), (c, d) = surface.domain if surface.dim == 2 else (surface.domain, (0.0, 0.0))
-    scale = 1e-3 / np.abs(beam.phi_nodes).max() / beam.n_modes
+    if body_state is None:
+        scale = 1e-3 / np.abs(body.phi_nodes).max() / body.n_modes
+        body_state = lambda rng, k: (rng.normal(size=body.nq) * scale, rng.normal(size=body.nu),  # noqa: E731
+                                     1e-3 * k)
     states = []
     eta, xi = 0.5 * (a + b), 0.5 * (c + d)
     for k in range(n):
         q, u = q0.copy(), u0.copy()
-        q[beam.q_slice] = rng.normal(size=beam.nq) * scale
-        u[beam.u_slice] = rng.normal(size=beam.nu)
-        u[mass.u_slice] = rng.normal(size=3)
+        q[body.q_slice], u[body.u_slice], t = body_state(rng, k)
+        u[mass.u_slice] = rng.normal(size=mass.nu)
         if k % 5 == 0:                                  # a jump: a cold-ish start far from the last point
             eta, xi = rng.uniform(a, b), rng.uniform(c, d)
         else:                                           # a small move: warm start
             eta = min(b, max(a, eta + 0.01 * (b - a) * rng.normal()))
             xi = min(d, max(c, xi + 0.01 * (d - c) * rng.normal()))
-        surface.update(q[beam.q_slice], u[beam.u_slice])
+        surface.update(q[body.q_slice], u[body.u_slice], t)
         p = surface.evaluate(surface.new_point(), eta, xi)
         kind = rng.choice(["above", "pressed", "far", "beyond", "above", "pressed"])
         if kind == "above":
@@ -66,8 +74,8 @@ def _states(scene, rng, n):
             r = p.r + 1.0 * p.n
         else:
             r = p.r + (b - a) * p.t1 + 1e-3 * p.n
-        q[mass.q_slice] = r + radius * p.n - mass.point.u0
-        states.append((q, u, 1e-3 * k))
+        q[mass.q_slice][:3] = r + radius * p.n - scene.contact.kinematics.contour1.frame_ref.u0   # side 1 unturned
+        states.append((q, u, t))
     return states
 
 
@@ -128,6 +136,101 @@ def test_fused_detection_is_the_python_path(law, side, contour):
     assert 0 < len(fallbacks) < len(states) // 3          # mostly the kernel's own work
     search = python_scene.contact.kinematics.search
     assert search.coarse_searches > 1 and search.newton_solves > search.coarse_searches
+
+
+MOVING = {     # case: (the surface's body, contour kind, side 1)
+    "2s on a spinning beam, point": ("spinning", "2s", "point"),
+    "2s on a free beam, sphere": ("free", "2s", "sphere"),
+    "band on a free beam, point": ("free", "band", "point"),
+    "1s on a spinning beam, sphere": ("spinning", "1s", "sphere"),
+    "2s on a rigid body, point": ("rigid", "2s", "point"),
+    "1s on a rigid body, sphere": ("rigid", "1s", "sphere"),
+    "2s on a spinning beam, sphere on a rigid body": ("spinning", "2s", "rigid sphere"),
+    "band on a free beam, point on a rigid body": ("free", "band", "rigid point"),
+}
+
+
+def _moving_scene(data, case, law):
+    """A point mass's point or a sphere of 10 mm about it (or about a point of a rigid
+    body) against a contour of a moving body (:data:`MOVING`): the thesis beam's top face,
+    its band or its centre line on a frame spun up about z (ω = 20 rad/s after 10 ms) or
+    free, or a curved 2s or 1s contour on a rigid body."""
+    frame, kind, side = MOVING[case]
+    system = System()
+    if frame == "rigid":
+        body = system.add(RigidBody(2.0, np.diag([0.01, 0.02, 0.03]), name="block"))
+        x = np.linspace(-0.1, 0.1, 7)
+        if kind == "2s":
+            X, Y = np.meshgrid(x, x, indexing="ij")
+            surface = Contour2sNeutralRigid(body, np.stack((X, Y, 0.3 * (X ** 2 - Y ** 2)), axis=-1), outward=1)
+        else:
+            surface = Contour1sNeutralRigid(body, np.stack((x, 0.2 * x ** 2, 0 * x), axis=-1), normal=(0, 1, 0))
+    else:
+        motion = PrescribedFrameMotion.spin_up(20.0, 0.01) if frame == "spinning" else "free"
+        body = system.add(FlexibleBodyFFR(data, modes=8, frame=motion, name="beam"))
+        if kind == "2s":
+            surface = Contour2sNeutralFFR(body, "y1")
+        else:
+            surface = Contour1sNeutralFFR.along_line(body, (0.0, 0.05, 0.025), (1, 0, 0), normal=(0, 1, 0), degree=4)
+            if kind == "band":
+                surface = FlexibleBand(surface, width=0.05, offset=0.0)
+    if side.startswith("rigid"):
+        mass = system.add(RigidBody(0.5, np.diag([1e-3, 2e-3, 3e-3]), name="ball"))
+        at = mass.frame_at((0.01, -0.02, 0.005))
+    else:
+        mass = system.add(PointMass(0.5, name="mass"))
+        at = mass.point
+    point = PointContour(at) if side.endswith("point") else SphereContour(at, 0.01)
+    law = UnilateralNewtonImpact(0.0) if law == "impact" else LinearRegularizedUnilateralConstraint(1e4, 10.0)
+    contact = system.add(connect(point, surface, law, name=case))
+    return SimpleNamespace(system=system, mass=mass, contact=contact, body=body, frame=frame)
+
+
+def _moving_body_state(scene):
+    """body_state of :func:`_states` for the moving body of a :func:`_moving_scene`: a free
+    beam by :func:`validation.bench.common.moving_state`, a spinning one deformed at t up
+    to 50 ms, a rigid body turned and moving at random."""
+    body = scene.body
+    if scene.frame == "free":
+        return lambda rng, k: (*moving_state(body, rng, 1e-3), 1e-3 * k)
+    if scene.frame == "spinning":
+        scale = 1e-3 / np.abs(body.phi_nodes).max() / body.n_modes
+        return lambda rng, k: (rng.normal(size=body.nq) * scale, rng.normal(size=body.nu), rng.uniform(0.0, 0.05))
+    return lambda rng, k: (np.r_[0.1 * rng.normal(size=3), quat_from_rotvec(rng.normal(size=3))],
+                           rng.normal(size=6), 1e-3 * k)
+
+
+@pytest.mark.parametrize("law", ["impact", "penalty"])
+@pytest.mark.parametrize("case", list(MOVING))
+def test_fused_detection_on_a_moving_frame_is_the_python_path(thesis_beam_data, case, law):
+    """A surface on a moving body — a prescribed spin, a free frame (its J_T and J_R have
+    the frame's columns), a rigid body's neutral contour: the fused detection (the
+    surface's update in Python, the rest in the kernel) leaves what the Python path leaves,
+    through warm and cold starts, open, closed, apart and outside the contour."""
+    fused_scene, python_scene = _moving_scene(thesis_beam_data, case, law), _moving_scene(thesis_beam_data, case, law)
+    fused = fused_detection(fused_scene.contact)
+    kind = MOVING[case][1]
+    assert isinstance(fused, {"2s": CentreOnNeutral2s, "band": CentreOnOffset, "1s": CentreOnNeutral1s}[kind])
+    assert fused.probe() is None                       # the recorder takes the Python path on a moving frame
+    rng = np.random.default_rng(29)
+    outcomes = set()
+    fallbacks = []
+    python_locate = fused.contact.locate
+    fused.contact.locate = lambda: fallbacks.append(1) or python_locate()
+    states = _states(fused_scene, rng, 80, _moving_body_state(fused_scene))
+    for i, (q, u, t) in enumerate(states):
+        if i % 20 == 10:
+            for scene in (fused_scene, python_scene):
+                scene.contact.kinematics.start[:] = np.nan
+        closed_f = fused.locate(q, u, t)
+        closed_p = _python_locate(python_scene, q, u, t)
+        _assert_same(fused_scene, python_scene, closed_f, closed_p)
+        outcomes.add((closed_p, python_scene.contact.kinematics.active))
+    assert {(True, True), (False, True)} <= outcomes
+    assert len(fallbacks) < len(states) // 3           # mostly the kernel's own work
+    kp = python_scene.contact.kinematics
+    if MOVING[case][0] != "spinning":
+        assert np.abs(kp.point2.J_R).max() > 0.1          # a free frame's rotation columns took part
 
 
 def test_fused_contour_products_follow_the_state():
