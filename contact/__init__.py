@@ -16,7 +16,7 @@ Public API::
 
 from .contact import Contact, ContactElement, CurveConstraint, connect
 from .kinematics import (ContactKinematics, ContactKinematicsPointContour1s, ContactKinematicsPointContour2s,
-                         ContactKinematicsPointPlane, ContactKinematicsSphereContour1s,
+                         ContactKinematicsPointPlane, ContactKinematicsPointSphere, ContactKinematicsSphereContour1s,
                          ContactKinematicsSphereEdge,
                          ContactKinematicsSphereContour2s, ContactKinematicsSpherePlane,
                          ContactKinematicsSphereSphere, PointOnCurveConstraint)
@@ -28,6 +28,7 @@ from .solver import ContactSolution, ProxSolver
 
 __all__ = ["BILATERAL_KINEMATICS", "Bilateral", "Contact", "Contact1sSearch", "Contact2sSearch", "ContactElement", "ContactKinematics",
            "ContactKinematicsPointContour1s", "ContactKinematicsPointContour2s", "ContactKinematicsPointPlane",
+           "ContactKinematicsPointSphere",
            "ContactKinematicsSphereContour1s", "ContactKinematicsSphereContour2s", "ContactKinematicsSphereEdge", "ContactKinematicsSpherePlane",
            "ContactKinematicsSphereSphere", "ContactSolution", "CurveConstraint", "LAWS",
            "LinearRegularizedUnilateralConstraint", "PAIR_KINEMATICS", "PointOnCurveConstraint", "ProxSolver",

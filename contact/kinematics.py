@@ -371,16 +371,16 @@ class ContactKinematicsSpherePlane(_PlaneProjection):
         super().__init__(sphere, plane, nu_total)
 
 
-class ContactKinematicsSphereSphere(_CentreContact):
-    """Two spheres, analytic: n = (c1 − c2)/|c1 − c2| along the centre line,
-    g_N = |c1 − c2| − ρ1 − ρ2, C2 = c2 + ρ2 n, C1 = c1 − ρ1 n (eq. 3.4); T from sphere
-    2's frame at C2, ġ by eq. 3.8. Inactive when the centres coincide (no normal)."""
+class _SphereProjection(_CentreContact):
+    """Contour 2 a SphereContour, analytic: n = (c − c2)/|c − c2| along the line from its
+    centre c2 to the centre c of side 1, C2 = c2 + ρ2 n, g_N = |c − c2| − ρ2 − ρ (eq. 3.4);
+    T from sphere 2's frame at C2, ġ by eq. 3.8. Inactive when the centres coincide (no
+    normal). ``axes2``: sphere 2's axes at the last update."""
 
-    side1 = SphereContour
     run_state = _CentreContact.run_state + ("axes2",)
 
-    def __init__(self, sphere1, sphere2, nu_total=None):
-        super().__init__(sphere1, _require(sphere2, SphereContour, "a SphereContour"), nu_total)
+    def __init__(self, contour1, sphere2, nu_total):
+        super().__init__(contour1, _require(sphere2, SphereContour, "a SphereContour"), nu_total)
         self.axes2 = np.eye(3)
 
     def _project(self, c, velocity, jacobians):
@@ -392,6 +392,27 @@ class ContactKinematicsSphereSphere(_CentreContact):
             return False
         self.contour2.evaluate(p2, *sphere_angles(self.axes2, d / dist), velocity=velocity, jacobians=jacobians)
         return True
+
+
+class ContactKinematicsPointSphere(_SphereProjection):
+    """A point against a sphere, analytic (:class:`_SphereProjection` with ρ = 0):
+    g_N = |r_P − c2| − ρ2, C2 = c2 + ρ2 n, C1 the point."""
+
+    side1 = PointContour
+
+    def __init__(self, point, sphere, nu_total=None):
+        super().__init__(point, sphere, nu_total)
+
+
+class ContactKinematicsSphereSphere(_SphereProjection):
+    """Two spheres, analytic (:class:`_SphereProjection`): n = (c1 − c2)/|c1 − c2| along
+    the centre line, g_N = |c1 − c2| − ρ1 − ρ2, C2 = c2 + ρ2 n, C1 = c1 − ρ1 n (eq. 3.4);
+    T from sphere 2's frame at C2, ġ by eq. 3.8. Inactive when the centres coincide."""
+
+    side1 = SphereContour
+
+    def __init__(self, sphere1, sphere2, nu_total=None):
+        super().__init__(sphere1, sphere2, nu_total)
 
 
 class PointOnCurveConstraint(ContactKinematicsPointContour1s):
@@ -427,7 +448,7 @@ class PointOnCurveConstraint(ContactKinematicsPointContour1s):
     def W(self, out=None):
         """W (nu_total, 2) into ``out`` (zero outside the bodies' slices); ġ = Wᵀ u."""
         out = np.zeros((self.nu_total, 2)) if out is None else out
-        out[:] = 0.0
+        out.fill(0.0)               # (assigning a scalar to a strided view allocates a buffer)
         for s, w_N, w_T in self.local_blocks():
             out[s, 0] += w_N
             out[s, 1] += w_T[:, 1]

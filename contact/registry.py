@@ -19,7 +19,7 @@ from ffrmbs.errors import ModelError
 from ffrmbs.registry import Registry
 
 from .kinematics import (ContactKinematicsPointContour1s, ContactKinematicsPointContour2s,
-                         ContactKinematicsPointPlane, ContactKinematicsSphereContour1s,
+                         ContactKinematicsPointPlane, ContactKinematicsPointSphere, ContactKinematicsSphereContour1s,
                          ContactKinematicsSphereEdge,
                          ContactKinematicsSphereContour2s, ContactKinematicsSpherePlane,
                          ContactKinematicsSphereSphere, PointOnCurveConstraint)
@@ -33,7 +33,7 @@ LAWS.register("penalty", LinearRegularizedUnilateralConstraint)     # single-val
 LAWS.register("bilateral", Bilateral)                               # a point kept on a curve
 
 PAIR_KINEMATICS = Registry("contour pair")
-for _surface in ("2s", "band", "cylinder", "sphere", "2s-rigid"):
+for _surface in ("2s", "band", "cylinder", "2s-rigid"):
     PAIR_KINEMATICS.register(("point", _surface), ContactKinematicsPointContour2s)
 for _surface in ("2s", "band", "cylinder", "2s-rigid"):
     PAIR_KINEMATICS.register(("sphere", _surface), ContactKinematicsSphereContour2s)
@@ -43,6 +43,7 @@ for _curve in ("1s", "1s-rigid"):
 PAIR_KINEMATICS.register(("sphere", "edge"), ContactKinematicsSphereEdge)   # a ball on a sharp edge (a rim)
 PAIR_KINEMATICS.register(("point", "plane"), ContactKinematicsPointPlane)
 PAIR_KINEMATICS.register(("sphere", "plane"), ContactKinematicsSpherePlane)
+PAIR_KINEMATICS.register(("point", "sphere"), ContactKinematicsPointSphere)
 PAIR_KINEMATICS.register(("sphere", "sphere"), ContactKinematicsSphereSphere)
 
 BILATERAL_KINEMATICS = Registry("bilateral contour pair")

@@ -39,8 +39,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from contact._detection_kernels import (boxes_overlap, frame_rates_jacobians, newton_1s, newton_2s, newton_offset,
-                                       normal_gap)
+from contact._detection_kernels import (boxes_overlap, edge_frame, frame_rates_jacobians, newton_1s, newton_2s,
+                                       newton_offset, normal_gap)
 from contact.search import LAST_ITERATIONS, NEWTON_ITERATIONS, NEWTON_SOLVES
 from contours import rigid
 from contours._offset_kernels import evaluate_offset, offsets
@@ -58,10 +58,11 @@ APART, LOCATED, FALLBACK, NO_POINT = 0, 1, 2, 3   # outcomes of a fused detectio
 # itab: the point's rows of q and u, the body's q_f and q̇_f rows, n_f, nu of the two
 # bodies, velocity wanted (0/1), broad phase on (0/1), Newton iterations, an offset
 # contour's offset law (contours._offset_kernels.offsets) and whether its ξ is closed,
-# whether the surface's body has a free frame (0/1), the offsets of the kinematics buffer
+# whether the surface's body has a free frame (0/1), whether a curve is a sharp edge (0/1:
+# the normal from the curve to the centre), the offsets of the kinematics buffer
 # (contact.kinematics.buffer_layout, 8). The surface's
 # own kernel data (knots, ints, floats, control points, state, span cache) are arguments.
-QP, UP, QF, UF, NF, NU1, NU2, VELOCITY, BOX, MAX_ITER, LAW, XI_CLOSED, FREE, KIN_AT = range(14)
+QP, UP, QF, UF, NF, NU1, NU2, VELOCITY, BOX, MAX_ITER, LAW, XI_CLOSED, FREE, EDGE, KIN_AT = range(15)
 ITAB_SIZE = KIN_AT + 8
 Q2, U2 = QF, UF     # the analytic pairs (plane, sphere–sphere): side 2's point-mass rows (−1: not a point mass)
 # ftab: margin [m], tol2 [m²] (NaN until the search knows its length scale), the largest
@@ -310,7 +311,9 @@ def centre_on_neutral_1s(q, u, itab, ftab, knots, ints, floats, ctrl0, phi, stat
     (:func:`~contact._detection_kernels.newton_1s`, the search's work arrays
     ``newton_work`` = B, local, D, g), C2 by :func:`~contours.neutral._kernels.evaluate_1s`
     at the root (the contour's work arrays ``contour_work`` = B, ū rows, Φ rows) with
-    J_T, J_R. Returns as :func:`centre_on_neutral_2s` (C2's ξ = 0)."""
+    J_T, J_R; on a sharp edge (``itab[EDGE]``) the frame of
+    :func:`~contact._detection_kernels.edge_frame` (NO_POINT when the centre lies on the
+    curve). Returns as :func:`centre_on_neutral_2s` (C2's ξ = 0)."""
     nan = np.nan
     n_f = itab[NF]
     if not _begin(q, u, itab, ftab, ftab[BOX_AT:BOX_AT + 6 + 3 * n_f], 0.0, state, frame1, point1, centre, axes1,
@@ -326,9 +329,11 @@ def centre_on_neutral_1s(q, u, itab, ftab, knots, ints, floats, ctrl0, phi, stat
     _count(counts, k, steps)
     start[0] = eta
     B, local, phi_rows = contour_work
+    D2, F2 = point2[DERIVS_AT:FRAME_AT].reshape(6, 3), point2[FRAME_AT:V_AT].reshape(3, 3)
     evaluate_1s(eta, knots, ints, floats, ctrl0, phi, state, span, n_ref, np.bool_(True), itab[VELOCITY] != 0, B,
-                local, phi_rows, point2[DERIVS_AT:FRAME_AT].reshape(6, 3), point2[FRAME_AT:V_AT].reshape(3, 3),
-                point2[V_AT:J_AT])
+                local, phi_rows, D2, F2, point2[V_AT:J_AT])
+    if itab[EDGE] != 0 and not edge_frame(F2, centre, D2):
+        return NO_POINT, nan, nan, nan, nan, nan, nan
     _jacobian(itab, ftab, state, local[0], phi_rows[0], point2)
     g_N, gd_N, eta1, xi1 = _finish(itab, ftab, frame1, point1, point2, kin, centre, axes1, work)
     return LOCATED, g_N, gd_N, eta, 0.0, eta1, xi1
@@ -355,7 +360,8 @@ def centre_on_plane(q, u, itab, ftab, frame1, plane, point1, point2, kin, centre
 
 @njit(cache=True)
 def sphere_on_sphere(q, u, itab, ftab, frame1, frame2, point1, point2, kin, centre, axes1, axes2, work):
-    """Stages 3 and 4 of two spheres (analytic) at the global (q, u): the frame states as
+    """Stages 3 and 4 of a sphere (or a point: ρ1 = 0) against a sphere (analytic) at the
+    global (q, u): the frame states as
     :func:`centre_on_plane`; broad phase (with ``itab[BOX]``) on the spheres' boxes;
     n = (c1 − c2)/|c1 − c2|, C2 = c2 + ρ2 n at sphere 2's coordinates of n
     (:func:`~contours._rigid_kernels.sphere_point`, its axes into ``axes2``), then g_N,
@@ -389,3 +395,12 @@ def sphere_on_sphere(q, u, itab, ftab, frame1, frame2, point1, point2, kin, cent
     sphere_point(frame2, radius2, eta, xi, velocity, np.bool_(True), point2)
     g_N, gd_N, eta1, xi1 = _finish(itab, ftab, frame1, point1, point2, kin, centre, axes1, work)
     return LOCATED, g_N, gd_N, eta, xi, eta1, xi1
+
+
+@njit(cache=True)
+def normal_plane_offset(itab, kin, point1, point2):
+    """t2ᵀ (r_C1 − r_C2) [m]: a point kept on a curve's offset along the curve frame's t2
+    (:class:`~contact.kinematics.PointOnCurveConstraint`), from the located kinematics."""
+    T = kin[itab[KIN_AT + 1]:itab[KIN_AT + 2]]           # T (3, 2) row-major: t2 is column 1
+    return (T[1] * (point1[DERIVS_AT] - point2[DERIVS_AT]) + T[3] * (point1[DERIVS_AT + 1] - point2[DERIVS_AT + 1])
+            + T[5] * (point1[DERIVS_AT + 2] - point2[DERIVS_AT + 2]))

@@ -23,11 +23,14 @@ Kinds with a fused detection:
 * :class:`CentreOnOffset`: the same against a band or a cylinder
   (:class:`~contours.derived.OffsetContour`) on a compiled 1s neutral curve;
 * :class:`CentreOnNeutral1s`: the same against a compiled neutral 1s contour (a curve),
-  ``ContactKinematicsPointContour1s`` or ``ContactKinematicsSphereContour1s`` with a
-  compiled ``Contact1sSearch``;
+  ``ContactKinematicsPointContour1s``, ``ContactKinematicsSphereContour1s`` or
+  ``ContactKinematicsSphereEdge`` (a sharp edge, a hole's rim) with a compiled
+  ``Contact1sSearch``; :class:`PointKeptOnCurve`: a point kept on such a curve
+  (a bilateral :class:`~contact.CurveConstraint`);
 * :class:`CentreOnPlane`: a point or a sphere against a plane
   (``ContactKinematicsPointPlane``, ``ContactKinematicsSpherePlane``) and
-  :class:`SphereOnSphere`: two spheres (``ContactKinematicsSphereSphere``) — analytic,
+  :class:`SphereOnSphere`: a point or a sphere against a sphere
+  (``ContactKinematicsPointSphere``, ``ContactKinematicsSphereSphere``) — analytic,
   no search, so they never fall back.
 
 The kernel writes the state of a point mass's frame itself; a ground frame's is
@@ -46,11 +49,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from contact.contact import Contact
+from contact.contact import Contact, CurveConstraint
 from contact.kinematics import (ContactKinematicsPointContour1s, ContactKinematicsPointContour2s,
-                                ContactKinematicsPointPlane, ContactKinematicsSphereContour1s,
-                                ContactKinematicsSphereContour2s, ContactKinematicsSpherePlane,
-                                ContactKinematicsSphereSphere, buffer_layout)
+                                ContactKinematicsPointPlane, ContactKinematicsPointSphere,
+                                ContactKinematicsSphereContour1s, ContactKinematicsSphereContour2s,
+                                ContactKinematicsSphereEdge,
+                                ContactKinematicsSpherePlane, ContactKinematicsSphereSphere, PointOnCurveConstraint,
+                                buffer_layout)
 from contact.search import Contact1sSearch, Contact2sSearch
 from contours.derived import OffsetContour
 from contours.neutral.factory import Contour1sNeutralFactory, Contour2sNeutralFactory
@@ -62,17 +67,19 @@ from mbs.run import _fused_detection_kernels as K
 
 def fused_detection(contact):
     """The fused detection of ``contact`` (:class:`CentreOnNeutral2s`,
-    :class:`CentreOnOffset`, :class:`CentreOnNeutral1s`, :class:`CentreOnPlane`,
-    :class:`SphereOnSphere`) when its kind has one and its bodies belong to a System,
-    else None (the Python path)."""
-    for kind in (CentreOnNeutral2s, CentreOnOffset, CentreOnNeutral1s, CentreOnPlane, SphereOnSphere):
+    :class:`CentreOnOffset`, :class:`CentreOnNeutral1s`, :class:`PointKeptOnCurve`,
+    :class:`CentreOnPlane`, :class:`SphereOnSphere`) when its kind has one and its bodies
+    belong to a System, else None (the Python path)."""
+    for kind in (CentreOnNeutral2s, CentreOnOffset, CentreOnNeutral1s, PointKeptOnCurve, CentreOnPlane,
+                 SphereOnSphere):
         if kind.applies(contact):
             return kind(contact)
     return None
 
 
 ON_SURFACE = {ContactKinematicsPointContour2s: PointContour, ContactKinematicsSphereContour2s: SphereContour}
-ON_CURVE = {ContactKinematicsPointContour1s: PointContour, ContactKinematicsSphereContour1s: SphereContour}
+ON_CURVE = {ContactKinematicsPointContour1s: PointContour, ContactKinematicsSphereContour1s: SphereContour,
+            ContactKinematicsSphereEdge: SphereContour}
 # ^ the kinematics of a centre searched on a 2s contour / a curve and the contour of its side 1
 
 
@@ -117,12 +124,12 @@ class _FusedCentre:
     kernel = None
 
     @staticmethod
-    def _applies(contact, surface_ok, kinds=ON_SURFACE, search=Contact2sSearch) -> bool:
-        """A :class:`~contact.Contact` of a point or a sphere (``kinds``: {kinematics: side
-        1's contour}) against a contour for which ``surface_ok(contour)`` holds, on a
-        floating-frame body, searched by a compiled ``search``, the bodies in a System
-        (side 1 may be on the ground)."""
-        if type(contact) is not Contact:
+    def _applies(contact, surface_ok, kinds=ON_SURFACE, search=Contact2sSearch, element=Contact) -> bool:
+        """A contact (an ``element``, default :class:`~contact.Contact`) of a point or a
+        sphere (``kinds``: {kinematics: side 1's contour}) against a contour for which
+        ``surface_ok(contour)`` holds, on a floating-frame body, searched by a compiled
+        ``search``, the bodies in a System (side 1 may be on the ground)."""
+        if type(contact) is not element:
             return False
         k = contact.kinematics
         side1 = kinds.get(type(k))
@@ -140,7 +147,8 @@ class _FusedCentre:
         point, surface = k.contour1, k.contour2
         self.search, self.neutral = k.search, neutral
         self.velocity = not contact.set_valued
-        self.closing_tol = contact.closing_tol
+        self.closing_tol = getattr(contact, "closing_tol", np.inf)      # a point kept on a curve: always closed
+        margin = getattr(contact, "margin", None)
         body2 = surface.body
         n_f = neutral.n_modes
         itab = np.zeros(K.ITAB_SIZE, dtype=np.int64)
@@ -149,10 +157,11 @@ class _FusedCentre:
         itab[K.QF] = body2.q_slice.start + body2.q_f_slice.start
         itab[K.UF] = body2.u_slice.start + body2.u_f_slice.start
         itab[K.NF], itab[K.NU1], itab[K.NU2] = n_f, point.nu, surface.nu
-        itab[K.VELOCITY], itab[K.BOX] = self.velocity, contact.margin is not None
+        itab[K.VELOCITY], itab[K.BOX] = self.velocity, margin is not None
         itab[K.FREE] = body2.is_free
+        itab[K.EDGE] = type(k) is ContactKinematicsSphereEdge
         itab[K.KIN_AT:K.KIN_AT + 8] = buffer_layout(point.nu, surface.nu)
-        ftab[K.MARGIN] = 0.0 if contact.margin is None else contact.margin
+        ftab[K.MARGIN] = 0.0 if margin is None else margin
         ftab[K.RADIUS] = k.radius
         ftab[K.FLOATS_AT:K.FLOATS_AT + 4] = offset_floats
         self._itab, self._ftab = itab, ftab
@@ -198,14 +207,21 @@ class _FusedCentre:
             k.point2.eta, k.point2.xi = eta, xi
             if self.sphere:
                 k.point1.eta, k.point1.xi = eta1, xi1
-            return g_N <= self.closing_tol
+            return self._located(g_N)
         if outcome == K.APART:
+            return False
+        if outcome == K.NO_POINT:
+            self.kinematics.active = False
             return False
         _python_updates(self._updates, q, u, t)
         closed = self.contact.locate()
         if np.isnan(self._ftab[K.TOL2]):
             self._newton_settings()
         return closed
+
+    def _located(self, g_N) -> bool:
+        """Closed when g_N [m] <= closing_tol, once the kernel located the contact."""
+        return g_N <= self.closing_tol
 
     def probe(self) -> "Probe | None":
         """A :class:`Probe` of this contact; None when a contour is updated in Python (the
@@ -332,6 +348,32 @@ class CentreOnNeutral1s(_FusedCentre):
                       *self._points, self._work, self.search.newton_work, curve.evaluate_work)
 
 
+class PointKeptOnCurve(CentreOnNeutral1s):
+    """A point kept on a compiled neutral 1s contour (:class:`~contact.CurveConstraint`,
+    bilateral: :class:`~contact.kinematics.PointOnCurveConstraint`) located as
+    :class:`CentreOnNeutral1s` locates a point, its gaps g = (g_N, t2ᵀ (r_P − r_C2))
+    (:func:`._fused_detection_kernels.normal_plane_offset`) filled as its ``update`` fills
+    them; always closed (the Python path says when the point left the curve)."""
+
+    @staticmethod
+    def applies(contact) -> bool:
+        """True for a :class:`~contact.CurveConstraint` of a point against a compiled
+        neutral 1s contour of a floating-frame body (:meth:`_FusedCentre._applies`)."""
+        return _FusedCentre._applies(contact, lambda s: isinstance(s, Contour1sNeutralFactory) and s.compiled,
+                                     {PointOnCurveConstraint: PointContour}, Contact1sSearch, CurveConstraint)
+
+    def __init__(self, contact):
+        super().__init__(contact)
+        k = self.kinematics
+        self._gap_args = (self._itab, k.buffer, k.point1.buffer, k.point2.buffer)
+
+    def _located(self, g_N) -> bool:
+        g = self.kinematics.g
+        g[0] = g_N
+        g[1] = K.normal_plane_offset(*self._gap_args)
+        return True
+
+
 class _FusedAnalytic:
     """What the fused detections of the analytic pairs share (:class:`CentreOnPlane`,
     :class:`SphereOnSphere`): :meth:`applies` by the kinematics' type and the contours'
@@ -417,11 +459,12 @@ class CentreOnPlane(_FusedAnalytic):
 
 
 class SphereOnSphere(_FusedAnalytic):
-    """Stages 3 and 4 of two spheres in one call of
+    """Stages 3 and 4 of a point or a sphere against a sphere in one call of
     :func:`._fused_detection_kernels.sphere_on_sphere` (module docstring)."""
 
     kernel = K.sphere_on_sphere
-    kinds = {ContactKinematicsSphereSphere: (SphereContour, SphereContour)}
+    kinds = {ContactKinematicsPointSphere: (PointContour, SphereContour),
+             ContactKinematicsSphereSphere: (SphereContour, SphereContour)}
 
     def __init__(self, contact):
         super().__init__(contact)

@@ -135,7 +135,7 @@ def test_connect_picks_the_kinematics_of_the_contour_kinds():
     assert type(c) is Contact and type(c.kinematics) is contact.ContactKinematicsSpherePlane
     assert c.law == contact.UnilateralNewtonImpact() and c.name == "ball"
     c = connect(PointContour(bob.point), SphereContour(ball.origin, 0.1), contact.UnilateralNewtonImpact(0.5))
-    assert type(c.kinematics) is contact.ContactKinematicsPointContour2s and c.law.e == 0.5
+    assert type(c.kinematics) is contact.ContactKinematicsPointSphere and c.law.e == 0.5
     grid = np.stack(np.meshgrid(np.linspace(-1, 1, 4), np.linspace(-1, 1, 4), indexing="ij"), axis=-1)
     surface = Contour2sNeutralRigid(ball, np.concatenate((grid, np.zeros((4, 4, 1))), axis=-1), outward=1)
     c = connect(PointContour(bob.point), surface, "impact")

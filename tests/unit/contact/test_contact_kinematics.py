@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from contact.kinematics import (ContactKinematicsPointContour1s, ContactKinematicsPointContour2s,
-                                ContactKinematicsPointPlane, ContactKinematicsSphereContour1s,
+                                ContactKinematicsPointPlane, ContactKinematicsPointSphere,
+                                ContactKinematicsSphereContour1s,
                                 ContactKinematicsSphereContour2s, ContactKinematicsSpherePlane,
                                 ContactKinematicsSphereSphere, PointOnCurveConstraint)
 from contact.search import Contact1sSearch, Contact2sSearch
@@ -205,6 +206,29 @@ def test_sphere_against_sphere(world):
     assert np.allclose(W_N[mass.u_slice], -n, atol=1e-15) and np.allclose(W_N[ball.u_slice], J1.T @ n)
     check_derivatives(world, kin, q, u)
 
+
+
+def test_point_against_a_sphere(world):
+    """n along the line from the sphere's centre c to the point p, g_N = |p − c| − ρ,
+    C2 = c + ρ n, ġ = Wᵀ u; inactive with the point on the centre."""
+    q, u = world.state(4)
+    world.place(world.mass, q, world.ball_dot.frame_ref.position(q[world.ball.q_slice]) + [0.01, 0.025, -0.02])
+    world.set(q, u)
+    kin = ContactKinematicsPointSphere(world.dot, world.ball_sphere)
+    assert kin.update()
+    ball = world.ball
+    c = q[ball.q_slice][:3] + quat_to_matrix(q[ball.q_slice][3:7]) @ S_BALL
+    d = q[world.mass.q_slice] - c
+    n = d / np.linalg.norm(d)
+    assert np.isclose(kin.g_N, np.linalg.norm(d) - 0.03, atol=1e-15) and np.allclose(kin.n, n, atol=1e-15)
+    assert np.allclose(kin.point2.r, c + 0.03 * n, atol=1e-15) and np.allclose(kin.point1.r, q[world.mass.q_slice])
+    J2 = rigid_J_T(ball, q, c + 0.03 * n)
+    dv = u[world.mass.u_slice] - J2 @ u[ball.u_slice]
+    assert np.isclose(kin.gd_N, n @ dv, atol=1e-13) and np.allclose(kin.gd_T, kin.T.T @ dv, atol=1e-13)
+    check_derivatives(world, kin, q, u)
+    world.place(world.mass, q, c)
+    world.set(q, u)
+    assert not kin.update() and not kin.active
 
 # --- searched contacts on the beam ------------------------------------------------------
 

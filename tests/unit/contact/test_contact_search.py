@@ -241,9 +241,9 @@ def test_the_box_test_of_a_contact():
     assert boxes_overlap(plane, apart + 100.0, 0.0) and boxes_overlap(apart, plane, 1.0)
 
 
-def test_a_contact_searches_only_when_the_boxes_overlap():
-    """Contact.locate searches a pair only when the contours' boxes, grown by the margin,
-    overlap (else no coarse search, no Newton step, the gap stays NaN), and then finds the
+def test_a_contact_locates_only_when_the_boxes_overlap():
+    """Contact.locate locates a pair only when the contours' boxes, grown by the margin,
+    overlap (else the kinematics are not updated: the gap stays NaN), and then finds the
     analytic gap: |p − c| − ρ of a point p and a sphere (c, ρ), the height above a floor."""
     from contact import UnilateralNewtonImpact, connect
 
@@ -251,25 +251,23 @@ def test_a_contact_searches_only_when_the_boxes_overlap():
     floor = PlaneContour(ground_frame())
 
     def located(position, contour, margin):
-        """(searches made, g_N [m]) of one locate of a point at ``position``."""
+        """(located, g_N [m]) of one locate of a point at ``position``."""
         point = PointContour(PointMass(1.0, position=position).point)
         contact = connect(point, contour, UnilateralNewtonImpact(0.0), margin=margin)
         contact.locate()
-        k = contact.kinematics
-        search = getattr(k, "search", None)
-        return (search.coarse_searches + search.newton_solves if search else None), k.g_N
+        return contact.kinematics.active, contact.kinematics.g_N
 
-    searches, g_N = located((0.025, 0.025, 0.05), ball, 0.0)          # inside the ball's box
-    assert searches > 0 and g_N == pytest.approx(np.sqrt(2) * 0.025 - 0.03, abs=1e-12)
-    searches, g_N = located((5.0, 0.0, 0.0), ball, 0.0)               # far apart
-    assert searches == 0 and np.isnan(g_N)
+    found, g_N = located((0.025, 0.025, 0.05), ball, 0.0)          # inside the ball's box
+    assert found and g_N == pytest.approx(np.sqrt(2) * 0.025 - 0.03, abs=1e-12)
+    found, g_N = located((5.0, 0.0, 0.0), ball, 0.0)               # far apart
+    assert not found and np.isnan(g_N)
     assert located((5.0, 0.0, 0.0), floor, 0.0)[1] == 0.0             # the plane's box is infinite
     below = (0.01, 0.0, 0.012)                                        # 8 mm below the box
     for margin in (0.0, 0.0039):                                      # the boxes grown by 2 x margin
-        searches, g_N = located(below, ball, margin)
-        assert searches == 0 and np.isnan(g_N)
-    searches, g_N = located(below, ball, 0.005)                       # ... by 2 x 5 mm
-    assert searches > 0 and g_N == pytest.approx(np.hypot(0.01, 0.038) - 0.03, abs=1e-12)
+        found, g_N = located(below, ball, margin)
+        assert not found and np.isnan(g_N)
+    found, g_N = located(below, ball, 0.005)                       # ... by 2 x 5 mm
+    assert found and g_N == pytest.approx(np.hypot(0.01, 0.038) - 0.03, abs=1e-12)
 
 
 def test_contact_searches_only_pairs_the_broad_phase_keeps():

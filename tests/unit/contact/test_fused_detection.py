@@ -3,25 +3,27 @@
 default scene (its point, or a sphere on the same point mass; its 2s contour, its band, or
 a curve along the top face's centre line) driven through the same
 random deformed states (warm and cold starts, open, closed, apart by the broad phase,
-outside the contour); the analytic pairs (a point or a sphere on a plane, two spheres) on
+outside the contour); the analytic pairs (a point or a sphere on a plane or a sphere) on
 point masses, rigid bodies and the ground through random states; and the choice of the
 path per contact in the Model."""
 
+import dataclasses
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 from centre_scenes import centre_scene as _scene
-from contact import (Contact, ContactKinematicsPointPlane, LinearRegularizedUnilateralConstraint, UnilateralNewtonImpact,
-                     connect)
+from contact import (Contact, ContactKinematicsPointPlane, CurveConstraint,
+                     LinearRegularizedUnilateralConstraint, PointOnCurveConstraint, UnilateralNewtonImpact, connect)
 from contours import (Contour1sNeutralFFR, Contour1sNeutralRigid, Contour2sNeutralFFR, Contour2sNeutralRigid,
                       FlexibleBand, PlaneContour, PointContour, SphereContour)
 from contours.neutral import _kernels as NK
 from mbs import FlexibleBodyFFR, PointMass, PrescribedFrameMotion, RigidBody, System, ground_frame
 from mbs.bodies.rotations import quat_from_rotvec, quat_to_matrix
+from ffrmbs.errors import ModelError
 from mbs.run.fused_detection import (CentreOnNeutral1s, CentreOnNeutral2s, CentreOnOffset, CentreOnPlane,
-                                     SphereOnSphere, fused_detection)
+                                     PointKeptOnCurve, SphereOnSphere, fused_detection)
 from mbs.run.model import compile_model
 from validation.bench.common import moving_state
 
@@ -108,7 +110,8 @@ def _assert_same(fused_scene, python_scene, closed_f, closed_p):
 @pytest.mark.parametrize("law, side, contour", [("impact", "point", "2s"), ("penalty", "point", "2s"),
                                                 ("impact", "sphere", "2s"), ("penalty", "sphere", "2s"),
                                                 ("penalty", "point", "band"), ("impact", "sphere", "band"),
-                                                ("impact", "point", "1s"), ("penalty", "sphere", "1s")])
+                                                ("impact", "point", "1s"), ("penalty", "sphere", "1s"),
+                                                ("penalty", "sphere", "edge")])
 def test_fused_detection_is_the_python_path(law, side, contour):
     """Warm and cold starts (a warm start dropped now and then, as a search that found
     nothing leaves it), open, closed, apart and outside the contour: the fused path
@@ -117,7 +120,8 @@ def test_fused_detection_is_the_python_path(law, side, contour):
     says closed when it does."""
     fused_scene, python_scene = _scene(law, side, contour), _scene(law, side, contour)
     fused = fused_detection(fused_scene.contact)
-    assert isinstance(fused, {"2s": CentreOnNeutral2s, "band": CentreOnOffset, "1s": CentreOnNeutral1s}[contour])
+    assert isinstance(fused, {"2s": CentreOnNeutral2s, "band": CentreOnOffset, "1s": CentreOnNeutral1s,
+                              "edge": CentreOnNeutral1s}[contour])
     rng = np.random.default_rng(19)
     outcomes = set()
     fallbacks = []
@@ -233,6 +237,41 @@ def test_fused_detection_on_a_moving_frame_is_the_python_path(thesis_beam_data, 
         assert np.abs(kp.point2.J_R).max() > 0.1          # a free frame's rotation columns took part
 
 
+def test_fused_detection_of_a_point_kept_on_a_curve_is_the_python_path():
+    """A point kept on a curve (a bilateral CurveConstraint: the default scene's point on
+    the top face's centre line): the fused detection leaves the kinematics and the gaps g
+    that the Python path leaves, and the point beyond the curve's end is the Python
+    path's error."""
+    scenes = []
+    for _ in range(2):
+        scene = _scene("impact", "point", "1s")
+        k = scene.contact.kinematics
+        element = CurveConstraint(PointOnCurveConstraint(k.contour1, k.contour2), name="kept on the curve")
+        contacts = scene.system.contacts
+        contacts[contacts.index(scene.contact)] = element
+        scenes.append(dataclasses.replace(scene, contact=element))
+    fused_scene, python_scene = scenes
+    fused = fused_detection(fused_scene.contact)
+    assert type(fused) is PointKeptOnCurve
+    left = 0
+    for i, (q, u, t) in enumerate(_states(fused_scene, np.random.default_rng(31), 100)):
+        if i % 20 == 10:
+            for scene in scenes:
+                scene.contact.kinematics.start[:] = np.nan
+        try:
+            closed_f = fused.locate(q, u, t)
+        except ModelError as fault:
+            with pytest.raises(ModelError, match=str(fault)):
+                _python_locate(python_scene, q, u, t)
+            left += 1
+            continue
+        assert closed_f and _python_locate(python_scene, q, u, t)
+        _assert_same(fused_scene, python_scene, closed_f, True)
+        np.testing.assert_allclose(fused_scene.contact.kinematics.g, python_scene.contact.kinematics.g,
+                                   rtol=1e-12, atol=1e-18)
+    assert left > 0                                   # a point beyond the curve's end left it
+
+
 def test_fused_contour_products_follow_the_state():
     """The neutral contour's control-point products, synced on demand, follow a state the
     fused kernel wrote (its stamp): the position field equals the Python path's."""
@@ -248,8 +287,9 @@ def test_fused_contour_products_follow_the_state():
 
 def test_the_model_fuses_the_pairs_that_have_a_kernel():
     """The default scene's contact (2s or band) and a point on a plane have a fused
-    detection and their contours are left to it by the contour stage; a point searched on
-    a sphere's surface keeps the Python path (the contour stage updates both its contours)."""
+    detection and their contours are left to it by the contour stage; a point on a rigid
+    body's 2s contour built for the reference route (``compiled=False``) keeps the Python
+    path (the contour stage updates both its contours)."""
     for contour, kind in (("2s", CentreOnNeutral2s), ("band", CentreOnOffset)):
         scene = _scene("impact", contour=contour)
         model = compile_model(scene.system, scene.system.plan(0.01))
@@ -262,10 +302,14 @@ def test_the_model_fuses_the_pairs_that_have_a_kernel():
     model = compile_model(system, system.plan(0.01))
     assert isinstance(model.fused[0], CentreOnPlane)
     assert model.owners.size == 0 and len(model.contours) == 2
-    system.add(connect(PointContour(mass.point), SphereContour(ground_frame((0.0, 0.0, -1.0)), 0.5), "impact"))
+    table = system.add(RigidBody(1.0, np.eye(3), name="table"))
+    x = np.linspace(-0.1, 0.1, 5)
+    grid = np.stack(np.meshgrid(x, x, [0.0], indexing="ij"), axis=-1)[:, :, 0]
+    system.add(connect(PointContour(mass.point), Contour2sNeutralRigid(table, grid, outward=1, compiled=False),
+                       "impact"))
     model = compile_model(system, system.plan(0.01))
     assert model.fused[1] is None
-    assert model.owner_at.tolist() == [0, 0, 0, 1, 2]   # the plane's contact's contours: none; the sphere's: its
+    assert model.owner_at.tolist() == [0, 0, 0, 1, 2]   # the plane's contact's contours: none; the table's: its
     assert model.owners.tolist() == [1, 1]
 
 
@@ -280,6 +324,7 @@ ANALYTIC = {    # case: (side 1, side 2) as (contour kind, body: "mass", "ball" 
     "sphere/mass on sphere/mass": (("sphere", "mass"), ("sphere", "mass2")),
     "sphere/ball on sphere/mass": (("sphere", "ball"), ("sphere", "mass2")),
     "sphere/mass on ground sphere": (("sphere", "mass"), ("sphere", "ground")),
+    "point/mass on sphere/ball": (("point", "mass"), ("sphere", "ball")),
 }
 RADII = {"mass": 0.02, "mass2": 0.05, "ball": 0.03, "ground": 0.04}     # [m]
 

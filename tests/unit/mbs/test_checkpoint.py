@@ -27,6 +27,7 @@ from ffrmbs_app.scenes.cache import cache_dir
 from mbs import FlexibleBodyFFR, Joint, PointMass, PrescribedFrameMotion, RigidBody, System, ground_frame
 from mbs.results import state_arrays
 from mbs.results.checkpoint import read_checkpoint
+from mbs.run.fused_detection import fused_detection
 from mbs.integrators import INTEGRATORS, driver, integrator_class
 from mbs.links.joints import JOINTS
 from mbs.registry import BODIES, LOADS, ROTATIONS
@@ -288,6 +289,19 @@ def test_every_registered_contour_pair_and_law_has_a_checkpoint_scene():
     assert {kind for pair in unilateral | bilateral for kind in pair} == set(CONTOURS.names())
     assert {law for _, law in built} == set(LAWS.names())
 
+
+
+def test_every_registered_pair_kind_has_a_fused_detection():
+    """Each scene's contact — every registered pair kind, unilateral and bilateral, on the
+    beam at rest, on a rigid table and on the ground, side 1 on a point mass or a rigid
+    ball — has a compiled detection (mbs.run.fused_detection): a pair kind registered
+    without its kernel fails here instead of running the Python path."""
+    missing = []
+    for (pair, law), make in KIND_SCENES.items():
+        system, _ = make(pair, law)
+        if fused_detection(system.contacts[0]) is None:
+            missing.append(f"{pair[0]}/{pair[1]} ({law})")
+    assert not missing, f"pair kinds without a fused detection: {', '.join(missing)}"
 
 @pytest.mark.parametrize("key", [pytest.param(key, id=kind_id(key), marks=() if key[1] == "bilateral" else
                                               pytest.mark.slow) for key in KIND_SCENES])

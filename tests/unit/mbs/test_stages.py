@@ -223,3 +223,27 @@ def test_a_steady_step_of_an_analytic_pair_allocates_no_numpy_array(side, surfac
     assert set(phases) == {0, 200}
     for closed, sizes in phases.items():
         assert sizes == [], (closed, len(sizes), sorted(set(sizes)))
+
+
+def test_a_steady_step_of_a_point_kept_on_a_curve_allocates_no_numpy_array():
+    """The default scene's point kept on the top face's centre line (a bilateral
+    CurveConstraint, its fused detection): 200 steps after warm-up steps, not one array."""
+    from contact import CurveConstraint, PointOnCurveConstraint
+
+    scene = centre_scene("impact", "point", "1s")
+    k = scene.contact.kinematics
+    system = scene.system
+    system.contacts[system.contacts.index(scene.contact)] = CurveConstraint(PointOnCurveConstraint(k.contour1,
+                                                                                                   k.contour2))
+    model = compile_model(system, system.plan(0.1), theta=0.5, solver=ProxSolver("gauss-seidel", tol=1e-10,
+                                                                                    max_iter=2000))
+    assert model.fused[0] is not None
+    data = Data(model)
+    data.q[:], data.u[:] = system.initial_state()
+    for _ in range(20):
+        stages.step(model, data, 1e-5)
+    with NumpyAllocations() as count:
+        for _ in range(200):
+            stages.step(model, data, 1e-5)
+    assert data.stats["closed_contacts"] == 220
+    assert count.sizes == [], (len(count.sizes), sorted(set(count.sizes)))
