@@ -44,6 +44,7 @@ from contact._detection_kernels import (boxes_overlap, edge_frame, frame_rates_j
 from contact.search import LAST_ITERATIONS, NEWTON_ITERATIONS, NEWTON_SOLVES
 from contours import rigid
 from contours._offset_kernels import evaluate_offset, offsets
+from contours.fitting._kernels import in_material
 from contours._rigid_kernels import frame_point, plane_coordinates, plane_point, sphere_point
 from contours.rigid import sphere_angles
 from contours.base import DERIVS_AT, FRAME_AT, J_AT, V_AT
@@ -206,7 +207,8 @@ def _jacobian(itab, ftab, state, local, phi_point, point2):
 
 @njit(cache=True)
 def centre_on_neutral_2s(q, u, itab, ftab, knots_e, knots_x, ints, floats, ctrl0, phi, state, span, frame1, point1,
-                         point2, kin, centre, axes1, start, counts, work, newton_work, contour_work):
+                         point2, kin, centre, axes1, start, counts, work, newton_work, contour_work, trim_vertices,
+                         trim_starts):
     """Stages 3 and 4 for one contact (module docstring) at the global (q, u) [m, m/s]:
 
     1. the contours' states: the point r = q_P + ū0, ṙ = u_P into ``frame1`` (the
@@ -222,8 +224,10 @@ def centre_on_neutral_2s(q, u, itab, ftab, knots_e, knots_x, ints, floats, ctrl0
     4. Newton on eq. 3.31–3.32 for c from the warm start ``start`` (η, ξ)
        (:func:`~contact._detection_kernels.newton_2s` on the surface's kernel data, in the
        search's ``newton_work`` = B, ū rows, r rows, g), the search's ``counts`` and
-       ``start`` updated — no warm start, no tolerance yet or no root: FALLBACK (the
-       caller runs the Python path, which searches the coarse grid);
+       ``start`` updated — no warm start, no tolerance yet, no root, or a root in a hole
+       of a trimmed face (``trim_vertices``, ``trim_starts``: the polygons of
+       :func:`contours.fitting._kernels.in_material`; none: no hole): FALLBACK (the caller
+       runs the Python path, which searches the coarse grid or keeps the hole);
     5. C2 into ``point2``: r and its derivatives (eq. 3.23, 3.25, 3.26: those of Newton's
        last evaluation, at the root), the frame (eq. 3.27–3.29), ṙ (eq. 2.32)
        with ``itab[VELOCITY]`` — what :func:`~contours.neutral._kernels.evaluate_2s`
@@ -247,7 +251,7 @@ def centre_on_neutral_2s(q, u, itab, ftab, knots_e, knots_x, ints, floats, ctrl0
     found, eta, xi, gg, k, steps = newton_2s(centre, start[0], start[1], knots_e, knots_x, ints, floats, ctrl0, phi,
                                              state, span, ftab[MAX_STEP_E], ftab[MAX_STEP_X], ftab[TOL2], ftab[EDGE2],
                                              itab[MAX_ITER], B, local, D, g)
-    if not found:
+    if not (found and in_material(eta, xi, trim_vertices, trim_starts)):
         return FALLBACK, nan, nan, nan, nan, nan, nan
     _count(counts, k, steps)
     start[0], start[1] = eta, xi

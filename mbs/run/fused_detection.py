@@ -15,7 +15,8 @@ searches the coarse grid (:mod:`contact.search`).
 Kinds with a fused detection:
 
 * :class:`CentreOnNeutral2s`: a point (``PointContour``) or a sphere (``SphereContour``)
-  against a compiled neutral 2s contour — nodal or fitted,
+  against a compiled neutral 2s contour — nodal or fitted, trimmed or not (a root in a
+  hole falls back to the Python path, which keeps the hole as the search does),
   :class:`~contours.neutral.factory.Contour2sNeutralFactory` — of a floating-frame body
   (an FFR body or a rigid one), ``ContactKinematicsPointContour2s`` or
   ``ContactKinematicsSphereContour2s`` with a compiled ``Contact2sSearch``, any law of
@@ -289,18 +290,24 @@ class CentreOnNeutral2s(_FusedCentre):
 
     @staticmethod
     def applies(contact) -> bool:
-        """True for a point or a sphere on a point mass against a compiled neutral 2s
-        contour on a floating-frame body, not trimmed (a face with holes takes the Python path,
-        whose search tests the trim) (:meth:`_FusedCentre._applies`)."""
-        return _FusedCentre._applies(contact, lambda s: isinstance(s, Contour2sNeutralFactory) and s.compiled
-                                     and s.trim is None)
+        """True for a point or a sphere against a compiled neutral 2s contour on a
+        floating-frame body (:meth:`_FusedCentre._applies`)."""
+        return _FusedCentre._applies(contact, lambda s: isinstance(s, Contour2sNeutralFactory) and s.compiled)
 
     def __init__(self, contact):
         surface = contact.kinematics.contour2
         super().__init__(contact, surface)
         self._ftab[K.SIGN] = surface.sign
+        trim = surface.trim
+        holes = (np.zeros((0, 2)), np.zeros(1, dtype=np.int64)) if trim is None else (trim.vertices, trim.starts)
         self._args = (self._itab, self._ftab, *surface.kernel_data, *self._points, self._work, self.search.newton_work,
-                      surface.evaluate_work)
+                      surface.evaluate_work, *holes)
+        self._hole = None if trim is None else self.search.hole
+
+    def _located(self, g_N) -> bool:
+        if self._hole is not None:
+            self._hole.fill(np.nan)             # as the search's solve: no hole once a root is on the material
+        return g_N <= self.closing_tol
 
 
 class CentreOnOffset(_FusedCentre):

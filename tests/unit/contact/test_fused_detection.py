@@ -272,6 +272,62 @@ def test_fused_detection_of_a_point_kept_on_a_curve_is_the_python_path():
     assert left > 0                                   # a point beyond the curve's end left it
 
 
+@pytest.fixture(scope="module")
+def plate_hole_data():
+    """The validation case contact_hole's plate with its 12 mm hole, tet4 at 6 mm, bottom
+    clamped, 2 modes: its top face is fitted and trimmed."""
+    from preprocess import build_body
+    from validation.cases import contact_hole as case
+
+    return build_body(case.plate_hole_mesh(0.006, order=1), case.STEEL, n_modes=2, clamp="bottom")
+
+
+def _trimmed_scene(data):
+    from validation.cases import contact_hole as case
+
+    system = System(gravity=(0.0, 0.0, -case.G))
+    plate = system.add(FlexibleBodyFFR(data, modes=2, frame=PrescribedFrameMotion.fixed(), name="plate"))
+    ball = system.add(PointMass(case.BALL_MASS, position=(*case.BESIDE, 0.1), name="ball"))
+    face = system.add(connect(SphereContour(ball.point, case.BALL_RADIUS), Contour2sNeutralFFR(plate, "top"),
+                              "impact", name="face"))
+    return SimpleNamespace(system=system, mass=ball, contact=face)
+
+
+@pytest.mark.filterwarnings("ignore:neutral 2s.*fitted to within")     # the coarse mesh's mode 2: not the point here
+def test_fused_detection_on_a_trimmed_face_is_the_python_path(plate_hole_data):
+    """A ball over a face with a hole — on the material, over the hole (no contact point:
+    the kernel falls back and the Python path keeps the hole as the next warm start),
+    back on the material (the hole forgotten): the fused detection leaves what the Python
+    path leaves, the search's hole included."""
+    fused_scene, python_scene = _trimmed_scene(plate_hole_data), _trimmed_scene(plate_hole_data)
+    assert fused_scene.contact.kinematics.contour2.trim is not None
+    fused = fused_detection(fused_scene.contact)
+    assert isinstance(fused, CentreOnNeutral2s)
+    fallbacks = []
+    python_locate = fused.contact.locate
+    fused.contact.locate = lambda: fallbacks.append(1) or python_locate()
+    outcomes = set()
+    from validation.cases import contact_hole as case
+
+    rng = np.random.default_rng(37)
+    states = _states(fused_scene, rng, 150)
+    (hx, hy, radius), lz = case.HOLE, case.PLATE[2]
+    for k in range(5, len(states), 10):              # runs of states over the hole
+        for q, _, _ in states[k:k + 3]:
+            q[fused_scene.mass.q_slice] = (hx + 0.3 * radius * rng.normal(), hy + 0.3 * radius * rng.normal(),
+                                           lz + case.BALL_RADIUS + 1e-3)
+    for q, u, t in states:
+        closed_f = fused.locate(q, u, t)
+        closed_p = _python_locate(python_scene, q, u, t)
+        _assert_same(fused_scene, python_scene, closed_f, closed_p)
+        hf, hp = fused_scene.contact.kinematics.search.hole, python_scene.contact.kinematics.search.hole
+        np.testing.assert_array_equal(np.isnan(hf), np.isnan(hp))
+        np.testing.assert_allclose(hf, hp, rtol=1e-12, atol=1e-15)
+        outcomes.add((closed_p, python_scene.contact.kinematics.active, bool(np.isnan(hp[0]))))
+    assert {(True, True, True), (False, True, True), (False, False, False)} <= outcomes   # ... the last: in the hole
+    assert 0 < len(fallbacks) < len(states) // 2
+
+
 def test_fused_contour_products_follow_the_state():
     """The neutral contour's control-point products, synced on demand, follow a state the
     fused kernel wrote (its stamp): the position field equals the Python path's."""
