@@ -39,6 +39,7 @@ BENCHES = {
     "contour_evaluation": "validation.bench.contour_evaluation",
     "step_cost": "validation.bench.step_cost",
     "scene_cost": "validation.bench.scene_cost",
+    "pair_cost": "validation.bench.pair_cost",
     "geometric_stiffness_cost": "validation.bench.geometric_stiffness_cost",
 }
 
