@@ -3,7 +3,8 @@ and the detection stage of one contact in one call, composed of the kernels of t
 contours (:mod:`contours.neutral._kernels`), the contact search and kinematics
 (:mod:`contact._detection_kernels`) and the bodies (:func:`mbs.bodies._kernels.point_jacobian_T`).
 
-:func:`centre_on_neutral_2s` serves a point or a sphere on a point mass against a
+:func:`centre_on_neutral_2s` serves a point or a sphere (its frame's state written here
+from the global q, u on a point mass, by its contour's update otherwise) against a
 neutral 2s contour of a floating-frame body (FFR or rigid; the frame's R, A, v, ω̄ are in
 the contour's state: constant on a frame at rest, written by the contour's update
 otherwise), :func:`centre_on_offset` the same

@@ -114,8 +114,8 @@ def _python_updates(updates, q, u, t):
 
 
 class _FusedCentre:
-    """What the fused detections of a centre (a point or a sphere on a point mass) on a
-    surface of a floating-frame body share: the tables' common entries (the layouts of
+    """What the fused detections of a centre (a point or a sphere on any body or the
+    ground) on a surface of a floating-frame body share: the tables' common entries (the layouts of
     :mod:`._fused_detection_kernels`), Newton's settings, and :meth:`locate` around the
     kernel (:attr:`kernel` with the arguments :attr:`_args` after q and u), preceded on a
     moving frame by the surface's update. ``neutral``: the neutral contour whose state the
@@ -275,7 +275,7 @@ class Probe:
 
 
 class CentreOnNeutral2s(_FusedCentre):
-    """Stages 3 and 4 of a point or a sphere on a point mass against a neutral 2s contour
+    """Stages 3 and 4 of a point or a sphere against a neutral 2s contour
     on a floating-frame body (module docstring) in one call of
     :func:`._fused_detection_kernels.centre_on_neutral_2s`.
 
@@ -311,7 +311,7 @@ class CentreOnNeutral2s(_FusedCentre):
 
 
 class CentreOnOffset(_FusedCentre):
-    """Stages 3 and 4 of a point or a sphere on a point mass against a band or a cylinder
+    """Stages 3 and 4 of a point or a sphere against a band or a cylinder
     (:class:`~contours.derived.OffsetContour`) on a compiled 1s neutral curve of a
     floating-frame body, in one call of :func:`._fused_detection_kernels.centre_on_offset`."""
 
@@ -319,7 +319,7 @@ class CentreOnOffset(_FusedCentre):
 
     @staticmethod
     def applies(contact) -> bool:
-        """True for a point or a sphere on a point mass against a compiled offset contour
+        """True for a point or a sphere against a compiled offset contour
         on a compiled 1s neutral curve of a floating-frame body (:meth:`_FusedCentre._applies`)."""
         return _FusedCentre._applies(contact, lambda s: isinstance(s, OffsetContour) and s.compiled
                                      and isinstance(s.neutral, Contour1sNeutralFactory) and s.neutral.compiled)
@@ -336,14 +336,14 @@ class CentreOnOffset(_FusedCentre):
 
 
 class CentreOnNeutral1s(_FusedCentre):
-    """Stages 3 and 4 of a point or a sphere on a point mass against a compiled neutral 1s
+    """Stages 3 and 4 of a point or a sphere against a compiled neutral 1s
     contour of a floating-frame body, in one call of :func:`._fused_detection_kernels.centre_on_neutral_1s`."""
 
     kernel = K.centre_on_neutral_1s
 
     @staticmethod
     def applies(contact) -> bool:
-        """True for a point or a sphere on a point mass against a compiled neutral 1s
+        """True for a point or a sphere against a compiled neutral 1s
         contour of a floating-frame body (:meth:`_FusedCentre._applies`)."""
         return _FusedCentre._applies(contact, lambda s: isinstance(s, Contour1sNeutralFactory) and s.compiled,
                                      ON_CURVE, Contact1sSearch)
