@@ -103,6 +103,17 @@ def _frame_side(contour, itab, ftab, q_at, u_at, offset_at):
     return contour, body.q_slice, body.u_slice
 
 
+def _store_located(k, velocity, sphere, g_N, gd_N, eta, xi, eta1, xi1) -> None:
+    """What a kernel located into the kinematics ``k``, as their update leaves it: active,
+    g_N [m], ġ_N [m/s] (with ``velocity``), C2's (η, ξ) and C1's (a ``sphere``'s, a point's 0)."""
+    k.active = True
+    k.g_N = g_N
+    if velocity:
+        k.gd_N = gd_N
+    k.point2.eta, k.point2.xi = eta, xi
+    k.point1.eta, k.point1.xi = (eta1, xi1) if sphere else (0.0, 0.0)
+
+
 def _python_updates(updates, q, u, t):
     """``contour.update`` of each (contour, q slice, u slice) at the global (q, u, t); a
     contour on the ground (slices None) at t."""
@@ -200,14 +211,7 @@ class _FusedCentre:
         outcome, g_N, gd_N, eta, xi, eta1, xi1 = type(self).kernel(q, u, *self._args)
         self.neutral.kernel_updated(velocity=True)
         if outcome == K.LOCATED:
-            k = self.kinematics
-            k.active = True
-            k.g_N = g_N
-            if self.velocity:
-                k.gd_N = gd_N
-            k.point2.eta, k.point2.xi = eta, xi
-            if self.sphere:
-                k.point1.eta, k.point1.xi = eta1, xi1
+            _store_located(self.kinematics, self.velocity, self.sphere, g_N, gd_N, eta, xi, eta1, xi1)
             return self._located(g_N)
         if outcome == K.APART:
             return False
@@ -390,6 +394,7 @@ class _FusedAnalytic:
 
     kernel = None
     kinds = {}
+    axes2 = False       # the kernel takes the kinematics' axes2 (sphere 2's axes)
 
     @classmethod
     def applies(cls, contact) -> bool:
@@ -422,6 +427,8 @@ class _FusedAnalytic:
         ftab[K.RADIUS2] = getattr(k.contour2, "radius", 0.0)
         self._itab, self._ftab = itab, ftab
         self._work = np.zeros(K.WORK_SIZE)
+        self._args = (itab, ftab, k.contour1.state, k.contour2.state, k.point1.buffer, k.point2.buffer, k.buffer,
+                      k.centre, k.axes1, *((k.axes2,) if self.axes2 else ()), self._work)
 
     def locate(self, q, u, t) -> bool:
         """Both contours at the global (q, u, t) and the contact located, as
@@ -429,20 +436,11 @@ class _FusedAnalytic:
         (g_N <= closing_tol)."""
         _python_updates(self._before, q, u, t)
         outcome, g_N, gd_N, eta, xi, eta1, xi1 = type(self).kernel(q, u, *self._args)
-        k = self.kinematics
         if outcome != K.LOCATED:
             if outcome == K.NO_POINT:
-                k.active = False
+                self.kinematics.active = False
             return False
-        k.active = True
-        k.g_N = g_N
-        if self.velocity:
-            k.gd_N = gd_N
-        k.point2.eta, k.point2.xi = eta, xi
-        if self.sphere:
-            k.point1.eta, k.point1.xi = eta1, xi1
-        else:
-            k.point1.eta = k.point1.xi = 0.0
+        _store_located(self.kinematics, self.velocity, self.sphere, g_N, gd_N, eta, xi, eta1, xi1)
         return g_N <= self.closing_tol
 
     def probe(self):
@@ -458,12 +456,6 @@ class CentreOnPlane(_FusedAnalytic):
     kinds = {ContactKinematicsPointPlane: (PointContour, PlaneContour),
              ContactKinematicsSpherePlane: (SphereContour, PlaneContour)}
 
-    def __init__(self, contact):
-        super().__init__(contact)
-        k = self.kinematics
-        self._args = (self._itab, self._ftab, k.contour1.state, k.contour2.state, k.point1.buffer, k.point2.buffer,
-                      k.buffer, k.centre, k.axes1, self._work)
-
 
 class SphereOnSphere(_FusedAnalytic):
     """Stages 3 and 4 of a point or a sphere against a sphere in one call of
@@ -472,9 +464,4 @@ class SphereOnSphere(_FusedAnalytic):
     kernel = K.sphere_on_sphere
     kinds = {ContactKinematicsPointSphere: (PointContour, SphereContour),
              ContactKinematicsSphereSphere: (SphereContour, SphereContour)}
-
-    def __init__(self, contact):
-        super().__init__(contact)
-        k = self.kinematics
-        self._args = (self._itab, self._ftab, k.contour1.state, k.contour2.state, k.point1.buffer, k.point2.buffer,
-                      k.buffer, k.centre, k.axes1, k.axes2, self._work)
+    axes2 = True

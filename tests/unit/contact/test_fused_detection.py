@@ -81,6 +81,26 @@ def _states(scene, rng, n, body_state=None):
     return states
 
 
+def _both_routes(fused, fused_scene, python_scene, states):
+    """Each state located by ``fused`` and by the Python path of ``python_scene`` (every
+    20th from index 10 with both warm starts lost: a cold start), asserted the same
+    (:func:`_assert_same`); returns ({(closed, active)} seen, the fused route's fallbacks
+    to the Python path)."""
+    fallbacks = []
+    python_locate = fused.contact.locate
+    fused.contact.locate = lambda: fallbacks.append(1) or python_locate()
+    outcomes = set()
+    for i, (q, u, t) in enumerate(states):
+        if i % 20 == 10:
+            for scene in (fused_scene, python_scene):
+                scene.contact.kinematics.start[:] = np.nan
+        closed_f = fused.locate(q, u, t)
+        closed_p = _python_locate(python_scene, q, u, t)
+        _assert_same(fused_scene, python_scene, closed_f, closed_p)
+        outcomes.add((closed_p, python_scene.contact.kinematics.active))
+    return outcomes, len(fallbacks)
+
+
 def _assert_same(fused_scene, python_scene, closed_f, closed_p):
     kf, kp = fused_scene.contact.kinematics, python_scene.contact.kinematics
     assert closed_f == closed_p
@@ -122,22 +142,10 @@ def test_fused_detection_is_the_python_path(law, side, contour):
     fused = fused_detection(fused_scene.contact)
     assert isinstance(fused, {"2s": CentreOnNeutral2s, "band": CentreOnOffset, "1s": CentreOnNeutral1s,
                               "edge": CentreOnNeutral1s}[contour])
-    rng = np.random.default_rng(19)
-    outcomes = set()
-    fallbacks = []
-    python_locate = fused.contact.locate
-    fused.contact.locate = lambda: fallbacks.append(1) or python_locate()
-    states = _states(fused_scene, rng, 120)
-    for i, (q, u, t) in enumerate(states):
-        if i % 20 == 10:                                 # a lost contact point: both start cold
-            for scene in (fused_scene, python_scene):
-                scene.contact.kinematics.start[:] = np.nan
-        closed_f = fused.locate(q, u, t)
-        closed_p = _python_locate(python_scene, q, u, t)
-        _assert_same(fused_scene, python_scene, closed_f, closed_p)
-        outcomes.add((closed_p, python_scene.contact.kinematics.active))
+    states = _states(fused_scene, np.random.default_rng(19), 120)
+    outcomes, fallbacks = _both_routes(fused, fused_scene, python_scene, states)
     assert outcomes == {(True, True), (False, True), (False, False)}
-    assert 0 < len(fallbacks) < len(states) // 3          # mostly the kernel's own work
+    assert 0 < fallbacks < len(states) // 3          # mostly the kernel's own work
     search = python_scene.contact.kinematics.search
     assert search.coarse_searches > 1 and search.newton_solves > search.coarse_searches
 
@@ -216,22 +224,10 @@ def test_fused_detection_on_a_moving_frame_is_the_python_path(thesis_beam_data, 
     kind = MOVING[case][1]
     assert isinstance(fused, {"2s": CentreOnNeutral2s, "band": CentreOnOffset, "1s": CentreOnNeutral1s}[kind])
     assert fused.probe() is None                       # the recorder takes the Python path on a moving frame
-    rng = np.random.default_rng(29)
-    outcomes = set()
-    fallbacks = []
-    python_locate = fused.contact.locate
-    fused.contact.locate = lambda: fallbacks.append(1) or python_locate()
-    states = _states(fused_scene, rng, 80, _moving_body_state(fused_scene))
-    for i, (q, u, t) in enumerate(states):
-        if i % 20 == 10:
-            for scene in (fused_scene, python_scene):
-                scene.contact.kinematics.start[:] = np.nan
-        closed_f = fused.locate(q, u, t)
-        closed_p = _python_locate(python_scene, q, u, t)
-        _assert_same(fused_scene, python_scene, closed_f, closed_p)
-        outcomes.add((closed_p, python_scene.contact.kinematics.active))
+    states = _states(fused_scene, np.random.default_rng(29), 80, _moving_body_state(fused_scene))
+    outcomes, fallbacks = _both_routes(fused, fused_scene, python_scene, states)
     assert {(True, True), (False, True)} <= outcomes
-    assert len(fallbacks) < len(states) // 3           # mostly the kernel's own work
+    assert fallbacks < len(states) // 3           # mostly the kernel's own work
     kp = python_scene.contact.kinematics
     if MOVING[case][0] != "spinning":
         assert np.abs(kp.point2.J_R).max() > 0.1          # a free frame's rotation columns took part
