@@ -10,9 +10,10 @@
   pruned by the plan, or separated by the broad phase, when the steps do not locate it),
   located afresh at the sample's state (t, q, u), the broad phase left out: a pair kind
   with a fused detection in copies of its arrays (:class:`mbs.run.fused_detection.Probe`),
-  else (and when the probe cannot start from the run's last contact point) the contours
-  updated and the search run there, the contours' and the contact's run state put back
-  afterwards — either way recording changes nothing of the run. NaN where no contact
+  else (and when the probe cannot start from the run's or its own last contact point) the
+  contours updated and the search run there — which seeds the probe's own —, the contours'
+  and the contact's run state put back afterwards — either way recording changes nothing
+  of the run. NaN where no contact
   point exists (a point beyond the contour's domain);
 * ``deflection`` [m]: δ of the normal row, the spring's deflection at the end of the last
   step of a closed contact through residual flexibility (0 otherwise);
@@ -89,6 +90,8 @@ class ContactRecorder:
             rec["point"][i] = k.point2.r if located else np.nan
             rec["normal"][i] = k.n if located else np.nan
             if afresh:
+                if located and self.probes[j] is not None:
+                    self.probes[j].seed()           # its warm start while the run has none
                 self.put_back()
 
     def deflection(self, data, j) -> float:

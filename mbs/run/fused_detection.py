@@ -191,14 +191,8 @@ class _FusedCentre:
         self._free_T = ftab[K.FRAME_T_AT:K.FRAME_T_AT + 9].reshape(3, 3) if body2.is_free else None
 
     def _newton_settings(self):
-        """Newton's step caps and tolerance from the search (NaN tolerance while its
-        length scale is not known: the kernel falls back)."""
-        settings = self.search.newton_settings()
-        if settings is None:
-            self._ftab[K.TOL2] = np.nan
-            return
-        steps, self._ftab[K.TOL2], self._ftab[K.EDGE2], self._itab[K.MAX_ITER] = settings
-        self._ftab[K.MAX_STEP_E:K.MAX_STEP_E + len(steps)] = steps
+        """Newton's step caps and tolerance from the search into the tables."""
+        _newton_settings(self.search, self._itab, self._ftab)
 
     def locate(self, q, u, t) -> bool:
         """Both contours updated at the global (q, u, t) and the contact located, as
@@ -235,6 +229,17 @@ class _FusedCentre:
         return None if self._before else Probe(self)
 
 
+def _newton_settings(search, itab, ftab) -> None:
+    """Newton's step caps, tolerance and iterations from ``search`` into ``itab``,
+    ``ftab`` (a NaN tolerance while its length scale is not known: the kernel falls back)."""
+    settings = search.newton_settings()
+    if settings is None:
+        ftab[K.TOL2] = np.nan
+        return
+    steps, ftab[K.TOL2], ftab[K.EDGE2], itab[K.MAX_ITER] = settings
+    ftab[K.MAX_STEP_E:K.MAX_STEP_E + len(steps)] = steps
+
+
 def _copied(args):
     """The arrays of a kernel's argument tuple copied (nested tuples of work arrays too)."""
     return tuple(_copied(a) if isinstance(a, tuple) else a.copy() for a in args)
@@ -246,7 +251,9 @@ class Probe:
     counters, work), so that the run's own stay as they are: what the contact recorder
     (:mod:`mbs.results.contact_record`) samples of an open contact, without the save and restore
     of the run state around the Python path. Newton starts from the run's last contact
-    point; the broad phase is left out (the recorder wants the gap however far).
+    point, or, while the run has none (a contact never located, or lost), from the
+    probe's own last one (:meth:`seed`: the recorder's Python path gives it one); the
+    broad phase is left out (the recorder wants the gap however far).
 
     Parameters
     ----------
@@ -264,18 +271,30 @@ class Probe:
 
     def locate(self, q, u):
         """(g_N [m], contact point C2 (3,) [m], normal n (3,)) at the global (q, u) — views
-        of the probe's arrays —, or None when the kernel cannot locate it from the run's
-        warm start (then the caller takes the Python path)."""
+        of the probe's arrays —, or None when the kernel cannot locate it from its warm
+        start (then the caller takes the Python path)."""
         fused, args = self.fused, self.args
         itab, ftab = args[0], args[1]
-        np.copyto(itab, fused._itab)
+        if not np.isnan(fused._ftab[K.TOL2]):           # else the settings of the last seed
+            np.copyto(itab, fused._itab)
+            np.copyto(ftab, fused._ftab)
         itab[K.BOX] = 0
-        np.copyto(ftab, fused._ftab)
-        np.copyto(self._start, fused.kinematics.start)
+        if not np.isnan(fused.kinematics.start[0]):
+            np.copyto(self._start, fused.kinematics.start)
         outcome, g_N = type(fused).kernel(q, u, *args)[:2]
         if outcome != K.LOCATED:
             return None
         return g_N, self._point2[:3], self._kin[:3]
+
+    def seed(self) -> None:
+        """Take the contact point and Newton's settings the run's kinematics and search
+        hold now — a locate by the Python path at a sample, before its run state is put
+        back — as the probe's own, for the samples while the run has none."""
+        fused = self.fused
+        np.copyto(self._start, fused.kinematics.start)
+        np.copyto(self.args[0], fused._itab)
+        np.copyto(self.args[1], fused._ftab)
+        _newton_settings(fused.search, self.args[0], self.args[1])
 
 
 class CentreOnNeutral2s(_FusedCentre):

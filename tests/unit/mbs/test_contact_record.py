@@ -50,3 +50,25 @@ def test_the_probe_records_what_the_python_path_records(monkeypatch, side, conto
     for field, values in ref.contacts[scene.contact.name].items():
         np.testing.assert_allclose(res.contacts[scene.contact.name][field], values, rtol=1e-12, atol=1e-15,
                                    err_msg=field)
+
+
+@pytest.mark.parametrize("side, contour", [("point", "2s"), ("sphere", "edge")])
+def test_a_contact_the_run_never_locates_is_sampled_by_the_seeded_probe(monkeypatch, side, contour):
+    """The point (the sphere) 0.1 m above the top face, rising at 0.2 m/s: the planned run
+    prunes the contact at every step, so the run has no contact point; the first sample
+    takes the Python path, which seeds the probe, and the probe samples every other one:
+    the gap is the height, 0.1 m + 0.2 m/s · t."""
+    python_path = []
+    locate = contact_record.ContactRecorder.locate
+    monkeypatch.setattr(contact_record.ContactRecorder, "locate",
+                        lambda self, *a: python_path.append(a[0]) or locate(self, *a))
+    scene = centre_scene("impact", side, contour)
+    system = scene.system
+    q0, u0 = system.initial_state()
+    q0[scene.mass.q_slice][1] += 0.1 - GAP0 + scene.contact.kinematics.radius
+    u0[scene.mass.u_slice] = (0.0, SPEED, 0.0)
+    res = system.simulate(T_END, 1e-5, integrator="moreau", t_out=np.linspace(0.0, T_END, N_OUT), q0=q0, u0=u0,
+                          contacts=True)
+    assert np.isnan(scene.contact.kinematics.start).all()          # the run never located it
+    np.testing.assert_allclose(res.contacts[scene.contact.name]["gap"], 0.1 + SPEED * res.t, rtol=0, atol=1e-12)
+    assert len(python_path) == 1
