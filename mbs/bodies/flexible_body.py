@@ -274,6 +274,12 @@ class FlexibleBodyFFR(FloatingFrameBody):
         return D
 
     @property
+    def box_centre(self) -> np.ndarray:
+        """c (3,) [m]: the centre of the undeformed nodes' box in the body frame, the
+        body-frame centre of :meth:`bounding_sphere` (R + A c)."""
+        return self._box_centre
+
+    @property
     def rest_radius(self) -> float:
         """max_j |ū0_j − c| [m]: the radius about the centre c of the nodes' box (body
         frame) that holds every undeformed node; the constant part of

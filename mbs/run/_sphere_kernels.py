@@ -10,6 +10,11 @@ Sphere kinds (``kind`` codes):
   once by the caller), radius max_j |ū0_j − c| + Σ_k max_j |Φ_jk| |q_f,k| with
   max_j |Φ_jk| in ``reach[s, :n_reach[s]]`` and q_f at q[at:] —
   :meth:`mbs.bodies.flexible_body.FlexibleBodyFFR.bounding_sphere`;
+- :data:`FREE`: a body on a free frame with a quaternion (a rigid body's frame, or a
+  flexible body's bounding sphere), centre R + A c with R = q[at:at+3], A the rotation
+  of the quaternion q[at+3:at+7] (:func:`mbs.bodies.rotations.quat_to_matrix`) and c the
+  body-frame point ``offset`` (a frame's ū0, the body's :attr:`box_centre`), radius
+  ``radius0`` + Σ_k reach[s, k] |q_f,k| with q_f at q[at+7:] (none for a rigid body);
 - :data:`CALLED`: any other sphere; the caller writes its centre and radius (the
   kernel leaves them).
 
@@ -24,14 +29,14 @@ from numba import njit
 
 from mbs.run._stage_kernels import live_contacts
 
-POINT, AT_REST, CALLED = 0, 1, 2
+POINT, AT_REST, CALLED, FREE = 0, 1, 2, 3
 INTS_AT = 3     # ints: n_s, n_p, width, then kind, at, n_reach (n_s each), contact, sphere1, sphere2 (n_p each)
 
 
 @njit(cache=True)
 def sphere_states(q, kind, at, offset, radius0, reach, n_reach, centres, radii):
-    """Centres (n_s, 3) [m] and radii (n_s,) [m] of the POINT and AT_REST spheres at the
-    global q into ``centres``, ``radii`` (module docstring); CALLED rows untouched."""
+    """Centres (n_s, 3) [m] and radii (n_s,) [m] of the POINT, AT_REST and FREE spheres at
+    the global q into ``centres``, ``radii`` (module docstring); CALLED rows untouched."""
     for s in range(kind.shape[0]):
         k = kind[s]
         if k == POINT:
@@ -42,6 +47,20 @@ def sphere_states(q, kind, at, offset, radius0, reach, n_reach, centres, radii):
             r = 0.0
             for j in range(n_reach[s]):
                 r += reach[s, j] * abs(q[at[s] + j])
+            radii[s] = radius0[s] + r
+        elif k == FREE:
+            o = at[s]
+            p0, p1, p2, p3 = q[o + 3], q[o + 4], q[o + 5], q[o + 6]
+            c0, c1, c2 = offset[s, 0], offset[s, 1], offset[s, 2]
+            centres[s, 0] = q[o] + ((1.0 - 2.0 * (p2 * p2 + p3 * p3)) * c0 + 2.0 * (p1 * p2 - p0 * p3) * c1
+                                    + 2.0 * (p1 * p3 + p0 * p2) * c2)
+            centres[s, 1] = q[o + 1] + (2.0 * (p1 * p2 + p0 * p3) * c0 + (1.0 - 2.0 * (p1 * p1 + p3 * p3)) * c1
+                                        + 2.0 * (p2 * p3 - p0 * p1) * c2)
+            centres[s, 2] = q[o + 2] + (2.0 * (p1 * p3 - p0 * p2) * c0 + 2.0 * (p2 * p3 + p0 * p1) * c1
+                                        + (1.0 - 2.0 * (p1 * p1 + p2 * p2)) * c2)
+            r = 0.0
+            for j in range(n_reach[s]):
+                r += reach[s, j] * abs(q[o + 7 + j])
             radii[s] = radius0[s] + r
 
 

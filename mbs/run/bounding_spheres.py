@@ -12,8 +12,9 @@ in space the centre is constant and the radius is computed in place). Anything e
 
 :class:`SphereTable` holds the distinct spheres of all prunable contacts of a run as
 arrays and prunes every pair in one call of the kernels of :mod:`._sphere_kernels`
-(the spheres of point masses and of flexible bodies at rest computed there, the others
-by their callables), so the cost per far-apart pair is a few array reads.
+(the spheres of point masses, of flexible bodies at rest and of bodies on a free
+quaternion frame computed there, the others by their callables), so the cost per
+far-apart pair is a few array reads.
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ import numpy as np
 from contours import Contour1sNeutralFFR, Contour2sNeutralFFR, PointContour, SphereContour
 
 from mbs.run import _sphere_kernels as K
-from mbs.bodies.rigid_body import PointMass
+from mbs.bodies.rigid_body import PointMass, RigidBody
 
 NEUTRAL_FFR = (Contour1sNeutralFFR, Contour2sNeutralFFR)
 
@@ -146,6 +147,14 @@ class SphereTable:
                 self.kind[s], self.at[s] = K.AT_REST, sphere._f.start
                 self.radius0[s], self.n_reach[s] = b.rest_radius, b.n_modes
                 self.reach[s, :b.n_modes] = b.mode_reach
+            elif isinstance(sphere, FlexibleBodySphere) and sphere.body.free_quaternion:
+                b = sphere.body
+                self.kind[s], self.at[s] = K.FREE, b.q_slice.start
+                self.offset[s], self.radius0[s], self.n_reach[s] = b.box_centre, b.rest_radius, b.n_modes
+                self.reach[s, :b.n_modes] = b.mode_reach
+            elif isinstance(sphere, FrameSphere) and isinstance(sphere.body, RigidBody) and sphere.body.free_quaternion:
+                self.kind[s], self.at[s] = K.FREE, sphere.body.q_slice.start
+                self.offset[s], self.radius0[s] = sphere.frame.u0, sphere.radius
         self.called = [s for s in range(n) if self.kind[s] == K.CALLED]
         self.at_rest = [s for s in range(n) if self.kind[s] == K.AT_REST]
         for p, (i, s1, s2, margin) in enumerate(pairs):

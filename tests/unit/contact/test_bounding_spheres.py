@@ -74,6 +74,53 @@ def test_sphere_table_prunes_as_the_sphere_callables(seed):
 
 
 @pytest.mark.parametrize("seed", range(4))
+def test_free_bodies_spheres_are_compiled_and_equal_the_callables(seed, thesis_beam_data):
+    """A free flexible beam (quaternion frame), a sphere on a rigid ball (quaternion) and
+    one on a rigid ball with Cardan angles, each against the beam's top face and the
+    other ball, turned and moved at random: the table computes the quaternion frames'
+    spheres in its kernel (FREE), the Cardan ball's by its callable, all equal to the
+    callables, and prunes as they do."""
+    from contact import connect
+    from contours import Contour2sNeutralFFR, SphereContour
+    from mbs import FlexibleBodyFFR
+    from mbs.bodies.rotations import quat_from_rotvec
+    from mbs.run import _sphere_kernels as K
+
+    system = System()
+    beam = system.add(FlexibleBodyFFR(thesis_beam_data, modes=8, name="beam"))
+    top = Contour2sNeutralFFR(beam, "y1")
+    balls = [system.add(RigidBody(1.0, 0.01 * np.eye(3), rotation=rotation, name=f"ball {rotation}"))
+             for rotation in ("quaternion", "cardan")]
+    spheres = [SphereContour(ball.frame_at((0.01, -0.02, 0.03)), 0.02) for ball in balls]
+    for sphere in spheres:
+        system.add(connect(sphere, top, "impact"))
+    system.add(connect(spheres[0], SphereContour(balls[1].origin, 0.03), "impact"))
+    contacts = list(system.contacts)
+    table = SphereTable(contacts)
+    assert sorted(table.kind.tolist()) == [K.CALLED, K.CALLED, K.FREE, K.FREE]   # the Cardan ball's two
+    rng = np.random.default_rng(seed)
+    q, _ = system.initial_state()
+    q[beam.q_slice][:3] = 0.05 * rng.normal(size=3)
+    q[beam.q_slice][3:7] = quat_from_rotvec(rng.normal(size=3))
+    q[beam.q_slice][7:] = 1e-4 * rng.normal(size=beam.n_modes)
+    q[balls[0].q_slice][:3] = 0.1 * rng.normal(size=3)
+    q[balls[0].q_slice][3:7] = quat_from_rotvec(rng.normal(size=3))
+    q[balls[1].q_slice] = np.r_[0.1 * rng.normal(size=3), rng.normal(size=3)]
+    n = len(table.spheres)
+    centres, radii = np.zeros((n, 3)), np.zeros(n)
+    live, closed = np.ones(len(contacts), dtype=bool), np.ones(len(contacts), dtype=bool)
+    table.start(q, 0.0, centres, radii)
+    live_idx = np.full(len(contacts), -1, dtype=np.intp)
+    table.prune(q, 0.0, centres, radii, live, closed, live_idx)
+    for s, sphere in enumerate(table.spheres):
+        c, r = sphere(q, 0.0)
+        np.testing.assert_allclose(centres[s], c, rtol=1e-14, atol=1e-15)
+        assert abs(radii[s] - r) <= 1e-14 * r
+    ref = reference_prune(contacts, q, 0.0)
+    assert live.tolist() == [ref[i] for i in range(len(contacts))]
+
+
+@pytest.mark.parametrize("seed", range(4))
 def test_stage_kernels_equal_their_references(seed):
     rng = np.random.default_rng(seed)
     n_contacts, n_contours = 7, 5
