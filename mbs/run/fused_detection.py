@@ -42,8 +42,10 @@ a moving frame (prescribed: a function of t; free: its R, A, v, ω̄ and the map
 ω̄ = T u_r, which the Jacobians take). On a frame at rest the neutral contour's R, A, v,
 ω̄ are constant and the kernel does all.
 
-Every other contact keeps the Python path (which stays the reference of the fused ones,
-``tests/unit/contact/test_fused_detection.py``).
+Every registered pair kind has one (``tests/unit/mbs/test_checkpoint.py`` fails for a
+kind registered without); a contour built for the reference route (``compiled=False``)
+keeps the Python path, which stays the reference of the fused ones
+(``tests/unit/contact/test_fused_detection.py``).
 """
 
 from __future__ import annotations
