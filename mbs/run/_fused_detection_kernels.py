@@ -86,12 +86,15 @@ WORK_SIZE = 15     # the work vector: two boxes (2, 3) and the direction −n (3
 
 
 @njit(cache=True)
-def _begin(q, u, itab, ftab, box0, reach, state, frame1, point1, centre, axes1, work):
+def _begin(q, u, itab, ftab, reach, state, frame1, point1, centre, axes1, start, work):
     """Steps 1–3 of a fused detection (:func:`centre_on_neutral_2s`): the contours'
-    states, the broad phase against the surface's box (``box0``: its undeformed control
-    points' lo (3), hi (3) and the bound of P_Φ (3, n_f); grown by ``reach`` [m]), the
-    centre, a point's C1 or a sphere's axes. False when the boxes are apart."""
+    states, the broad phase against the surface's box (in ``ftab`` from BOX_AT: its
+    undeformed control points' lo (3), hi (3) and the bound of P_Φ (3, n_f); grown by
+    ``reach`` [m]), the centre, a point's C1 or a sphere's axes. Returns APART when the
+    boxes are apart, FALLBACK without a warm start ``start`` or a Newton tolerance,
+    else LOCATED (ready for Newton)."""
     n_f = itab[NF]
+    box0 = ftab[BOX_AT:BOX_AT + 6 + 3 * n_f]
     radius = ftab[RADIUS]
     qf, uf = itab[QF], itab[UF]
     _mass_frame(q, u, itab[QP], itab[UP], ftab[OFFSET_AT:OFFSET_AT + 3], frame1)
@@ -107,9 +110,11 @@ def _begin(q, u, itab, ftab, box0, reach, state, frame1, point1, centre, axes1, 
             box2[0, c] -= reach
             box2[1, c] += reach
         if not boxes_overlap(box1, box2, ftab[MARGIN]):
-            return False
+            return APART
     _centre(frame1, radius, itab[VELOCITY] != 0, point1, centre, axes1)
-    return True
+    if np.isnan(start[0]) or np.isnan(ftab[TOL2]):
+        return FALLBACK
+    return LOCATED
 
 
 @njit(cache=True)
@@ -242,12 +247,9 @@ def centre_on_neutral_2s(q, u, itab, ftab, knots_e, knots_x, ints, floats, ctrl0
     C1 η, ξ [rad] (NaN for a point)).
     """
     nan = np.nan
-    n_f = itab[NF]
-    if not _begin(q, u, itab, ftab, ftab[BOX_AT:BOX_AT + 6 + 3 * n_f], 0.0, state, frame1, point1, centre, axes1,
-                  work):
-        return APART, nan, nan, nan, nan, nan, nan
-    if np.isnan(start[0]) or np.isnan(ftab[TOL2]):
-        return FALLBACK, nan, nan, nan, nan, nan, nan
+    ready = _begin(q, u, itab, ftab, 0.0, state, frame1, point1, centre, axes1, start, work)
+    if ready != LOCATED:
+        return ready, nan, nan, nan, nan, nan, nan
     B, local, D, g = newton_work
     found, eta, xi, gg, k, steps = newton_2s(centre, start[0], start[1], knots_e, knots_x, ints, floats, ctrl0, phi,
                                              state, span, ftab[MAX_STEP_E], ftab[MAX_STEP_X], ftab[TOL2], ftab[EDGE2],
@@ -281,12 +283,9 @@ def centre_on_offset(q, u, itab, ftab, knots, ints, floats, ctrl0, phi, state, s
     :meth:`contours.derived.OffsetContour.evaluate` fills them) with J_T, J_R at Φ_P.
     Returns as :func:`centre_on_neutral_2s`."""
     nan = np.nan
-    n_f = itab[NF]
-    if not _begin(q, u, itab, ftab, ftab[BOX_AT:BOX_AT + 6 + 3 * n_f], ftab[REACH], state, frame1, point1, centre,
-                  axes1, work):
-        return APART, nan, nan, nan, nan, nan, nan
-    if np.isnan(start[0]) or np.isnan(ftab[TOL2]):
-        return FALLBACK, nan, nan, nan, nan, nan, nan
+    ready = _begin(q, u, itab, ftab, ftab[REACH], state, frame1, point1, centre, axes1, start, work)
+    if ready != LOCATED:
+        return ready, nan, nan, nan, nan, nan, nan
     B, local, rows, frame, D, g = newton_work
     law, size = itab[LAW], ftab[SIZE]
     found, eta, xi, gg, k, steps = newton_offset(centre, start[0], start[1], knots, ints, floats, ctrl0, phi, state,
@@ -320,12 +319,9 @@ def centre_on_neutral_1s(q, u, itab, ftab, knots, ints, floats, ctrl0, phi, stat
     :func:`~contact._detection_kernels.edge_frame` (NO_POINT when the centre lies on the
     curve). Returns as :func:`centre_on_neutral_2s` (C2's ξ = 0)."""
     nan = np.nan
-    n_f = itab[NF]
-    if not _begin(q, u, itab, ftab, ftab[BOX_AT:BOX_AT + 6 + 3 * n_f], 0.0, state, frame1, point1, centre, axes1,
-                  work):
-        return APART, nan, nan, nan, nan, nan, nan
-    if np.isnan(start[0]) or np.isnan(ftab[TOL2]):
-        return FALLBACK, nan, nan, nan, nan, nan, nan
+    ready = _begin(q, u, itab, ftab, 0.0, state, frame1, point1, centre, axes1, start, work)
+    if ready != LOCATED:
+        return ready, nan, nan, nan, nan, nan, nan
     B, local, D, g = newton_work
     found, eta, gg, k, steps = newton_1s(centre, start[0], knots, ints, floats, ctrl0, phi, state, span,
                                          ftab[MAX_STEP_E], ftab[TOL2], ftab[EDGE2], itab[MAX_ITER], B, local, D, g)

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 from numba import njit
 
+from mbs.bodies._kernels import quat_matrix_into
 from mbs.run._stage_kernels import live_contacts
 
 POINT, AT_REST, CALLED, FREE = 0, 1, 2, 3
@@ -34,9 +35,10 @@ INTS_AT = 3     # ints: n_s, n_p, width, then kind, at, n_reach (n_s each), cont
 
 
 @njit(cache=True)
-def sphere_states(q, kind, at, offset, radius0, reach, n_reach, centres, radii):
+def sphere_states(q, kind, at, offset, radius0, reach, n_reach, centres, radii, A):
     """Centres (n_s, 3) [m] and radii (n_s,) [m] of the POINT, AT_REST and FREE spheres at
-    the global q into ``centres``, ``radii`` (module docstring); CALLED rows untouched."""
+    the global q into ``centres``, ``radii`` (module docstring; ``A`` (3, 3) a work array
+    for a free frame's rotation); CALLED rows untouched."""
     for s in range(kind.shape[0]):
         k = kind[s]
         if k == POINT:
@@ -50,14 +52,9 @@ def sphere_states(q, kind, at, offset, radius0, reach, n_reach, centres, radii):
             radii[s] = radius0[s] + r
         elif k == FREE:
             o = at[s]
-            p0, p1, p2, p3 = q[o + 3], q[o + 4], q[o + 5], q[o + 6]
-            c0, c1, c2 = offset[s, 0], offset[s, 1], offset[s, 2]
-            centres[s, 0] = q[o] + ((1.0 - 2.0 * (p2 * p2 + p3 * p3)) * c0 + 2.0 * (p1 * p2 - p0 * p3) * c1
-                                    + 2.0 * (p1 * p3 + p0 * p2) * c2)
-            centres[s, 1] = q[o + 1] + (2.0 * (p1 * p2 + p0 * p3) * c0 + (1.0 - 2.0 * (p1 * p1 + p3 * p3)) * c1
-                                        + 2.0 * (p2 * p3 - p0 * p1) * c2)
-            centres[s, 2] = q[o + 2] + (2.0 * (p1 * p3 - p0 * p2) * c0 + 2.0 * (p2 * p3 + p0 * p1) * c1
-                                        + (1.0 - 2.0 * (p1 * p1 + p2 * p2)) * c2)
+            quat_matrix_into(q, o + 3, A)
+            for c in range(3):
+                centres[s, c] = q[o + c] + (A[c, 0] * offset[s, 0] + A[c, 1] * offset[s, 1] + A[c, 2] * offset[s, 2])
             r = 0.0
             for j in range(n_reach[s]):
                 r += reach[s, j] * abs(q[o + 7 + j])
@@ -88,7 +85,7 @@ def prune_pairs(contact, sphere1, sphere2, margin, centres, radii, live, closed)
 def prune(q, ints, floats, centres, radii, live, closed, live_idx):
     """:func:`sphere_states` then :func:`prune_pairs` in one call, their arrays views of
     ``ints`` (n_s, n_p, width, then kind, at, n_reach, contact, sphere1, sphere2) and
-    ``floats`` (offset (n_s, 3), radius0, reach (n_s, width), margin) — the layout of
+    ``floats`` (offset (n_s, 3), radius0, reach (n_s, width), margin, a (3, 3) work block) — the layout of
     :class:`mbs.run.bounding_spheres.SphereTable`; then the indices of the live contacts into
     ``live_idx`` (:func:`mbs.run._stage_kernels.live_contacts`). Returns (the number pruned,
     the number live)."""
@@ -101,6 +98,7 @@ def prune(q, ints, floats, centres, radii, live, closed, live_idx):
     radius0 = floats[3 * n:4 * n]
     reach = floats[4 * n:(4 + width) * n].reshape(n, width)
     margin = floats[(4 + width) * n:(4 + width) * n + n_p]
-    sphere_states(q, kind, at, offset, radius0, reach, n_reach, centres, radii)
+    A = floats[(4 + width) * n + n_p:(4 + width) * n + n_p + 9].reshape(3, 3)
+    sphere_states(q, kind, at, offset, radius0, reach, n_reach, centres, radii, A)
     pruned = prune_pairs(contact, sphere1, sphere2, margin, centres, radii, live, closed)
     return pruned, live_contacts(live, live_idx)

@@ -134,7 +134,7 @@ class SphereTable:
         self.ints[:K.INTS_AT] = n, n_p, width
         self.kind, self.at, self.n_reach, self.contact, self.sphere1, self.sphere2 = (
             self.ints[K.INTS_AT + a:K.INTS_AT + b] for a, b in _blocks((n, n, n, n_p, n_p, n_p)))
-        self.floats = np.zeros((4 + width) * n + n_p)
+        self.floats = np.zeros((4 + width) * n + n_p + 9)    # the last 9: the kernel's work block
         offset, self.radius0, reach, self.margin = (self.floats[a:b] for a, b in _blocks((3 * n, n, width * n, n_p)))
         self.offset, self.reach = offset.reshape(n, 3), reach.reshape(n, width)
         self.kind[:] = K.CALLED
