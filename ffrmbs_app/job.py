@@ -48,7 +48,10 @@ The job, for a scene (:class:`ffrmbs_app.scene.Scene`) built fresh by ``make_sce
    named; a scene of such bodies only takes no step and gives the sampled energies);
    the final outputs; the error estimate;
 5. ``OUT/<scene>.png`` (the outputs against time, :mod:`ffrmbs_app.plot`; rewritten by
-   each run) and the ParaView series ``OUT/<scene>-paraview/`` (:mod:`ffrmbs_app.export`).
+   each run) and the ParaView series ``OUT/<scene>-paraview/`` (:mod:`ffrmbs_app.export`),
+   written in a second process while step 3 runs (:mod:`ffrmbs_app.side_process`; the
+   summary goes into the result file once that process is done), in the job's own process
+   without checks, without a second CPU, or when the second process failed.
 """
 
 from __future__ import annotations
@@ -64,6 +67,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ffrmbs_app import side_process
 from ffrmbs_app.compile_clock import CompileClock
 from ffrmbs.errors import InputFileError, ModelError
 from ffrmbs_app.limits import check_resources
@@ -271,26 +275,57 @@ def _run(make_scene, scene, path, check, resume, checkpoint_every, flush_every, 
     log(clock.describe())
     summary = _summary(scene, res, wall, cpu, warm_s)
     summary.update(compile_s=clock.seconds, kernels_compiled=clock.compiled)
-    if check:
-        half = _simulate(make_scene(), dt=0.5 * scene.dt)
-        summary["error_estimate"] = {name: error_estimate(res[name], half[name], units[name]) for name in res.outputs}
-        summary["error_parts"] = {}
-        for label, (what, make) in scene.variants.items():
-            other = _simulate(make())
-            summary["error_parts"][label] = {"against": what, "outputs": {
-                name: error_estimate(res[name], other[name], units[name]) for name in res.outputs}}
-    recorder.write_summary(summary)
+    side = side_process.start(lambda: _derived_files(path, plot, export)) if check and (plot or export) else None
+    try:
+        if check:
+            _check(make_scene, scene, res, units, summary)
+        written = side is not None and side.join()
+    except BaseException:
+        if side is not None:
+            side.stop()
+        raise
+    recorder.write_summary(summary)         # the result file is free again: the side process read it
     _report(summary, log)
+    summary.update(_derived_files(path, plot, export) if not written else _derived_paths(path, plot, export))
+    summary["result_file"] = str(path)
+    return summary
+
+
+def _check(make_scene, scene, res, units, summary) -> None:
+    """Step 3 of the job (module docstring): the error estimates into ``summary``."""
+    half = _simulate(make_scene(), dt=0.5 * scene.dt)
+    summary["error_estimate"] = {name: error_estimate(res[name], half[name], units[name]) for name in res.outputs}
+    summary["error_parts"] = {}
+    for label, (what, make) in scene.variants.items():
+        other = _simulate(make())
+        summary["error_parts"][label] = {"against": what, "outputs": {
+            name: error_estimate(res[name], other[name], units[name]) for name in res.outputs}}
+
+
+def _derived_files(path, plot, export) -> dict:
+    """Step 5 of the job (module docstring): the plot and the ParaView export of the result
+    file ``path`` (as asked); their paths under "plot", "paraview"."""
     if plot:
         from ffrmbs_app.plot import plot_result
 
-        summary["plot"] = str(plot_result(path, out=path.with_suffix(".png")))
+        plot_result(path, out=path.with_suffix(".png"))
     if export:
         from ffrmbs_app.export import export_paraview
 
-        summary["paraview"] = str(export_paraview(path))
-    summary["result_file"] = str(path)
-    return summary
+        export_paraview(path)
+    return _derived_paths(path, plot, export)
+
+
+def _derived_paths(path, plot, export) -> dict:
+    """The paths :func:`_derived_files` writes."""
+    from ffrmbs_app.export import default_export_dir
+
+    paths = {}
+    if plot:
+        paths["plot"] = str(path.with_suffix(".png"))
+    if export:
+        paths["paraview"] = str(default_export_dir(path) / f"{path.stem}.pvd")
+    return paths
 
 
 def header(scene) -> str:
