@@ -205,6 +205,56 @@ def ffr_free_mass_and_h(q, u, mass, I1, S_bar, I_kl, I_bar, S_kl, M_ff, S_skew, 
 
 
 @njit(cache=True)
+def half_quadratic(M, x) -> float:
+    """½ xᵀ M x for a square M (n, n) and x (n,) (½ first in each row, as
+    :func:`linear_bodies_energy`)."""
+    total = 0.0
+    for i in range(x.shape[0]):
+        s = 0.0
+        for j in range(x.shape[0]):
+            s += M[i, j] * x[j]
+        total += 0.5 * x[i] * s
+    return total
+
+
+@njit(cache=True)
+def ffr_free_energies(q, u, mass, I1, S_bar, I_kl, I_bar, S_kl, M_ff, S_skew, K, gravity, A, G, M, Q):
+    """(kinetic, potential) energy [J] of a free FFR body with a quaternion frame at its
+    own (q, u), u = (Ṙ, ω̄, q̇_f): T = ½ uᵀ M̄ u (thesis eq. 2.43, M̄ of
+    :func:`ffr_mass_qv_into`) and V = ½ q_fᵀ K q_f − gᵀ (m R + A (I1 + S̄ q_f)), the
+    elastic energy and gravity's potential −m g·r_com (eq. 2.55: m ū_com = I1 + S̄ q_f).
+    ``A``, ``G``, ``M``, ``Q`` scratch as :func:`ffr_free_mass_and_h`'s. Numpy reference:
+    the body's ``kinetic_energy``, ``elastic_energy`` and its centre-of-mass frame."""
+    quat_matrix_into(q, np.int64(3), A)
+    q_f = q[7:]
+    ffr_mass_qv_into(A, u[3:6], q_f, u[6:], mass, I1, S_bar, I_kl, I_bar, S_kl, M_ff, S_skew, G, M, Q)
+    potential = half_quadratic(K, q_f)
+    for c in range(3):
+        moment = mass * q[c]                    # m r_com = m R + A S̄_t
+        for d in range(3):
+            s_t = I1[d]
+            for a in range(q_f.shape[0]):
+                s_t += S_bar[d, a] * q_f[a]
+            moment += A[c, d] * s_t
+        potential -= gravity[c] * moment
+    return half_quadratic(M, u), potential
+
+
+@njit(cache=True)
+def point_masses_energies(q_at, u_at, mass, gravity, q, u):
+    """(kinetic, potential) energy [J] of the point masses with rows q_at[p], u_at[p] and
+    masses mass[p] [kg]: Σ ½ m |u_p|² and Σ −m g·q_p."""
+    kinetic = 0.0
+    potential = 0.0
+    for p in range(q_at.shape[0]):
+        for c in range(3):
+            v = u[u_at[p] + c]
+            kinetic += 0.5 * mass[p] * v * v
+            potential -= mass[p] * gravity[c] * q[q_at[p] + c]
+    return kinetic, potential
+
+
+@njit(cache=True)
 def ffr_prescribed_mass_and_h(A, w, a_R, wd, q, u, mass, I1, S_bar, I_kl, I_bar, S_kl, M_ff, S_skew, K, D,
                               damped, G, Mb, Qb, M, h):
     """M = M̄_ff and h = Q̄_f − M̄_fR R̈ − M̄_fθ ω̄̇ − K q_f − D q̇_f (n_f,) of an FFR body on a

@@ -23,7 +23,8 @@ from ffrmbs.errors import ModelError
 from preprocess import BodyData, read_body
 
 from mbs.bodies.body import Frame
-from mbs.bodies._kernels import elastic_h_into, ffr_free_mass_and_h, ffr_mass_and_qv, ffr_prescribed_mass_and_h
+from mbs.bodies._kernels import (elastic_h_into, ffr_free_energies, ffr_free_mass_and_h, ffr_mass_and_qv,
+                                 ffr_prescribed_mass_and_h)
 from mbs.bodies.floating_frame import FloatingFrameBody
 from mbs.bodies.geometric_stiffening import N_CASES, add_geometric_tangents, load_parameters_into, sub_geometric_force
 from mbs.bodies.shape_integrals import ShapeIntegrals
@@ -247,6 +248,20 @@ class FlexibleBodyFFR(FloatingFrameBody):
             elastic_h_into(self.K_ff, self.D_ff, self.damped, q, u, h)
         else:
             super().h_into(q, u, t, h, work)
+
+    def free_energies(self, q, u, gravity, work=None):
+        """(kinetic, potential) energy [J] of a body on a free quaternion frame at its own
+        (q, u) under ``gravity`` (3,) [m/s²] in one kernel
+        (:func:`mbs.bodies._kernels.ffr_free_energies`): T = ½ uᵀ M̄ u and V = ½ q_fᵀ K_ff q_f
+        − m g·r_com, as :meth:`kinetic_energy`, :meth:`elastic_energy` and gravity at the
+        :meth:`com_frame` give them; None on another frame."""
+        if not self.free_quaternion:
+            return None
+        if work is None:
+            work = self.workspace()
+        si = self.integrals
+        return ffr_free_energies(q, u, si.mass, si.I1, si.S_bar, si.I_kl, si.I_bar, si.S_kl, si.M_ff, si.S_skew,
+                                 self.K_ff, gravity, work[0], work[1], work[2], work[3])
 
     def linear_forces(self):
         """On a frame at rest h = −K_ff q_f − D_ff q̇_f (thesis eq. 2.36; Q_v = 0, eq. 4.2)

@@ -28,7 +28,8 @@ When every body's h is linear with constant coefficients (point masses, FFR bodi
 a frame at rest) and gravity is the only load, h is one kernel
 (:func:`mbs.bodies._kernels.linear_bodies_h`): gravity on a body at rest is the constant
 J_Tᵀ m g, taken once from the body's own ``add_point_load_into``, and so is the
-energy (kinetic and potential, :meth:`BodyStage.energies`).
+energy (kinetic and potential, :meth:`BodyStage.energies`); FFR bodies on free
+quaternion frames beside point masses take one energy kernel each.
 The results equal :meth:`mbs.system.System.mass_and_h` (the numpy reference) to
 rounding.
 """
@@ -119,6 +120,7 @@ class BodyStage:
         self.linear_rows, self.linear_KD, self.linear_force, self.linear_V0 = self._linear_table()
         self.linear = self.linear_rows is not None
         self.linear_M = self._linear_mass() if self.linear and not self.idle else None
+        self._free = self._free_frames() if self.linear_M is None else None
 
     def _linear_table(self):
         """The rows (k, 3) (first row, end row, kind), coefficients KD (2, nu, nu) and
@@ -182,6 +184,19 @@ class BodyStage:
             loads[id(b)] = (Q, V0)
         return loads
 
+    def _free_frames(self):
+        """[(body, q slice, u slice, work)] of the FFR bodies on free quaternion frames, when
+        they and point masses are all the bodies, none is left out and no force element
+        acts (gravity the only load): :meth:`energies` sums their kernels then; else None."""
+        if self.idle or self.forces:
+            return None
+        free = []
+        for b, qs, us, work in self._items:
+            if not (getattr(b, "free_quaternion", False) and callable(getattr(b, "free_energies", None))):
+                return None
+            free.append((b, qs, us, work))
+        return free
+
     def _linear_mass(self):
         """The constant mass matrix (nu, nu) of the linear bodies (their blocks at the
         initial state), for :meth:`energies`."""
@@ -191,14 +206,24 @@ class BodyStage:
         return M
 
     def energies(self, q, u):
-        """(kinetic, potential) energy [J] in one kernel
-        (:func:`mbs.bodies._kernels.linear_bodies_energy`) when every body is linear, none is
-        left out and no force element acts (then the energy is the bodies' and gravity's
-        alone); else None (the caller sums the bodies' and links' own energies)."""
-        if self.linear_M is None:
+        """(kinetic, potential) energy [J], when none is left out and no force element acts
+        (then the energy is the bodies' and gravity's alone): in one kernel
+        (:func:`mbs.bodies._kernels.linear_bodies_energy`) when every body is linear, in one
+        kernel per body (:meth:`~mbs.bodies.flexible_body.FlexibleBodyFFR.free_energies`) and
+        one for the point masses (:func:`~mbs.bodies._kernels.point_masses_energies`) when
+        the others are FFR bodies on free quaternion frames; else None (the caller sums the
+        bodies' and links' own energies)."""
+        if self.linear_M is not None:
+            return K.linear_bodies_energy(self.linear_rows, self.linear_M, self.linear_KD[0], self.linear_force,
+                                          self.linear_V0, q, u)
+        if self._free is None:
             return None
-        return K.linear_bodies_energy(self.linear_rows, self.linear_M, self.linear_KD[0], self.linear_force,
-                                      self.linear_V0, q, u)
+        kinetic, potential = K.point_masses_energies(self._point_q, self._point_u, self._point_mass, self.gravity, q, u)
+        for b, qs, us, work in self._free:
+            body_kinetic, body_potential = b.free_energies(q[qs], u[us], self.gravity, work)
+            kinetic += body_kinetic
+            potential += body_potential
+        return kinetic, potential
 
     def energy(self, q, u):
         """Kinetic plus potential energy [J] (:meth:`energies`), or None."""
