@@ -51,8 +51,10 @@ from contours.rigid import sphere_angles
 from contours.base import DERIVS_AT, FRAME_AT, J_AT, V_AT
 from contours.neutral._kernels import (A_AT, Q_AT, STAMP_AT, bounding_box, contract_surface, evaluate_1s, frame_2s,
                                       point_velocity)
+from contours.neutral._kernels import R_AT as STATE_R_AT, V_AT as STATE_V_AT, W_AT as STATE_W_AT  # (beside the
+# ContourPoint buffer's V_AT)
 
-from mbs.bodies._kernels import point_jacobian_T
+from mbs.bodies._kernels import point_jacobian_T, quat_matrix_into
 
 APART, LOCATED, FALLBACK, NO_POINT = 0, 1, 2, 3   # outcomes of a fused detection (NO_POINT: no contact
                                                  # point exists, the kinematics turn inactive)
@@ -61,10 +63,12 @@ APART, LOCATED, FALLBACK, NO_POINT = 0, 1, 2, 3   # outcomes of a fused detectio
 # bodies, velocity wanted (0/1), broad phase on (0/1), Newton iterations, an offset
 # contour's offset law (contours._offset_kernels.offsets) and whether its ξ is closed,
 # whether the surface's body has a free frame (0/1), whether a curve is a sharp edge (0/1:
-# the normal from the curve to the centre), the offsets of the kinematics buffer
-# (contact.kinematics.buffer_layout, 8). The surface's
-# own kernel data (knots, ints, floats, control points, state, span cache) are arguments.
-QP, UP, QF, UF, NF, NU1, NU2, VELOCITY, BOX, MAX_ITER, LAW, XI_CLOSED, FREE, EDGE, KIN_AT = range(15)
+# the normal from the curve to the centre), the first rows of q and u of a free quaternion
+# frame whose state the kernel writes (−1: its contour's update writes it, or it is at
+# rest), the offsets of the kinematics buffer (contact.kinematics.buffer_layout, 8). The
+# surface's own kernel data (knots, ints, floats, control points, state, span cache) are
+# arguments.
+QP, UP, QF, UF, NF, NU1, NU2, VELOCITY, BOX, MAX_ITER, LAW, XI_CLOSED, FREE, EDGE, FRAME_Q, FRAME_U, KIN_AT = range(17)
 ITAB_SIZE = KIN_AT + 8
 Q2, U2 = QF, UF     # the analytic pairs (plane, sphere–sphere): side 2's point-mass rows (−1: not a point mass)
 # ftab: margin [m], tol2 [m²] (NaN until the search knows its length scale), the largest
@@ -98,6 +102,7 @@ def _begin(q, u, itab, ftab, reach, state, frame1, point1, centre, axes1, start,
     radius = ftab[RADIUS]
     qf, uf = itab[QF], itab[UF]
     _mass_frame(q, u, itab[QP], itab[UP], ftab[OFFSET_AT:OFFSET_AT + 3], frame1)
+    _free_frame(q, u, itab[FRAME_Q], itab[FRAME_U], state)
     for k in range(n_f):
         state[Q_AT + k] = q[qf + k]
         state[Q_AT + n_f + k] = u[uf + k]
@@ -127,6 +132,20 @@ def _mass_frame(q, u, q_at, u_at, offset, frame):
     for c in range(3):
         frame[rigid.R_AT + c] = q[q_at + c] + offset[c]
         frame[rigid.V_AT + c] = u[u_at + c]
+
+
+@njit(cache=True)
+def _free_frame(q, u, q_at, u_at, state):
+    """A free quaternion frame's R = q[q_at:+3], A of the quaternion q[q_at+3:+7], v =
+    u[u_at:+3] and ω̄ = u[u_at+3:+6] (T = 1) into the neutral contour's ``state``, as its
+    update's ``frame_state`` gives them; nothing for ``q_at`` < 0."""
+    if q_at < 0:
+        return
+    quat_matrix_into(q, q_at + 3, state[A_AT:A_AT + 9].reshape(3, 3))
+    for c in range(3):
+        state[STATE_R_AT + c] = q[q_at + c]
+        state[STATE_V_AT + c] = u[u_at + c]
+        state[STATE_W_AT + c] = u[u_at + 3 + c]
 
 
 @njit(cache=True)
