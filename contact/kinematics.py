@@ -72,30 +72,53 @@ class ContactKinematics(ABC):
         Point-local Jacobian pieces J_T1ᵀ n and −J_T2ᵀ n in the bodies' own u.
     w_T1, w_T2 : (nu1, 2), (nu2, 2)
         J_T1ᵀ T and −J_T2ᵀ T.
-    buffer : (11 + 3 (nu1 + nu2),)
-        n, T (row-major), gd_T, w_N1, w_N2, w_T1, w_T2 (row-major) are views of this one
-        vector, in this order (offsets :func:`buffer_layout`), so that a compiled kernel
-        takes them as one array.
+    buffer : (14 + 3 (nu1 + nu2),)
+        g_N, ġ_N, active (1.0 or 0.0) at ``G_N_AT``, ``GD_N_AT``, ``ACTIVE_AT``, then n, T
+        (row-major), gd_T, w_N1, w_N2, w_T1, w_T2 (row-major) as views of this one vector,
+        in this order (offsets :func:`buffer_layout`), so that a compiled kernel takes and
+        writes them as one array.
     """
 
     #: what update() wrote (:mod:`mbs.results.state_arrays`)
-    run_state = ("active", "g_N", "n", "T", "gd_N", "gd_T", "w_N1", "w_N2", "w_T1", "w_T2", "point1", "point2")
+    run_state = ("buffer", "point1", "point2")
 
     def __init__(self, contour1, contour2, nu_total=None):
         self.contour1, self.contour2 = contour1, contour2
         self.point1, self.point2 = contour1.new_point(), contour2.new_point()
         self._nu_total = nu_total
-        self.active = False
-        self.g_N = np.nan
-        self.gd_N = np.nan
         nu1, nu2 = contour1.nu, contour2.nu
         n_at, T_at, gd_T_at, w_N1_at, w_N2_at, w_T1_at, w_T2_at, size = buffer_layout(nu1, nu2)
         self.buffer = b = np.zeros(size)
+        b[G_N_AT] = b[GD_N_AT] = np.nan
         self.n = b[n_at:T_at]
         self.T = b[T_at:gd_T_at].reshape(3, 2)
         self.gd_T = b[gd_T_at:w_N1_at]
         self.w_N1, self.w_N2 = b[w_N1_at:w_N2_at], b[w_N2_at:w_T1_at]
         self.w_T1, self.w_T2 = b[w_T1_at:w_T2_at].reshape(nu1, 2), b[w_T2_at:size].reshape(nu2, 2)
+
+    @property
+    def active(self) -> bool:
+        return bool(self.buffer[ACTIVE_AT])
+
+    @active.setter
+    def active(self, value):
+        self.buffer[ACTIVE_AT] = 1.0 if value else 0.0
+
+    @property
+    def g_N(self) -> float:
+        return float(self.buffer[G_N_AT])
+
+    @g_N.setter
+    def g_N(self, value):
+        self.buffer[G_N_AT] = value
+
+    @property
+    def gd_N(self) -> float:
+        return float(self.buffer[GD_N_AT])
+
+    @gd_N.setter
+    def gd_N(self, value):
+        self.buffer[GD_N_AT] = value
 
     @abstractmethod
     def _locate(self, velocity, jacobians) -> bool:
@@ -185,11 +208,14 @@ class ContactKinematics(ABC):
         return f"{type(self).__name__}({self.contour1!r}, {self.contour2!r})"
 
 
+G_N_AT, GD_N_AT, ACTIVE_AT = 0, 1, 2       # the scalars at the head of ContactKinematics.buffer
+
+
 def buffer_layout(nu1, nu2):
     """Offsets of n, T, gd_T, w_N1, w_N2, w_T1, w_T2 in :attr:`ContactKinematics.buffer`
     for bodies with nu1, nu2 velocities, and its length."""
-    w_N1 = 11
-    return 0, 3, 9, w_N1, w_N1 + nu1, w_N1 + nu1 + nu2, w_N1 + 3 * nu1 + nu2, w_N1 + 3 * (nu1 + nu2)
+    w_N1 = 14
+    return 3, 6, 12, w_N1, w_N1 + nu1, w_N1 + nu1 + nu2, w_N1 + 3 * nu1 + nu2, w_N1 + 3 * (nu1 + nu2)
 
 
 def _require(contour, kind, what):

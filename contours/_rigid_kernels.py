@@ -3,8 +3,14 @@ contour point, a plane's point at given coordinates and the coordinates of a poi
 foot on it, a sphere's surface coordinates of a direction and its point at given
 coordinates — the one implementation that the contours' ``evaluate``, the contact
 kinematics of planes and spheres (:mod:`contact.kinematics`) and the compiled detection
-(:mod:`mbs.run._fused_detection_kernels`) share. The frame contour's ``state`` and the point's ``buffer`` are the flat vectors
-their arrays are views of (layouts below and :data:`contours.base.DERIVS_AT` …).
+(:mod:`mbs.run._fused_detection_kernels`) share. The frame contour's ``state`` and the
+point's ``buffer`` are the flat vectors their arrays are views of (layouts below and
+:data:`contours.base.ETA_AT` …: η, ξ, then the derivatives, frame, velocity and
+Jacobians; the kernels leave η, ξ to their callers).
+
+numba's disk cache keeps the imported layout's values with the compiled kernels and
+checks only this file's stamp: a change of the layout in :mod:`contours.base` must come
+with a change of this file.
 """
 
 from __future__ import annotations

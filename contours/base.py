@@ -32,8 +32,8 @@ from ffrmbs.errors import ModelError
 
 # rows of ContourPoint.derivs and of the contraction kernels
 VALUE, D_ETA, D_XI, D_ETA_ETA, D_ETA_XI, D_XI_XI = range(6)
-# layout of ContourPoint.buffer: derivs (6, 3), frame (3, 3), v (3,), J_T (3, nu), J_R (3, nu)
-DERIVS_AT, FRAME_AT, V_AT, J_AT = 0, 18, 27, 30
+# layout of ContourPoint.buffer: η, ξ, derivs (6, 3), frame (3, 3), v (3,), J_T (3, nu), J_R (3, nu)
+ETA_AT, XI_AT, DERIVS_AT, FRAME_AT, V_AT, J_AT = 0, 1, 2, 20, 29, 32
 
 
 class ContourPoint:
@@ -51,23 +51,38 @@ class ContourPoint:
         Velocity ṙ (filled when asked for).
     J_T, J_R : (3, nu)
         Jacobians of translation and rotation (filled when asked for).
-    buffer : (30 + 6 nu,)
-        The arrays above are views of this one vector (layout ``DERIVS_AT``,
-        ``FRAME_AT``, ``V_AT``, ``J_AT``: derivs row-major, frame row-major, v, J_T
-        row-major, J_R row-major), so that a compiled kernel takes a point as one array.
+    buffer : (32 + 6 nu,)
+        η, ξ and the arrays above are this one vector (layout ``ETA_AT``, ``XI_AT``,
+        ``DERIVS_AT``, ``FRAME_AT``, ``V_AT``, ``J_AT``: derivs row-major, frame row-major,
+        v, J_T row-major, J_R row-major), so that a compiled kernel takes a point as one
+        array.
     """
 
-    run_state = ("eta", "xi", "derivs", "frame", "v", "J_T", "J_R")     # (mbs.results.state_arrays)
+    run_state = ("buffer",)     # (mbs.results.state_arrays)
 
     def __init__(self, nu: int):
-        self.eta = 0.0
-        self.xi = 0.0
         self.buffer = b = np.zeros(J_AT + 6 * nu)
         self.derivs = b[DERIVS_AT:FRAME_AT].reshape(6, 3)
         self.frame = b[FRAME_AT:V_AT].reshape(3, 3)
         self.v = b[V_AT:J_AT]
         self.J_T = b[J_AT:J_AT + 3 * nu].reshape(3, nu)
         self.J_R = b[J_AT + 3 * nu:].reshape(3, nu)
+
+    @property
+    def eta(self) -> float:
+        return float(self.buffer[ETA_AT])
+
+    @eta.setter
+    def eta(self, value):
+        self.buffer[ETA_AT] = value
+
+    @property
+    def xi(self) -> float:
+        return float(self.buffer[XI_AT])
+
+    @xi.setter
+    def xi(self, value):
+        self.buffer[XI_AT] = value
 
     @property
     def r(self) -> np.ndarray:

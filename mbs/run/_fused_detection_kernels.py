@@ -42,13 +42,14 @@ from numba import njit
 
 from contact._detection_kernels import (boxes_overlap, edge_frame, frame_rates_jacobians, newton_1s, newton_2s,
                                        newton_offset, normal_gap)
+from contact.kinematics import ACTIVE_AT, G_N_AT, GD_N_AT
 from contact.search import LAST_ITERATIONS, NEWTON_ITERATIONS, NEWTON_SOLVES
 from contours import rigid
 from contours._offset_kernels import evaluate_offset, offsets
 from contours.fitting._kernels import in_material
 from contours._rigid_kernels import frame_point, plane_coordinates, plane_point, sphere_point
 from contours.rigid import sphere_angles
-from contours.base import DERIVS_AT, FRAME_AT, J_AT, V_AT
+from contours.base import DERIVS_AT, ETA_AT, FRAME_AT, J_AT, V_AT, XI_AT
 from contours.neutral._kernels import (A_AT, Q_AT, STAMP_AT, bounding_box, contract_surface, evaluate_1s, frame_2s,
                                       point_velocity)
 from contours.neutral._kernels import R_AT as STATE_R_AT, V_AT as STATE_V_AT, W_AT as STATE_W_AT  # (beside the
@@ -171,24 +172,26 @@ def _centre(frame1, radius, velocity, point1, centre, axes1):
 
 
 @njit(cache=True)
-def _finish(itab, ftab, frame1, point1, point2, kin, centre, axes1, work):
-    """Step 6 of a fused detection (:func:`centre_on_neutral_2s`) once C2 is in ``point2``:
-    g_N, a sphere's C1, the frame's pieces into ``kin``. Returns (g_N [m], ġ_N [m/s],
-    the sphere's C1 η, ξ [rad] (NaN for a point))."""
-    nan = np.nan
+def _finish(itab, ftab, frame1, point1, point2, kin, centre, axes1, work, eta, xi):
+    """Step 6 of a fused detection (:func:`centre_on_neutral_2s`) once C2 is in ``point2``
+    at (``eta``, ``xi``): g_N, a sphere's C1, the frame's pieces into ``kin``; the
+    kinematics active, g_N, ġ_N (with velocity) and both points' (η, ξ) (a point's C1 at
+    (0, 0)) as their update leaves them. Returns g_N [m]."""
     nu1, nu2 = itab[NU1], itab[NU2]
     velocity = itab[VELOCITY] != 0
     radius = ftab[RADIUS]
     D2 = point2[DERIVS_AT:FRAME_AT].reshape(6, 3)
     F2 = point2[FRAME_AT:V_AT].reshape(3, 3)
     g_N = normal_gap(F2, centre, D2, radius)
-    eta1 = xi1 = nan
+    eta1 = xi1 = 0.0
     if radius > 0.0:
         m = work[12:15]
         for c in range(3):
             m[c] = -F2[c, 2]
         eta1, xi1 = sphere_angles(axes1, m)
         sphere_point(frame1, radius, eta1, xi1, velocity, np.bool_(True), point1)
+    point1[ETA_AT], point1[XI_AT] = eta1, xi1
+    point2[ETA_AT], point2[XI_AT] = eta, xi
     ko = KIN_AT
     T = kin[itab[ko + 1]:itab[ko + 2]].reshape(3, 2)
     w_T1 = kin[itab[ko + 5]:itab[ko + 6]].reshape(nu1, 2)
@@ -198,7 +201,11 @@ def _finish(itab, ftab, frame1, point1, point2, kin, centre, axes1, work):
     gd_N = frame_rates_jacobians(F2, point1[V_AT:J_AT], point2[V_AT:J_AT], J1, J2, velocity, np.bool_(True),
                                  kin[itab[ko]:itab[ko + 1]], T, kin[itab[ko + 2]:itab[ko + 3]],
                                  kin[itab[ko + 3]:itab[ko + 4]], kin[itab[ko + 4]:itab[ko + 5]], w_T1, w_T2)
-    return g_N, gd_N if velocity else nan, eta1, xi1
+    kin[G_N_AT] = g_N
+    if velocity:
+        kin[GD_N_AT] = gd_N
+    kin[ACTIVE_AT] = 1.0
+    return g_N
 
 
 @njit(cache=True)
@@ -259,22 +266,21 @@ def centre_on_neutral_2s(q, u, itab, ftab, knots_e, knots_x, ints, floats, ctrl0
        gives at the root, its Φ rows in the third of the contour's ``contour_work`` —,
        J_T and J_R (eq. 2.70, 2.72: :func:`_jacobian`);
     6. g_N = nᵀ (c − r_C2) − ρ (eq. 3.4); a sphere's C1 = c − ρ n into ``point1``
-       (:func:`contours._rigid_kernels.sphere_point` at the coordinates of −n); n, T, ġ_T,
-       w_N1, w_N2, w_T1, w_T2 (eq. 3.8) into ``kin``.
+       (:func:`contours._rigid_kernels.sphere_point` at the coordinates of −n); g_N, ġ_N
+       (with velocity), active, n, T, ġ_T, w_N1, w_N2, w_T1, w_T2 (eq. 3.8) into ``kin``,
+       both points' (η, ξ) into theirs (:func:`_finish`).
 
-    Returns (outcome, g_N [m], ġ_N [m/s] (NaN without velocity), C2's η, ξ, a sphere's
-    C1 η, ξ [rad] (NaN for a point)).
+    Returns (outcome, g_N [m]; NaN unless LOCATED). NO_POINT leaves the kinematics inactive.
     """
-    nan = np.nan
     ready = _begin(q, u, itab, ftab, 0.0, state, frame1, point1, centre, axes1, start, work)
     if ready != LOCATED:
-        return ready, nan, nan, nan, nan, nan, nan
+        return ready, np.nan
     B, local, D, g = newton_work
     found, eta, xi, gg, k, steps = newton_2s(centre, start[0], start[1], knots_e, knots_x, ints, floats, ctrl0, phi,
                                              state, span, ftab[MAX_STEP_E], ftab[MAX_STEP_X], ftab[TOL2], ftab[EDGE2],
                                              itab[MAX_ITER], B, local, D, g)
     if not (found and in_material(eta, xi, trim_vertices, trim_starts)):
-        return FALLBACK, nan, nan, nan, nan, nan, nan
+        return FALLBACK, np.nan
     _count(counts, k, steps)
     start[0], start[1] = eta, xi
     # C2: the r rows of Newton's last evaluation, then the rest of evaluate_2s at the root
@@ -286,8 +292,7 @@ def centre_on_neutral_2s(q, u, itab, ftab, knots_e, knots_x, ints, floats, ctrl0
     if itab[VELOCITY] != 0:
         point_velocity(state, local[0], phi_rows[0], point2[V_AT:J_AT])
     _jacobian(itab, ftab, state, local[0], phi_rows[0], point2)
-    g_N, gd_N, eta1, xi1 = _finish(itab, ftab, frame1, point1, point2, kin, centre, axes1, work)
-    return LOCATED, g_N, gd_N, eta, xi, eta1, xi1
+    return LOCATED, _finish(itab, ftab, frame1, point1, point2, kin, centre, axes1, work, eta, xi)
 
 
 @njit(cache=True)
@@ -301,10 +306,9 @@ def centre_on_offset(q, u, itab, ftab, knots, ints, floats, ctrl0, phi, state, s
     arrays ``contour_work`` = B, local, rows, frame, Φ rows, Φ_P, as
     :meth:`contours.derived.OffsetContour.evaluate` fills them) with J_T, J_R at Φ_P.
     Returns as :func:`centre_on_neutral_2s`."""
-    nan = np.nan
     ready = _begin(q, u, itab, ftab, ftab[REACH], state, frame1, point1, centre, axes1, start, work)
     if ready != LOCATED:
-        return ready, nan, nan, nan, nan, nan, nan
+        return ready, np.nan
     B, local, rows, frame, D, g = newton_work
     law, size = itab[LAW], ftab[SIZE]
     found, eta, xi, gg, k, steps = newton_offset(centre, start[0], start[1], knots, ints, floats, ctrl0, phi, state,
@@ -312,7 +316,7 @@ def centre_on_offset(q, u, itab, ftab, knots, ints, floats, ctrl0, phi, state, s
                                                  ftab[MAX_STEP_E], ftab[MAX_STEP_X], ftab[TOL2], ftab[EDGE2],
                                                  itab[MAX_ITER], B, local, rows, frame, D, g)
     if not found:
-        return FALLBACK, nan, nan, nan, nan, nan, nan
+        return FALLBACK, np.nan
     _count(counts, k, steps)
     start[0], start[1] = eta, xi
     B, local, rows, frame, phi_rows, phi_point = contour_work
@@ -321,8 +325,7 @@ def centre_on_offset(q, u, itab, ftab, knots, ints, floats, ctrl0, phi, state, s
                     np.bool_(True), itab[VELOCITY] != 0, B, local, rows, frame, phi_rows, phi_point,
                     point2[DERIVS_AT:FRAME_AT].reshape(6, 3), point2[FRAME_AT:V_AT].reshape(3, 3), point2[V_AT:J_AT])
     _jacobian(itab, ftab, state, rows[0], phi_point, point2)
-    g_N, gd_N, eta1, xi1 = _finish(itab, ftab, frame1, point1, point2, kin, centre, axes1, work)
-    return LOCATED, g_N, gd_N, eta, xi, eta1, xi1
+    return LOCATED, _finish(itab, ftab, frame1, point1, point2, kin, centre, axes1, work, eta, xi)
 
 
 @njit(cache=True)
@@ -337,15 +340,14 @@ def centre_on_neutral_1s(q, u, itab, ftab, knots, ints, floats, ctrl0, phi, stat
     J_T, J_R; on a sharp edge (``itab[EDGE]``) the frame of
     :func:`~contact._detection_kernels.edge_frame` (NO_POINT when the centre lies on the
     curve). Returns as :func:`centre_on_neutral_2s` (C2's ξ = 0)."""
-    nan = np.nan
     ready = _begin(q, u, itab, ftab, 0.0, state, frame1, point1, centre, axes1, start, work)
     if ready != LOCATED:
-        return ready, nan, nan, nan, nan, nan, nan
+        return ready, np.nan
     B, local, D, g = newton_work
     found, eta, gg, k, steps = newton_1s(centre, start[0], knots, ints, floats, ctrl0, phi, state, span,
                                          ftab[MAX_STEP_E], ftab[TOL2], ftab[EDGE2], itab[MAX_ITER], B, local, D, g)
     if not found:
-        return FALLBACK, nan, nan, nan, nan, nan, nan
+        return FALLBACK, np.nan
     _count(counts, k, steps)
     start[0] = eta
     B, local, phi_rows = contour_work
@@ -353,10 +355,10 @@ def centre_on_neutral_1s(q, u, itab, ftab, knots, ints, floats, ctrl0, phi, stat
     evaluate_1s(eta, knots, ints, floats, ctrl0, phi, state, span, n_ref, np.bool_(True), itab[VELOCITY] != 0, B,
                 local, phi_rows, D2, F2, point2[V_AT:J_AT])
     if itab[EDGE] != 0 and not edge_frame(F2, centre, D2):
-        return NO_POINT, nan, nan, nan, nan, nan, nan
+        kin[ACTIVE_AT] = 0.0
+        return NO_POINT, np.nan
     _jacobian(itab, ftab, state, local[0], phi_rows[0], point2)
-    g_N, gd_N, eta1, xi1 = _finish(itab, ftab, frame1, point1, point2, kin, centre, axes1, work)
-    return LOCATED, g_N, gd_N, eta, 0.0, eta1, xi1
+    return LOCATED, _finish(itab, ftab, frame1, point1, point2, kin, centre, axes1, work, eta, 0.0)
 
 
 @njit(cache=True)
@@ -374,8 +376,7 @@ def centre_on_plane(q, u, itab, ftab, frame1, plane, point1, point2, kin, centre
     _centre(frame1, ftab[RADIUS], velocity, point1, centre, axes1)
     eta, xi = plane_coordinates(plane, centre)
     plane_point(plane, eta, xi, velocity, np.bool_(True), point2)
-    g_N, gd_N, eta1, xi1 = _finish(itab, ftab, frame1, point1, point2, kin, centre, axes1, work)
-    return LOCATED, g_N, gd_N, eta, xi, eta1, xi1
+    return LOCATED, _finish(itab, ftab, frame1, point1, point2, kin, centre, axes1, work, eta, xi)
 
 
 @njit(cache=True)
@@ -387,7 +388,6 @@ def sphere_on_sphere(q, u, itab, ftab, frame1, frame2, point1, point2, kin, cent
     (:func:`~contours._rigid_kernels.sphere_point`, its axes into ``axes2``), then g_N,
     C1 = c1 − ρ1 n and the frame's pieces as :func:`centre_on_neutral_2s` step 6.
     NO_POINT when the centres coincide. Returns as :func:`centre_on_neutral_2s`."""
-    nan = np.nan
     velocity = itab[VELOCITY] != 0
     radius1, radius2 = ftab[RADIUS], ftab[RADIUS2]
     _mass_frame(q, u, itab[QP], itab[UP], ftab[OFFSET_AT:OFFSET_AT + 3], frame1)
@@ -397,7 +397,7 @@ def sphere_on_sphere(q, u, itab, ftab, frame1, frame2, point1, point2, kin, cent
         _sphere_box(frame1, radius1, box1)
         _sphere_box(frame2, radius2, box2)
         if not boxes_overlap(box1, box2, ftab[MARGIN]):
-            return APART, nan, nan, nan, nan, nan, nan
+            return APART, np.nan
     _centre(frame1, radius1, velocity, point1, centre, axes1)
     for k in range(9):
         axes2[k // 3, k % 3] = frame2[rigid.A_AT + k]
@@ -408,13 +408,13 @@ def sphere_on_sphere(q, u, itab, ftab, frame1, frame2, point1, point2, kin, cent
         dist2 += m[c] * m[c]
     dist = np.sqrt(dist2)
     if dist == 0.0:
-        return NO_POINT, nan, nan, nan, nan, nan, nan
+        kin[ACTIVE_AT] = 0.0
+        return NO_POINT, np.nan
     for c in range(3):
         m[c] /= dist
     eta, xi = sphere_angles(axes2, m)
     sphere_point(frame2, radius2, eta, xi, velocity, np.bool_(True), point2)
-    g_N, gd_N, eta1, xi1 = _finish(itab, ftab, frame1, point1, point2, kin, centre, axes1, work)
-    return LOCATED, g_N, gd_N, eta, xi, eta1, xi1
+    return LOCATED, _finish(itab, ftab, frame1, point1, point2, kin, centre, axes1, work, eta, xi)
 
 
 @njit(cache=True)

@@ -60,6 +60,7 @@ from contact.kinematics import (ContactKinematicsPointContour1s, ContactKinemati
                                 ContactKinematicsSpherePlane, ContactKinematicsSphereSphere, PointOnCurveConstraint,
                                 buffer_layout)
 from contact.search import Contact1sSearch, Contact2sSearch
+from contours.base import DERIVS_AT
 from contours.derived import OffsetContour
 from contours.neutral.factory import Contour1sNeutralFactory, Contour2sNeutralFactory
 from contours.rigid import PlaneContour, PointContour, SphereContour
@@ -103,17 +104,6 @@ def _frame_side(contour, itab, ftab, q_at, u_at, offset_at):
         ftab[offset_at:offset_at + 3] = contour.frame_ref.u0
         return None
     return contour, body.q_slice, body.u_slice
-
-
-def _store_located(k, velocity, sphere, g_N, gd_N, eta, xi, eta1, xi1) -> None:
-    """What a kernel located into the kinematics ``k``, as their update leaves it: active,
-    g_N [m], ġ_N [m/s] (with ``velocity``), C2's (η, ξ) and C1's (a ``sphere``'s, a point's 0)."""
-    k.active = True
-    k.g_N = g_N
-    if velocity:
-        k.gd_N = gd_N
-    k.point2.eta, k.point2.xi = eta, xi
-    k.point1.eta, k.point1.xi = (eta1, xi1) if sphere else (0.0, 0.0)
 
 
 def _python_updates(updates, q, u, t):
@@ -188,7 +178,6 @@ class _FusedCentre:
         self._work = np.zeros(K.WORK_SIZE)
         self._points = (point.state, k.point1.buffer, k.point2.buffer, k.buffer, k.centre, k.axes1, k.start,
                         k.search.counts)
-        self.sphere = k.radius > 0.0
         self._updates = [(c, None, None) if c.body is None else (c, c.body.q_slice, c.body.u_slice)
                          for c in (point, surface)]                        # the Python path's
         moving = not (body2.frame_at_rest or frame_in_kernel)
@@ -213,15 +202,11 @@ class _FusedCentre:
             _python_updates(self._before, q, u, t)
             if self._free_T is not None:
                 self._free_T[...] = self.neutral.T
-        outcome, g_N, gd_N, eta, xi, eta1, xi1 = type(self).kernel(q, u, *self._args)
+        outcome, g_N = type(self).kernel(q, u, *self._args)
         self.neutral.kernel_updated(velocity=True)
         if outcome == K.LOCATED:
-            _store_located(self.kinematics, self.velocity, self.sphere, g_N, gd_N, eta, xi, eta1, xi1)
             return self._located(g_N)
-        if outcome == K.APART:
-            return False
-        if outcome == K.NO_POINT:
-            self.kinematics.active = False
+        if outcome != K.FALLBACK:           # apart, or no contact point (the kernel left it inactive)
             return False
         _python_updates(self._updates, q, u, t)
         closed = self.contact.locate()
@@ -292,10 +277,11 @@ class Probe:
         itab[K.BOX] = 0
         if not np.isnan(fused.kinematics.start[0]):
             np.copyto(self._start, fused.kinematics.start)
-        outcome, g_N = type(fused).kernel(q, u, *args)[:2]
+        outcome, g_N = type(fused).kernel(q, u, *args)
         if outcome != K.LOCATED:
             return None
-        return g_N, self._point2[:3], self._kin[:3]
+        n_at = fused._itab[K.KIN_AT]
+        return g_N, self._point2[DERIVS_AT:DERIVS_AT + 3], self._kin[n_at:n_at + 3]
 
     def seed(self) -> None:
         """Take the contact point and Newton's settings the run's kinematics and search
@@ -444,7 +430,6 @@ class _FusedAnalytic:
         k = self.kinematics = contact.kinematics
         self.velocity = not contact.set_valued
         self.closing_tol = contact.closing_tol
-        self.sphere = k.radius > 0.0
         itab = np.zeros(K.ITAB_SIZE, dtype=np.int64)
         ftab = np.zeros(K.BOX_AT)
         sides = (_frame_side(k.contour1, itab, ftab, K.QP, K.UP, K.OFFSET_AT),
@@ -466,13 +451,8 @@ class _FusedAnalytic:
         ``contour.update`` then :meth:`Contact.locate` do: True when closed
         (g_N <= closing_tol)."""
         _python_updates(self._before, q, u, t)
-        outcome, g_N, gd_N, eta, xi, eta1, xi1 = type(self).kernel(q, u, *self._args)
-        if outcome != K.LOCATED:
-            if outcome == K.NO_POINT:
-                self.kinematics.active = False
-            return False
-        _store_located(self.kinematics, self.velocity, self.sphere, g_N, gd_N, eta, xi, eta1, xi1)
-        return g_N <= self.closing_tol
+        outcome, g_N = type(self).kernel(q, u, *self._args)
+        return outcome == K.LOCATED and g_N <= self.closing_tol
 
     def probe(self):
         """None: the contact recorder locates an open analytic pair by the Python path."""
