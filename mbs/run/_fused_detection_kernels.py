@@ -83,6 +83,7 @@ Q2, U2 = QF, UF     # the analytic pairs (plane, sphere–sphere): side 2's poin
 MARGIN, TOL2, MAX_STEP_E, MAX_STEP_X, SIGN, EDGE2 = range(6)
 OFFSET_AT, FLOATS_AT, RADIUS, FRAME_T_AT, BOX_AT = 6, 9, 13, 14, 23
 SIZE, XI_A, XI_B, REACH = FLOATS_AT, FLOATS_AT + 1, FLOATS_AT + 2, FLOATS_AT + 3
+N_REF_AT = FLOATS_AT    # a 1s contour's: its body-frame reference normal n̄_ref (3,)
 OFFSET2_AT, RADIUS2 = FLOATS_AT, FLOATS_AT + 3    # the analytic pairs: side 2's frame offset ū0 (3) [m], radius [m]
 
 
@@ -339,8 +340,14 @@ def centre_on_neutral_1s(q, u, itab, ftab, knots, ints, floats, ctrl0, phi, stat
     at the root (the contour's work arrays ``contour_work`` = B, ū rows, Φ rows) with
     J_T, J_R; on a sharp edge (``itab[EDGE]``) the frame of
     :func:`~contact._detection_kernels.edge_frame` (NO_POINT when the centre lies on the
-    curve). Returns as :func:`centre_on_neutral_2s` (C2's ξ = 0)."""
+    curve). On a free quaternion frame the kernel writes (``itab[FRAME_Q]``) ``n_ref`` = A n̄_ref
+    follows the frame (n̄_ref in ``ftab``), as the curve's update. Returns as
+    :func:`centre_on_neutral_2s` (C2's ξ = 0)."""
     ready = _begin(q, u, itab, ftab, 0.0, state, frame1, point1, centre, axes1, start, work)
+    if itab[FRAME_Q] >= 0:
+        for c in range(3):
+            n_ref[c] = (state[A_AT + 3 * c] * ftab[N_REF_AT] + state[A_AT + 3 * c + 1] * ftab[N_REF_AT + 1]
+                        + state[A_AT + 3 * c + 2] * ftab[N_REF_AT + 2])
     if ready != LOCATED:
         return ready, np.nan
     B, local, D, g = newton_work

@@ -121,13 +121,12 @@ class _FusedCentre:
     ground) on a surface of a floating-frame body share: the tables' common entries (the layouts of
     :mod:`._fused_detection_kernels`), Newton's settings, and :meth:`locate` around the
     kernel (:attr:`kernel` with the arguments :attr:`_args` after q and u), preceded on a
-    moving frame by the surface's update (but a free quaternion frame when
-    :attr:`frame_in_kernel`: the kernel writes its state). ``neutral``: the neutral contour
-    whose state the kernel writes (the surface, or a band's curve); ``offset_floats``: an
-    offset contour's law size [m], ξ domain and reach [m] (ftab)."""
+    moving frame by the surface's update (but a free quaternion frame: the kernel writes
+    its state). ``neutral``: the neutral contour whose state the kernel writes (the
+    surface, or a band's curve); ``offset_floats``: an offset contour's law size [m], ξ
+    domain and reach [m], or a 1s contour's body-frame reference normal (ftab)."""
 
     kernel = None
-    frame_in_kernel = False     # the kernel writes a free quaternion frame's R, A, v, ω̄ (a 2s contour's)
 
     @staticmethod
     def _applies(contact, surface_ok, kinds=ON_SURFACE, search=Contact2sSearch, element=Contact) -> bool:
@@ -166,7 +165,7 @@ class _FusedCentre:
         itab[K.VELOCITY], itab[K.BOX] = self.velocity, margin is not None
         itab[K.FREE] = body2.is_free
         itab[K.EDGE] = type(k) is ContactKinematicsSphereEdge
-        frame_in_kernel = self.frame_in_kernel and body2.free_quaternion
+        frame_in_kernel = body2.free_quaternion         # its R, A, v, ω̄ written by the kernel
         itab[K.FRAME_Q] = body2.q_slice.start if frame_in_kernel else -1
         itab[K.FRAME_U] = body2.u_slice.start if frame_in_kernel else -1
         itab[K.KIN_AT:K.KIN_AT + 8] = buffer_layout(point.nu, surface.nu)
@@ -183,7 +182,7 @@ class _FusedCentre:
         moving = not (body2.frame_at_rest or frame_in_kernel)
         self._before = [side for side, python in ((side1, side1 is not None), (self._updates[1], moving)) if python]
         # ^ updated in Python before the kernel: side 1 on a body other than a point mass, the
-        #   surface on a moving frame but a free quaternion frame of a 2s contour (the kernel's)
+        #   surface on a moving frame but a free quaternion one (the kernel's)
         self._free_T = None
         if frame_in_kernel:
             ftab[K.FRAME_T_AT:K.FRAME_T_AT + 9] = np.eye(3).ravel()             # ω̄ = u_r
@@ -307,7 +306,6 @@ class CentreOnNeutral2s(_FusedCentre):
     """
 
     kernel = K.centre_on_neutral_2s
-    frame_in_kernel = True
 
     @staticmethod
     def applies(contact) -> bool:
@@ -371,7 +369,7 @@ class CentreOnNeutral1s(_FusedCentre):
 
     def __init__(self, contact):
         curve = contact.kinematics.contour2
-        super().__init__(contact, curve)
+        super().__init__(contact, curve, tuple(curve.normal_ref) + (0.0,))
         self._args = (self._itab, self._ftab, *curve.kernel_data, curve.n_ref,
                       *self._points, self._work, self.search.newton_work, curve.evaluate_work)
 
