@@ -34,13 +34,18 @@ Kinds with a fused detection:
   (``ContactKinematicsPointSphere``, ``ContactKinematicsSphereSphere``) — analytic,
   no search, so they never fall back.
 
-The kernel writes the state of a point mass's frame itself; a ground frame's is
-constant. What moves by a Python function is updated in Python just before the kernel,
-which does the rest: a frame contour on another body (a rigid body, a node of an FFR
-body: its frame's position, orientation, velocities and Jacobians), a neutral contour on
-a moving frame (prescribed: a function of t; free: its R, A, v, ω̄ and the map T of
-ω̄ = T u_r, which the Jacobians take). On a frame at rest the neutral contour's R, A, v,
-ω̄ are constant and the kernel does all.
+The kernel writes the state of a point mass's frame itself, and of a neutral contour's
+free quaternion frame (R, A, v, ω̄ = u_r from the global q, u; a curve's reference normal
+with them); a ground frame's is constant, so is a frame at rest's. What moves by a Python
+function is updated in Python just before the kernel, which does the rest: a frame
+contour on another body (a rigid body, a node of an FFR body: its frame's position,
+orientation, velocities and Jacobians), a neutral contour on a prescribed frame (a
+function of t) or a free Cardan frame (its R, A, v, ω̄ and the map T of ω̄ = T u_r,
+which the Jacobians take).
+
+The kernels leave the contact's state in arrays — the kinematics' buffer (g_N, ġ_N, the
+active flag, n, T, …), the contact points' buffers ((η, ξ), r and its derivatives, …),
+the warm start and the counters — so a located contact needs nothing written in Python.
 
 Every registered pair kind has one (``tests/unit/mbs/test_checkpoint.py`` fails for a
 kind registered without); a contour built for the reference route (``compiled=False``)
