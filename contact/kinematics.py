@@ -37,10 +37,13 @@ import numpy as np
 
 from ffrmbs.errors import ModelError
 
+from contours.base import BufferSlot
 from contours.rigid import PlaneContour, PointContour, SphereContour, sphere_angles
 
 from . import _detection_kernels as K
 from .search import Contact1sSearch, Contact2sSearch
+
+G_N_AT, GD_N_AT, ACTIVE_AT = 0, 1, 2       # the scalars at the head of ContactKinematics.buffer
 
 
 class ContactKinematics(ABC):
@@ -81,6 +84,7 @@ class ContactKinematics(ABC):
 
     #: what update() wrote (:mod:`mbs.results.state_arrays`)
     run_state = ("buffer", "point1", "point2")
+    g_N, gd_N, active = BufferSlot(G_N_AT), BufferSlot(GD_N_AT), BufferSlot(ACTIVE_AT, bool)
 
     def __init__(self, contour1, contour2, nu_total=None):
         self.contour1, self.contour2 = contour1, contour2
@@ -95,30 +99,6 @@ class ContactKinematics(ABC):
         self.gd_T = b[gd_T_at:w_N1_at]
         self.w_N1, self.w_N2 = b[w_N1_at:w_N2_at], b[w_N2_at:w_T1_at]
         self.w_T1, self.w_T2 = b[w_T1_at:w_T2_at].reshape(nu1, 2), b[w_T2_at:size].reshape(nu2, 2)
-
-    @property
-    def active(self) -> bool:
-        return bool(self.buffer[ACTIVE_AT])
-
-    @active.setter
-    def active(self, value):
-        self.buffer[ACTIVE_AT] = 1.0 if value else 0.0
-
-    @property
-    def g_N(self) -> float:
-        return float(self.buffer[G_N_AT])
-
-    @g_N.setter
-    def g_N(self, value):
-        self.buffer[G_N_AT] = value
-
-    @property
-    def gd_N(self) -> float:
-        return float(self.buffer[GD_N_AT])
-
-    @gd_N.setter
-    def gd_N(self, value):
-        self.buffer[GD_N_AT] = value
 
     @abstractmethod
     def _locate(self, velocity, jacobians) -> bool:
@@ -206,9 +186,6 @@ class ContactKinematics(ABC):
 
     def __repr__(self):
         return f"{type(self).__name__}({self.contour1!r}, {self.contour2!r})"
-
-
-G_N_AT, GD_N_AT, ACTIVE_AT = 0, 1, 2       # the scalars at the head of ContactKinematics.buffer
 
 
 def buffer_layout(nu1, nu2):

@@ -36,6 +36,20 @@ VALUE, D_ETA, D_XI, D_ETA_ETA, D_ETA_XI, D_XI_XI = range(6)
 ETA_AT, XI_AT, DERIVS_AT, FRAME_AT, V_AT, J_AT = 0, 1, 2, 20, 29, 32
 
 
+class BufferSlot:
+    """An attribute kept as one entry of its object's ``buffer`` at ``index`` (a float
+    vector a compiled kernel writes), read as ``kind`` (float, or bool: non-zero)."""
+
+    def __init__(self, index: int, kind=float):
+        self.index, self.kind = index, kind
+
+    def __get__(self, obj, owner=None):
+        return self if obj is None else self.kind(obj.buffer[self.index])
+
+    def __set__(self, obj, value):
+        obj.buffer[self.index] = float(value)
+
+
 class ContourPoint:
     """Workspace of one evaluated contour point (all inertial unless said otherwise).
 
@@ -59,6 +73,7 @@ class ContourPoint:
     """
 
     run_state = ("buffer",)     # (mbs.results.state_arrays)
+    eta, xi = BufferSlot(ETA_AT), BufferSlot(XI_AT)
 
     def __init__(self, nu: int):
         self.buffer = b = np.zeros(J_AT + 6 * nu)
@@ -67,22 +82,6 @@ class ContourPoint:
         self.v = b[V_AT:J_AT]
         self.J_T = b[J_AT:J_AT + 3 * nu].reshape(3, nu)
         self.J_R = b[J_AT + 3 * nu:].reshape(3, nu)
-
-    @property
-    def eta(self) -> float:
-        return float(self.buffer[ETA_AT])
-
-    @eta.setter
-    def eta(self, value):
-        self.buffer[ETA_AT] = value
-
-    @property
-    def xi(self) -> float:
-        return float(self.buffer[XI_AT])
-
-    @xi.setter
-    def xi(self, value):
-        self.buffer[XI_AT] = value
 
     @property
     def r(self) -> np.ndarray:
