@@ -14,6 +14,10 @@ Public API::
 * :mod:`contact.registry` — the laws, pair kinematics and solvers by name.
 """
 
+from ffrmbs.caches import configure_numba
+
+configure_numba()      # numba's cache directory, before any kernel is defined (ffrmbs.caches)
+
 from .contact import Contact, ContactElement, CurveConstraint, connect
 from .kinematics import (ContactKinematics, ContactKinematicsPointContour1s, ContactKinematicsPointContour2s,
                          ContactKinematicsPointPlane, ContactKinematicsPointSphere, ContactKinematicsSphereContour1s,

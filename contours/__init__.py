@@ -18,6 +18,10 @@ a :class:`ContourPoint` (position, tangents, frame, velocity, J_T, J_R),
 ``bounding_box(out)`` and ``to_trimesh()``.
 """
 
+from ffrmbs.caches import configure_numba
+
+configure_numba()      # numba's cache directory, before any kernel is defined (ffrmbs.caches)
+
 from .base import Contour, ContourPoint
 from .derived import FlexibleBand, FlexibleCylinder
 from .neutral import (Contour1sEdgeFFR, Contour1sNeutralFFR, Contour1sNeutralFactory, Contour1sNeutralRigid, Contour2sNeutralFFR,

@@ -1,8 +1,8 @@
 """Time spent compiling numba kernels, measured apart from the run it interrupts.
 
 Every kernel of ffrmbs is compiled with ``cache=True``: the first run of a kind of scene
-compiles its kernels and stores them on disk (numba's ``__pycache__`` beside the module,
-or ``$NUMBA_CACHE_DIR``), later runs load them. Compilation happens lazily, at a kernel's
+compiles its kernels and stores them on disk (``~/.cache/ffrmbs/numba`` or
+``$NUMBA_CACHE_DIR``, :mod:`ffrmbs.caches`), later runs load them. Compilation happens lazily, at a kernel's
 first call, so it falls inside whatever is being timed. :class:`CompileClock` listens to
 numba's ``numba:compiler_lock`` event — numba holds that lock while it compiles a kernel
 or loads it from the cache, and nested compilations are counted once — and to

@@ -8,7 +8,7 @@ the copy of ffrmbs the job runs), which builds the default scene on the 25 mm me
 (:data:`~ffrmbs_app.scenes.point_mass_beam.TET10_COARSE`, the job's mesh check, cached
 for it) and runs its warm-up, which compiles every kernel the scene calls with the
 argument types of the 12.5 mm mesh's scene (the same arrays, other sizes) into numba's
-disk cache (``cache=True``; ``$NUMBA_CACHE_DIR``, inherited). The job preprocesses the
+disk cache (``cache=True``; :mod:`ffrmbs.caches`, the directory inherited). The job preprocesses the
 12.5 mm beam meanwhile and :meth:`Precompiler.wait`\\ s for the child before it calls a
 kernel, then loads them from the cache; nothing is compiled twice and nothing depends on
 the child: if it fails, the job compiles what it needs itself.

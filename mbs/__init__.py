@@ -13,6 +13,10 @@ returns a ``Result``. The kinds by name (bodies, joints, loads, integrators, rot
 in :mod:`mbs.registry`.
 """
 
+from ffrmbs.caches import configure_numba
+
+configure_numba()      # numba's cache directory, before any kernel is defined (ffrmbs.caches)
+
 from mbs.bodies.body import Body, Frame, ground_frame
 from mbs.bodies.flexible_body import FlexibleBodyFFR
 from mbs.bodies.floating_frame import PrescribedFrameMotion

@@ -11,13 +11,9 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
 from pathlib import Path
 
-
-def cache_dir() -> Path:
-    """``$FFRMBS_CACHE`` or ``~/.cache/ffrmbs``."""
-    return Path(os.environ.get("FFRMBS_CACHE") or Path.home() / ".cache" / "ffrmbs")
+from ffrmbs.caches import cache_dir
 
 
 def cached_body_path(recipe: dict) -> Path:
