@@ -183,3 +183,20 @@ def pressed_contacts(warm, lam_rows, lam_prev, comp_force, closed, force_N, set_
         elif closed[i] and force_N[i] != 0.0:
             n += 1
     return n
+
+
+@njit(cache=True)
+def spring_energy(compliant, warm, lam_rows, force, delta):
+    """½ Σ Fᵀ δ [J] over the compliant contacts closed in the last step (``compliant[i]``
+    and ``warm[i]``), each with its block force[lam_rows[i, 0]:][:lam_rows[i, 1]] [N] of
+    spring forces and the same block of ``delta`` [m] of deflections. Reference:
+    ``Σ 0.5 * force[block] @ delta[block]`` over those contacts."""
+    e = 0.0
+    for i in range(compliant.shape[0]):
+        if compliant[i] and warm[i]:
+            at, dim = lam_rows[i, 0], lam_rows[i, 1]
+            s = 0.0
+            for k in range(dim):
+                s += force[at + k] * delta[at + k]
+            e += 0.5 * s
+    return e

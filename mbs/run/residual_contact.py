@@ -21,10 +21,14 @@ deflection opens the gap.
 
 from __future__ import annotations
 
+import numpy as np
+
 from contact.kinematics import PointOnCurveConstraint
 from contours._residual_kernels import add_contact_block
 from contours.residual import residual_compliances
 from ffrmbs.errors import ModelError
+
+from mbs.run import _stage_kernels as SK
 
 
 class ResidualContacts:
@@ -44,7 +48,7 @@ class ResidualContacts:
         Per contact a tuple of (sign, ResidualCompliance, side) — side 1 or 2 — of its
         corrected contours (empty: a rigid contact).
     compliant : tuple of bool
-        The contact has a corrected contour.
+        The contact has a corrected contour (``compliant_flags``: the same as an array).
     compliances : dict
         The ResidualCompliance of each corrected contour, by id.
     skip : tuple of int
@@ -80,6 +84,7 @@ class ResidualContacts:
             sides.append(tuple(s))
         self.sides = tuple(sides)
         self.compliant = tuple(bool(s) for s in sides)
+        self.compliant_flags = np.array(self.compliant, dtype=np.bool_)     # for the kernels
         self.skip = tuple(int(isinstance(c.kinematics, PointOnCurveConstraint)) for c in contacts)
 
     def __bool__(self):
@@ -153,9 +158,5 @@ def spring_energy(model, data) -> float:
     energy; zero without residual flexibility)."""
     if model.residual is None:
         return 0.0
-    e = 0.0
-    for i, compliant in enumerate(model.residual.compliant):
-        if compliant and data.warm[i]:
-            at, dim = model.lam_at[i], model.dims[i]
-            e += 0.5 * float(data.comp_force[at:at + dim] @ data.comp_delta[at:at + dim])
-    return e
+    return SK.spring_energy(model.residual.compliant_flags, data.warm, model.lam_rows, data.comp_force,
+                            data.comp_delta)

@@ -226,6 +226,12 @@ def test_the_energy_term_kernels_are_their_numpy_references():
         lam_prev[lam_rows[i, 0]:][:lam_rows[i, 1]].any() or comp_force[lam_rows[i, 0]:][:lam_rows[i, 1]].any()))
         or (not set_valued[i] and closed[i] and force_N[i] != 0.0))
     assert SK.pressed_contacts(warm, lam_rows, lam_prev, comp_force, closed, force_N, set_valued) == reference == 3
+    compliant = np.array([True, True, True, False, True])
+    delta = rng.normal(size=7)
+    comp_force[:] = rng.normal(size=7)
+    springs = sum(0.5 * comp_force[a:a + d] @ delta[a:a + d] for i, (a, d) in enumerate(lam_rows)
+                  if compliant[i] and warm[i])
+    assert SK.spring_energy(compliant, warm, lam_rows, comp_force, delta) == pytest.approx(springs, rel=1e-14)
 
 
 def test_the_trace_terms_allocate_no_more_than_the_step_s_own_loads(cantilever):
