@@ -181,11 +181,19 @@ def export_paraview(result_path, out_dir=None, every=1, bodies=None, compress=Fa
         remove_stale_exports(out_dir)
         try:
             with terminate_interrupts(), new_directories(out_dir.parent), _temporary_dir(out_dir) as tmp:
-                main = _write_series(tmp, plan, result_path, every, compress)
+                _write_series(tmp, plan, result_path, every, compress)
                 _replace_dir(tmp, out_dir)
         except OSError as exc:
             raise OutputFileError(out_dir, f"cannot write the ParaView export: {os_reason(exc)}") from None
-    return out_dir / main.name
+    return collection_path(result_path, out_dir)
+
+
+def collection_path(result_path, out_dir=None) -> Path:
+    """``<out_dir>/<result stem>.pvd``: the collection of every series that
+    :func:`export_paraview` writes for ``result_path`` (``out_dir`` default
+    :func:`default_export_dir`)."""
+    result_path = Path(result_path)
+    return (default_export_dir(result_path) if out_dir is None else Path(out_dir)) / f"{result_path.stem}.pvd"
 
 
 def default_export_dir(result_path) -> Path:
@@ -228,8 +236,8 @@ def _temporary_dir(out_dir: Path):
         raise
 
 
-def _write_series(tmp: Path, plan, result_path: Path, every, compress) -> Path:
-    """Write every series of ``plan`` and the main .pvd into ``tmp``; the main .pvd's path."""
+def _write_series(tmp: Path, plan, result_path: Path, every, compress) -> None:
+    """Write every series of ``plan`` and the main .pvd (:func:`collection_path`) into ``tmp``."""
     from ffrmbs_app.progress import progress_bar
 
     idx = np.arange(0, plan["n"], every)
@@ -249,12 +257,10 @@ def _write_series(tmp: Path, plan, result_path: Path, every, compress) -> Path:
                 bar.update()
             write_pvd(tmp / name / f"{name}.pvd", own, series.get("comment"))
     entries.sort(key=lambda e: (e[0], e[2]))
-    main = tmp / f"{result_path.stem}.pvd"
-    write_pvd(main, entries, f"ffrmbs export of {result_path.name}: "
-                             + ", ".join(s["label"] for s in plan["series"]))
+    write_pvd(collection_path(result_path, tmp), entries,
+              f"ffrmbs export of {result_path.name}: " + ", ".join(s["label"] for s in plan["series"]))
     (tmp / MARKER).write_text(json.dumps({"result": str(result_path.absolute()), "every": every,
                                           "series": [s["name"] for s in plan["series"]]}) + "\n")
-    return main
 
 
 def _replace_dir(tmp: Path, out_dir: Path):

@@ -318,13 +318,13 @@ def _derived_files(path, plot, export) -> dict:
 
 def _derived_paths(path, plot, export) -> dict:
     """The paths :func:`_derived_files` writes."""
-    from ffrmbs_app.export import default_export_dir
+    from ffrmbs_app.export import collection_path
 
     paths = {}
     if plot:
         paths["plot"] = str(path.with_suffix(".png"))
     if export:
-        paths["paraview"] = str(default_export_dir(path) / f"{path.stem}.pvd")
+        paths["paraview"] = str(collection_path(path))
     return paths
 
 
