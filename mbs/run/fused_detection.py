@@ -156,7 +156,6 @@ class _FusedCentre:
         k = self.kinematics = contact.kinematics
         point, surface = k.contour1, k.contour2
         self.search, self.neutral = k.search, neutral
-        self.velocity = not contact.set_valued
         self.closing_tol = getattr(contact, "closing_tol", np.inf)      # a point kept on a curve: always closed
         margin = getattr(contact, "margin", None)
         body2 = surface.body
@@ -167,7 +166,7 @@ class _FusedCentre:
         itab[K.QF] = body2.q_slice.start + body2.q_f_slice.start
         itab[K.UF] = body2.u_slice.start + body2.u_f_slice.start
         itab[K.NF], itab[K.NU1], itab[K.NU2] = n_f, point.nu, surface.nu
-        itab[K.VELOCITY], itab[K.BOX] = self.velocity, margin is not None
+        itab[K.VELOCITY], itab[K.BOX] = not contact.set_valued, margin is not None       # ġ for a single-valued law
         itab[K.FREE] = body2.is_free
         itab[K.EDGE] = type(k) is ContactKinematicsSphereEdge
         frame_in_kernel = body2.free_quaternion         # its R, A, v, ω̄ written by the kernel
@@ -431,7 +430,6 @@ class _FusedAnalytic:
     def __init__(self, contact):
         self.contact = contact
         k = self.kinematics = contact.kinematics
-        self.velocity = not contact.set_valued
         self.closing_tol = contact.closing_tol
         itab = np.zeros(K.ITAB_SIZE, dtype=np.int64)
         ftab = np.zeros(K.BOX_AT)
@@ -439,7 +437,7 @@ class _FusedAnalytic:
                  _frame_side(k.contour2, itab, ftab, K.Q2, K.U2, K.OFFSET2_AT))
         self._before = [side for side in sides if side is not None]     # updated in Python first
         itab[K.NU1], itab[K.NU2] = k.contour1.nu, k.contour2.nu
-        itab[K.VELOCITY], itab[K.BOX] = self.velocity, contact.margin is not None
+        itab[K.VELOCITY], itab[K.BOX] = not contact.set_valued, contact.margin is not None
         itab[K.KIN_AT:K.KIN_AT + 8] = buffer_layout(k.contour1.nu, k.contour2.nu)
         ftab[K.MARGIN] = 0.0 if contact.margin is None else contact.margin
         ftab[K.RADIUS] = k.radius
