@@ -283,19 +283,25 @@ class AdaptiveMoreauTimeStepping(MoreauTimeStepping):
 
     def _penetration(self) -> float:
         """Largest penetration [m] of the unilateral contacts (set-valued and penalty) at
-        (t, q, u); their closed flags follow."""
+        (t, q, u); their closed flags follow. Located as the detection stage locates
+        them: a contact's fused detection updates its contours and locates it in one
+        compiled call; the other contours are updated first (each once)."""
         model, data = self.model, self.data
         if not any(model.unilateral):
             return 0.0
+        t, q, u = data.t, data.q, data.u
         for contour, owners, qs, us in model.contours:
+            if not owners:                  # updated by its contacts' fused detections
+                continue
             if qs is None:
-                contour.update(None, None, data.t)
+                contour.update(None, None, t)
             else:
-                contour.update(data.q[qs], data.u[us], data.t)
+                contour.update(q[qs], u[us], t)
         pen = 0.0
         for i, c in enumerate(model.contacts):
             if model.unilateral[i]:
-                data.closed[i] = closed = c.locate()
+                f = model.fused[i]
+                data.closed[i] = closed = c.locate() if f is None else f.locate(q, u, t)
                 if closed:
                     pen = max(pen, -c.kinematics.g_N)
         return pen
