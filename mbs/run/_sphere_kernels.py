@@ -7,19 +7,26 @@ Sphere kinds (``kind`` codes):
 - :data:`POINT`: a frame on a point mass, centre r = q[at:at+3] + ū0 [m] (``offset``),
   constant radius (``radius0``) — :class:`mbs.run.bounding_spheres.FrameSphere`;
 - :data:`AT_REST`: a flexible body on a frame fixed in space, constant centre (written
-  once by the caller), radius max_j |ū0_j − c| + Σ_k max_j |Φ_jk| |q_f,k| with
-  max_j |Φ_jk| in ``reach[s, :n_reach[s]]`` and q_f at q[at:] —
-  :meth:`mbs.bodies.flexible_body.FlexibleBodyFFR.bounding_sphere`;
+  once by the caller), radius ``radius0`` + Σ_k max_j |Φ_jk| |q_f,k| (``radius0`` =
+  max_j |ū0_j − c| and what an offset contour adds) with max_j |Φ_jk| in
+  ``reach[s, :n_reach[s]]`` and q_f at q[at:] —
+  :meth:`mbs.bodies.flexible_body.FlexibleBodyFFR.bounding_sphere`; also a sphere fixed
+  in space (a point or sphere contour on the ground: no reach);
 - :data:`FREE`: a body on a free frame with a quaternion (a rigid body's frame, or a
   flexible body's bounding sphere), centre R + A c with R = q[at:at+3], A the rotation
   of the quaternion q[at+3:at+7] (:func:`mbs.bodies.rotations.quat_to_matrix`) and c the
   body-frame point ``offset`` (a frame's ū0, the body's :attr:`box_centre`), radius
   ``radius0`` + Σ_k reach[s, k] |q_f,k| with q_f at q[at+7:] (none for a rigid body);
 - :data:`CALLED`: any other sphere; the caller writes its centre and radius (the
-  kernel leaves them).
+  kernel leaves them);
+- :data:`PLANE`: not a sphere but the half-space behind a plane fixed in space (a plane
+  contour on the ground): a point p0 of the plane as its centre (written once by the
+  caller), its unit normal n in ``offset``, radius 0. A pair with a plane as its second
+  bound is live while the first sphere reaches within the margin of the plane:
+  nᵀ(c1 − p0) <= r1 + margin (a centre behind the plane, penetrating, is live).
 
 Plain-numpy reference: the sphere callables of :mod:`mbs.run.bounding_spheres` and the
-test d·d > (r1 + r2 + margin)² of each pair; ``tests/unit/contact/test_bounding_spheres.py`` compares
+test d·d > (r1 + r2 + margin)² of each pair (the half-space test for a plane); ``tests/unit/contact/test_bounding_spheres.py`` compares
 them.
 """
 
@@ -30,7 +37,7 @@ from numba import njit
 from mbs.bodies._kernels import quat_matrix_into
 from mbs.run._stage_kernels import live_contacts
 
-POINT, AT_REST, CALLED, FREE = 0, 1, 2, 3
+POINT, AT_REST, CALLED, FREE, PLANE = 0, 1, 2, 3, 4
 INTS_AT = 3     # ints: n_s, n_p, width, then kind, at, n_reach (n_s each), contact, sphere1, sphere2 (n_p each)
 
 
@@ -62,9 +69,10 @@ def sphere_states(q, kind, at, offset, radius0, reach, n_reach, centres, radii, 
 
 
 @njit(cache=True)
-def prune_pairs(contact, sphere1, sphere2, margin, centres, radii, live, closed):
+def prune_pairs(contact, sphere1, sphere2, margin, kind, offset, centres, radii, live, closed):
     """Each prunable contact ``contact[p]`` live when its spheres ``sphere1[p]``,
-    ``sphere2[p]`` come within ``margin[p]`` [m]: not |c1 − c2|² > (r1 + r2 + margin)²;
+    ``sphere2[p]`` come within ``margin[p]`` [m]: not |c1 − c2|² > (r1 + r2 + margin)²
+    (a PLANE second: not nᵀ(c1 − p0) > r1 + margin, n its ``offset`` row);
     a contact pruned is also open (``closed`` False). Returns the number pruned."""
     pruned = 0
     for p in range(contact.shape[0]):
@@ -73,7 +81,10 @@ def prune_pairs(contact, sphere1, sphere2, margin, centres, radii, live, closed)
         d1 = centres[a, 1] - centres[b, 1]
         d2 = centres[a, 2] - centres[b, 2]
         reach = radii[a] + radii[b] + margin[p]
-        on = not d0 * d0 + d1 * d1 + d2 * d2 > reach * reach
+        if kind[b] == PLANE:
+            on = not offset[b, 0] * d0 + offset[b, 1] * d1 + offset[b, 2] * d2 > reach
+        else:
+            on = not d0 * d0 + d1 * d1 + d2 * d2 > reach * reach
         live[i] = on
         if not on:
             closed[i] = False
@@ -100,5 +111,5 @@ def prune(q, ints, floats, centres, radii, live, closed, live_idx):
     margin = floats[(4 + width) * n:(4 + width) * n + n_p]
     A = floats[(4 + width) * n + n_p:(4 + width) * n + n_p + 9].reshape(3, 3)
     sphere_states(q, kind, at, offset, radius0, reach, n_reach, centres, radii, A)
-    pruned = prune_pairs(contact, sphere1, sphere2, margin, centres, radii, live, closed)
+    pruned = prune_pairs(contact, sphere1, sphere2, margin, kind, offset, centres, radii, live, closed)
     return pruned, live_contacts(live, live_idx)

@@ -3,39 +3,58 @@ contour stage (:mod:`mbs.run.plan`: a contact is searched only while its two con
 spheres come within its margin).
 
 :func:`contour_sphere` gives a callable (q, t) -> (centre (3,) [m], radius [m]) that
-writes its centre into its own array: a point or sphere contour about its frame's
-position (a frame on a point mass: r = q + ū0, no temporary); a neutral contour of a
-flexible body within its body's sphere (:meth:`mbs.bodies.body.Body.bounding_sphere`:
-centre R + A c, radius max_j |ū0_j − c| + Σ_k max_j |Φ_jk| |q_f,k|; for a frame fixed
-in space the centre is constant and the radius is computed in place). Anything else
-(planes, derived contours) cannot be bounded: None.
+writes its centre into its own array, for every contour kind of :data:`contours.CONTOURS`
+but a plane on a moving frame:
+
+- a point or sphere contour: about its frame's position (a frame on a point mass:
+  r = q + ū0, no temporary); on the ground a sphere fixed in space;
+- a neutral contour of a flexible body (1s, 2s, edge): within its body's sphere
+  (:meth:`mbs.bodies.body.Body.bounding_sphere`: centre R + A c, radius
+  max_j |ū0_j − c| + Σ_k max_j |Φ_jk| |q_f,k|; for a frame fixed in space the centre
+  is constant and the radius is computed in place);
+- a neutral contour of a rigid body (2s-rigid, 1s-rigid): about the body-frame centre c
+  of its control points, radius max |P_ū0 − c| (a B-spline lies in the convex hull of
+  its control points);
+- an offset contour (band, cylinder): its neutral curve's sphere grown by the offset's
+  reach (the largest |d̄|);
+- a plane on the ground: not a sphere but the half-space behind it (:class:`GroundPlane`;
+  its pairs are live while the other sphere reaches within the margin of the plane).
 
 :class:`SphereTable` holds the distinct spheres of all prunable contacts of a run as
 arrays and prunes every pair in one call of the kernels of :mod:`._sphere_kernels`
-(the spheres of point masses, of flexible bodies at rest and of bodies on a free
-quaternion frame computed there, the others by their callables), so the cost per
-far-apart pair is a few array reads.
+(the spheres of point masses, of flexible bodies at rest, of bodies on a free
+quaternion frame and those fixed in space computed there, the others by their
+callables), so the cost per far-apart pair is a few array reads.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from contours import Contour1sNeutralFFR, Contour2sNeutralFFR, PointContour, SphereContour
+from contours import (Contour1sNeutralFFR, Contour1sNeutralRigid, Contour2sNeutralFFR, Contour2sNeutralRigid,
+                      PlaneContour, PointContour, SphereContour)
+from contours.derived import OffsetContour
 
 from mbs.run import _sphere_kernels as K
 from mbs.bodies.rigid_body import PointMass, RigidBody
 
 NEUTRAL_FFR = (Contour1sNeutralFFR, Contour2sNeutralFFR)
+NEUTRAL_RIGID = (Contour1sNeutralRigid, Contour2sNeutralRigid)
 
 
 class FrameSphere:
-    """The sphere of radius ``radius`` [m] about ``frame``'s origin on ``body``."""
+    """The sphere of radius ``radius`` [m] about ``frame``'s origin on ``body``; ``key``
+    what makes two of them the same sphere (default: the frame, body and radius)."""
 
-    def __init__(self, frame, body, radius):
+    def __init__(self, frame, body, radius, key=None):
         self.frame, self.body, self.radius = frame, body, float(radius)
         self.centre = np.zeros(3)
         self._offset = frame.u0 if isinstance(body, PointMass) else None
+        self.key = ("frame", id(frame), id(body), self.radius) if key is None else key
+
+    def grown(self, reach) -> "FrameSphere":
+        """The same sphere with ``reach`` [m] more radius."""
+        return FrameSphere(self.frame, self.body, self.radius + reach, key=self.key[:-1] + (self.radius + reach,))
 
     def __call__(self, q, t):
         qb = q[self.body.q_slice]
@@ -47,10 +66,12 @@ class FrameSphere:
 
 
 class FlexibleBodySphere:
-    """The bounding sphere of a flexible body (:meth:`FlexibleBodyFFR.bounding_sphere`)."""
+    """The bounding sphere of a flexible body (:meth:`FlexibleBodyFFR.bounding_sphere`),
+    its radius grown by ``reach`` [m] (an offset contour's)."""
 
-    def __init__(self, body):
-        self.body = body
+    def __init__(self, body, reach=0.0):
+        self.body, self.reach = body, float(reach)
+        self.key = ("body", id(body), self.reach)
         f = body.q_f_slice
         self._f = slice(body.q_slice.start + f.start, body.q_slice.start + f.stop)
         self._abs = np.zeros(body.n_modes)
@@ -59,23 +80,85 @@ class FlexibleBodySphere:
     def __call__(self, q, t):
         b = self.body
         if not b.frame_at_rest:
-            return b.bounding_sphere(q[b.q_slice], t)
+            centre, radius = b.bounding_sphere(q[b.q_slice], t)
+            return centre, radius + self.reach
         np.abs(q[self._f], out=self._abs)
-        radius = b.rest_radius + b.mode_reach @ self._abs
+        radius = b.rest_radius + self.reach + b.mode_reach @ self._abs
         if self._rest_centre is None:
             self._rest_centre = b.bounding_sphere(q[b.q_slice], t)[0]
         return self._rest_centre, radius
 
+    def grown(self, reach) -> "FlexibleBodySphere":
+        """The same body's sphere with ``reach`` [m] more radius."""
+        return FlexibleBodySphere(self.body, self.reach + reach)
+
+
+class FixedSphere:
+    """A sphere fixed in space: centre (3,) [m], radius [m]."""
+
+    def __init__(self, centre, radius):
+        self.centre, self.radius = np.array(centre, dtype=float), float(radius)
+        self.key = ("fixed", *self.centre.tolist(), self.radius)
+
+    def __call__(self, q, t):
+        return self.centre, self.radius
+
+    def grown(self, reach) -> "FixedSphere":
+        return FixedSphere(self.centre, self.radius + reach)
+
+
+class GroundPlane:
+    """The half-space behind a plane contour on the ground: ``centre`` its frame's origin
+    p0 [m], ``normal`` its unit normal n (the frame's z axis). Called it gives (p0, 0);
+    a pair with it is live while nᵀ(c1 − p0) <= r1 + margin (:func:`live_pair`)."""
+
+    radius = 0.0
+
+    def __init__(self, frame):
+        self.centre = np.array(frame.position(None), dtype=float)
+        self.normal = np.array(frame.orientation(None), dtype=float)[:, 2]
+        self.key = ("plane", *self.centre.tolist(), *self.normal.tolist())
+
+    def __call__(self, q, t):
+        return self.centre, 0.0
+
 
 def contour_sphere(contour):
     """A callable (q, t) -> (centre (3,) [m], radius [m]) of a sphere holding ``contour``
-    at the global state, or None (module docstring)."""
+    at the global state (a :class:`GroundPlane` for a plane on the ground), or None
+    (module docstring)."""
     body = contour.body
-    if isinstance(contour, (PointContour, SphereContour)) and body is not None:
-        return FrameSphere(contour.frame_ref, body, getattr(contour, "radius", 0.0))
+    if isinstance(contour, OffsetContour):
+        inner = contour_sphere(contour.neutral)
+        return None if inner is None else inner.grown(contour.reach)
+    if isinstance(contour, (PointContour, SphereContour)):
+        radius = getattr(contour, "radius", 0.0)
+        if body is None:
+            return FixedSphere(contour.frame_ref.position(None), radius)
+        return FrameSphere(contour.frame_ref, body, radius)
+    if isinstance(contour, PlaneContour):
+        return GroundPlane(contour.frame_ref) if body is None else None
     if isinstance(contour, NEUTRAL_FFR):
         return FlexibleBodySphere(body)
+    if isinstance(contour, NEUTRAL_RIGID) and body is not None:
+        P0 = contour.local_position.ctrl0.reshape(-1, 3)
+        c = 0.5 * (P0.min(axis=0) + P0.max(axis=0))
+        radius = float(np.sqrt(((P0 - c) ** 2).sum(axis=1).max()))
+        return FrameSphere(body.frame_at(c), body, radius, key=("rigid", id(body), *c.tolist(), radius))
     return None
+
+
+def live_pair(sphere1, sphere2, margin, q, t) -> bool:
+    """Whether a pair of bounds comes within ``margin`` [m] at (q, t): the plain-Python
+    reference of :func:`._sphere_kernels.prune_pairs`."""
+    c1, r1 = sphere1(q, t)
+    c1 = np.array(c1)
+    c2, r2 = sphere2(q, t)
+    d = c1 - c2
+    if isinstance(sphere2, GroundPlane):
+        return not float(sphere2.normal @ d) > r1 + margin
+    reach = r1 + r2 + margin
+    return not float(d @ d) > reach * reach
 
 
 def sphere_pair(contact):
@@ -108,7 +191,8 @@ class SphereTable:
     contact, sphere1, sphere2 : (n_p,) int
         Each prunable contact's index and spheres.
     margin : (n_p,)
-        Each prunable contact's margin [m].
+        Each prunable contact's margin plus its closing tolerance [m] (a contact resting
+        within ``closing_tol`` of the surface stays live even with a zero margin).
     ints, floats : int and float vectors
         The arrays above are views of these two (layout of
         :func:`._sphere_kernels.prune`), which the kernel takes.
@@ -122,12 +206,12 @@ class SphereTable:
                 continue
             ids = []
             for sphere in pair:
-                key = _identity(sphere)
+                key = sphere.key
                 if key not in index:
                     index[key] = len(self.spheres)
                     self.spheres.append(sphere)
                 ids.append(index[key])
-            pairs.append((i, ids[0], ids[1], c.margin))
+            pairs.append((i, ids[0], ids[1], c.margin + c.closing_tol))   # closed up to closing_tol
         n, n_p = len(self.spheres), len(pairs)
         width = max((s.body.n_modes for s in self.spheres if isinstance(s, FlexibleBodySphere)), default=0)
         self.ints = np.zeros(K.INTS_AT + 3 * n + 3 * n_p, dtype=np.int64)
@@ -139,24 +223,28 @@ class SphereTable:
         self.offset, self.reach = offset.reshape(n, 3), reach.reshape(n, width)
         self.kind[:] = K.CALLED
         for s, sphere in enumerate(self.spheres):
-            if isinstance(sphere, FrameSphere) and sphere._offset is not None:
+            if isinstance(sphere, FixedSphere):
+                self.kind[s], self.radius0[s] = K.AT_REST, sphere.radius
+            elif isinstance(sphere, GroundPlane):
+                self.kind[s], self.offset[s] = K.PLANE, sphere.normal
+            elif isinstance(sphere, FrameSphere) and sphere._offset is not None:
                 self.kind[s], self.at[s] = K.POINT, sphere.body.q_slice.start
                 self.offset[s], self.radius0[s] = sphere._offset, sphere.radius
             elif isinstance(sphere, FlexibleBodySphere) and sphere.body.frame_at_rest:
                 b = sphere.body
                 self.kind[s], self.at[s] = K.AT_REST, sphere._f.start
-                self.radius0[s], self.n_reach[s] = b.rest_radius, b.n_modes
+                self.radius0[s], self.n_reach[s] = b.rest_radius + sphere.reach, b.n_modes
                 self.reach[s, :b.n_modes] = b.mode_reach
             elif isinstance(sphere, FlexibleBodySphere) and sphere.body.free_quaternion:
                 b = sphere.body
                 self.kind[s], self.at[s] = K.FREE, b.q_slice.start
-                self.offset[s], self.radius0[s], self.n_reach[s] = b.box_centre, b.rest_radius, b.n_modes
+                self.offset[s], self.radius0[s], self.n_reach[s] = b.box_centre, b.rest_radius + sphere.reach, b.n_modes
                 self.reach[s, :b.n_modes] = b.mode_reach
             elif isinstance(sphere, FrameSphere) and isinstance(sphere.body, RigidBody) and sphere.body.free_quaternion:
                 self.kind[s], self.at[s] = K.FREE, sphere.body.q_slice.start
                 self.offset[s], self.radius0[s] = sphere.frame.u0, sphere.radius
         self.called = [s for s in range(n) if self.kind[s] == K.CALLED]
-        self.at_rest = [s for s in range(n) if self.kind[s] == K.AT_REST]
+        self.at_rest = [s for s in range(n) if self.kind[s] in (K.AT_REST, K.PLANE)]
         for p, (i, s1, s2, margin) in enumerate(pairs):
             self.contact[p], self.sphere1[p], self.sphere2[p], self.margin[p] = i, s1, s2, margin
 
@@ -164,10 +252,10 @@ class SphereTable:
         return len(self.contact)
 
     def start(self, q, t, centres, radii) -> None:
-        """The constant centres of the spheres at rest at (q, t) into ``centres`` (once per
-        run, before :meth:`prune`)."""
+        """The constant centres of the spheres at rest (and the planes' points, radius 0)
+        at (q, t) into ``centres`` (once per run, before :meth:`prune`)."""
         for s in self.at_rest:
-            centres[s] = self.spheres[s](q, t)[0]
+            centres[s], radii[s] = self.spheres[s](q, t)
 
     def prune(self, q, t, centres, radii, live, closed, live_idx) -> tuple:
         """Every prunable contact live or not at (q, t) (:func:`._sphere_kernels.prune`:
@@ -185,9 +273,3 @@ def _blocks(sizes):
     stops = np.cumsum(sizes)
     return list(zip(stops - np.asarray(sizes), stops))
 
-
-def _identity(sphere):
-    """What makes two sphere callables the same sphere: the frame (radius) or the body."""
-    if isinstance(sphere, FrameSphere):
-        return ("frame", id(sphere.frame), id(sphere.body), sphere.radius)
-    return ("body", id(sphere.body))

@@ -22,6 +22,13 @@ gives the medians of the batch means [µs per call] and their ratio. Both routes
 leave the same gap (to 1e-12 m) or the benchmark fails. Compilation happens in the
 untimed warm-up.
 
+A second table gives the per-step cost in far-apart pairs (issue 32's target: flat
+within 10 %) for every unilateral pair kind: the same scene run by Moreau's stages under
+a plan, alone, with 16 more point masses (2 m and more out along the surface's normal,
+flying away) each in a contact of the same kind with the same surface, and with those
+masses but no contacts. The pairs' share is (with pairs − without) / alone: what the
+planned broad phase (:mod:`mbs.run.bounding_spheres`) leaves of the far pairs' cost.
+
 Run::
 
     python3 -m validation.bench --only pair_cost [--quick]
@@ -39,6 +46,9 @@ FULL = {"batch": 2000, "rounds": 7}
 QUICK = {"batch": 200, "rounds": 3}
 RADIUS = 0.01           # [m], the sphere about the point mass
 PRESS = 1e-6            # [m], how far the side is pressed into the surface (closed)
+FAR = 2.0               # [m], the nearest far-apart side's distance from the surface
+FAR_PAIRS = 16          # far-apart pairs of the step-cost table
+FLAT_TOL = 0.10         # far pairs: per-step cost within 10 % of the step without them
 
 
 def surface(kind, beam, table):
@@ -64,22 +74,30 @@ def surface(kind, beam, table):
             "sphere": lambda: SphereContour(ground_frame((0.0, 0.0, -1.0)), 0.1)}[kind]()
 
 
-def pair_scene(pair, bilateral=False):
+def pair_scene(pair, bilateral=False, far=0, far_contacts=True):
     """(system, contact, q, u) of the contour pair ``pair`` (module docstring), the side
-    pressed into the surface (on it for a ``bilateral`` pair)."""
+    pressed into the surface (on it for a ``bilateral`` pair); with ``far`` point masses
+    more, FAR + k metres out along the surface's normal and flying away at 0.1 m/s, each
+    (``far_contacts``) with a side of the same kind in a contact with the same surface."""
     from contact import connect
     from contours import PointContour, SphereContour
     from ffrmbs_app.scenes import point_mass_beam as pmb
     from mbs import FlexibleBodyFFR, PointMass, PrescribedFrameMotion, RigidBody, System
+
+    def side_of(mass):
+        return PointContour(mass.point) if pair[0] == "point" else SphereContour(mass.point, RADIUS)
 
     system = System()
     beam = system.add(FlexibleBodyFFR(pmb.default_beam_data(), modes=20, frame=PrescribedFrameMotion.fixed(),
                                       name="beam"))
     table = system.add(RigidBody(10.0, 0.1 * np.eye(3), name="table"))
     mass = system.add(PointMass(0.05, name="side"))
-    side = PointContour(mass.point) if pair[0] == "point" else SphereContour(mass.point, RADIUS)
     other = surface(pair[1], beam, table)
-    contact = system.add(connect(side, other, "bilateral" if bilateral else "impact", name="/".join(pair)))
+    contact = system.add(connect(side_of(mass), other, "bilateral" if bilateral else "impact", name="/".join(pair)))
+    far_masses = [system.add(PointMass(0.05, name=f"far {k}")) for k in range(far)]
+    if far_contacts:
+        for k, m in enumerate(far_masses):
+            system.add(connect(side_of(m), other, "impact", name=f"far {k}"))
     q, u = system.initial_state()
     body = other.body
     other.update(None if body is None else q[body.q_slice], None if body is None else u[body.u_slice])
@@ -89,7 +107,9 @@ def pair_scene(pair, bilateral=False):
         domain = other.domain if other.dim == 2 else (other.domain,)
         at = tuple(0.5 * (a + b) for a, b in domain)
     p = other.evaluate(other.new_point(), *at)
-    q[mass.q_slice] = p.r + (0.0 if bilateral else getattr(side, "radius", 0.0) - PRESS) * p.n
+    q[mass.q_slice] = p.r + (0.0 if bilateral else getattr(contact.kinematics.contour1, "radius", 0.0) - PRESS) * p.n
+    for k, m in enumerate(far_masses):
+        q[m.q_slice], u[m.u_slice] = p.r + (FAR + k) * p.n, 0.1 * p.n
     return system, contact, q, u
 
 
@@ -138,6 +158,59 @@ def measure(pair, bilateral, batch, rounds) -> dict:
             "g_N": float(gaps[0])}
 
 
+def _planned_run(pair, far, far_contacts):
+    """(Model, Data) of a planned Moreau run of :func:`pair_scene` (θ = ½, Gauss–Seidel)."""
+    from contact.solver import ProxSolver
+    from mbs.run.model import Data, compile_model
+
+    system, _, q, u = pair_scene(pair, far=far, far_contacts=far_contacts)
+    model = compile_model(system, system.plan(1.0), theta=0.5,
+                          solver=ProxSolver("gauss-seidel", tol=1e-10, max_iter=2000))
+    data = Data(model)
+    data.q[:], data.u[:] = q, u
+    return model, data
+
+
+def far_pairs_row(pair, steps, rounds) -> dict:
+    """The per-step cost [µs] of the pair's scene alone, with FAR_PAIRS far-apart pairs of
+    its kind, and with their point masses but no contacts (module docstring), medians of
+    ``rounds`` batches of ``steps`` Moreau steps (Δt = 1e-5 s) alternating; the far pairs'
+    own share = (pairs − bodies) / alone."""
+    from mbs.run import stages
+
+    runs = {"alone": _planned_run(pair, 0, True), "far_pairs": _planned_run(pair, FAR_PAIRS, True),
+            "far_bodies": _planned_run(pair, FAR_PAIRS, False)}
+
+    def batch(run):
+        model, data = run
+        start = time.perf_counter()
+        for _ in range(steps):
+            stages.step(model, data, 1e-5)
+        return 1e6 * (time.perf_counter() - start) / steps
+
+    for run in runs.values():       # warm-up: compiles, factors M̂, builds the contact set
+        batch(run)
+    times = {name: [] for name in runs}
+    for _ in range(rounds):
+        for name, run in runs.items():
+            times[name].append(batch(run))
+    med = {f"{name}_us": float(np.median(t)) for name, t in times.items()}
+    return {"pair": "/".join(pair), **med, "share": (med["far_pairs_us"] - med["far_bodies_us"]) / med["alone_us"],
+            "searched": int(runs["far_pairs"][1].n_live)}
+
+
+def _far_table(rows, settings) -> list:
+    lines = [f"µs per Moreau step (planned run), median of {settings['rounds']} batches of {settings['batch'] // 2} "
+             f"steps, alternating: the scene alone, with {FAR_PAIRS} far-apart pairs of its kind "
+             f"({FAR:g} m and more out, flying away), with their point masses but no contacts", "",
+             "| pair kind | alone | far pairs | far bodies | the pairs' share | contacts searched |",
+             "|---|---|---|---|---|---|"]
+    for r in rows:
+        lines.append(f"| {r['pair']} | {r['alone_us']:.1f} | {r['far_pairs_us']:.1f} | {r['far_bodies_us']:.1f} | "
+                     f"{100 * r['share']:+.1f} % | {r['searched']} of {FAR_PAIRS + 1} |")
+    return lines
+
+
 def run(quick=False) -> dict:
     """Every registered pair kind's row (module docstring), the table and the verdict
     that each has a fused detection."""
@@ -159,8 +232,13 @@ def run(quick=False) -> dict:
     missing = [r["pair"] for r in rows if r["fused"] is None]
     verdict = (f"target (every registered pair kind has a fused detection): "
                f"{'met' if not missing else 'NOT met (' + ', '.join(missing) + ')'}")
-    return {"benchmark": "pair_cost", "machine": machine(), "settings": settings, "rows": rows,
-            "table": "\n".join(lines), "verdicts": [verdict]}
+    far = [far_pairs_row(pair, settings["batch"] // 2, settings["rounds"]) for pair in PAIR_KINEMATICS.names()]
+    lines += [""] + _far_table(far, settings)
+    steep = [f"{r['pair']} {100 * r['share']:+.0f} %" for r in far if r["share"] > FLAT_TOL]
+    flat = (f"target (per-step cost flat within {100 * FLAT_TOL:.0f} % in {FAR_PAIRS} far-apart pairs, every "
+            f"unilateral pair kind): {'met' if not steep else 'NOT met (' + ', '.join(steep) + ')'}")
+    return {"benchmark": "pair_cost", "machine": machine(), "settings": settings, "rows": rows, "far_pairs": far,
+            "table": "\n".join(lines), "verdicts": [verdict, flat]}
 
 
 def main(argv=None):

@@ -8,10 +8,11 @@ import pytest
 
 from contact import Contact, ContactKinematicsPointContour2s, UnilateralNewtonImpact
 from contours import PointContour
-from mbs import PointMass, RigidBody, System
+from contours import CONTOURS
+from mbs import FlexibleBodyFFR, PointMass, PrescribedFrameMotion, RigidBody, System
 from mbs.run import _stage_kernels as SK
 from mbs.run.body_stage import BodyStage
-from mbs.run.bounding_spheres import SphereTable, sphere_pair
+from mbs.run.bounding_spheres import GroundPlane, SphereTable, contour_sphere, live_pair, sphere_pair
 
 
 def far_pairs_scene(n):
@@ -29,19 +30,10 @@ def far_pairs_scene(n):
 
 
 def reference_prune(contacts, q, t):
-    """live flags of the prunable contacts by the sphere callables, pair by pair."""
-    live = {}
-    for i, c in enumerate(contacts):
-        pair = sphere_pair(c)
-        if pair is None:
-            continue
-        c1, r1 = pair[0](q, t)
-        c1 = c1.copy()
-        c2, r2 = pair[1](q, t)
-        d = c1 - c2
-        reach = r1 + r2 + c.margin
-        live[i] = not float(d @ d) > reach * reach
-    return live
+    """live flags of the prunable contacts by the sphere callables, pair by pair
+    (:func:`live_pair`: the distance of the centres, or of a centre from a plane)."""
+    return {i: live_pair(*pair, c.margin + c.closing_tol, q, t)
+            for i, c in enumerate(contacts) if (pair := sphere_pair(c)) is not None}
 
 
 @pytest.mark.parametrize("seed", range(4))
@@ -164,3 +156,107 @@ def test_point_masses_in_the_body_stage_equal_the_system_assembly(gravity):
     out = np.full(system.nq, np.nan)
     stage.increment(q, du, out)
     np.testing.assert_allclose(out, system.increment(q, du), rtol=1e-15, atol=1e-15)
+
+
+SURFACE_KINDS = [name for name in CONTOURS.names() if name != "point"]
+
+
+def _moved_state(system, q, rng):
+    """q with the beam's modes excited (tip deflections of millimetres) and the rigid
+    table moved and turned at random."""
+    from mbs.bodies.rotations import quat_from_rotvec
+
+    q = q.copy()
+    for body in system.bodies:
+        s = q[body.q_slice]
+        if isinstance(body, FlexibleBodyFFR):
+            s[body.q_f_slice] = 1e-3 * rng.normal(size=body.n_modes)
+        elif isinstance(body, RigidBody):
+            s[:3] = 0.05 * rng.normal(size=3)
+            s[3:7] = quat_from_rotvec(rng.normal(size=3))
+    return q
+
+
+def _samples(contour, n=21):
+    """Points r (k, 3) [m] of ``contour`` on an n (x n) grid of its domain (its state as
+    last updated)."""
+    point = contour.new_point()
+    domains = contour.domain if contour.dim == 2 else (contour.domain,)
+    axes = [np.linspace(a, b, n) for a, b in domains]
+    grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, contour.dim)
+    return np.array([contour.evaluate(point, *at).r.copy() for at in grid])
+
+
+@pytest.mark.parametrize("kind", SURFACE_KINDS)
+@pytest.mark.parametrize("seed", range(2))
+def test_every_surface_kind_is_bounded_and_no_pair_within_the_margin_is_pruned(kind, seed):
+    """Each surface kind (on the beam, the free rigid table or the ground; pair_cost's
+    scenes) against a sphere side, the beam deformed and the table moved at random: every
+    point sampled over the surface's domain lies in its bounding sphere (a plane: on its
+    plane), the compiled table's flags are the reference's, and a pair the table prunes
+    has every sampled point farther from the side's centre than the side's radius plus
+    the margin — pruning never drops a pair that could close."""
+    from validation.bench.pair_cost import RADIUS, pair_scene
+
+    system, contact, q, u = pair_scene(("sphere", kind))
+    surface = contact.kinematics.contour2
+    side = contact.kinematics.contour1.body
+    bound = contour_sphere(surface)
+    assert bound is not None, f"{kind}: no bound: its pairs cannot be pruned"
+    rng = np.random.default_rng(seed)
+    q = _moved_state(system, q, rng)
+    body = surface.body
+    surface.update(None if body is None else q[body.q_slice], None if body is None else u[body.u_slice], 0.0)
+    r = _samples(surface)
+    centre, radius = bound(q, 0.0)
+    if isinstance(bound, GroundPlane):
+        np.testing.assert_allclose((r - centre) @ bound.normal, 0.0, atol=1e-15)
+    else:
+        assert np.linalg.norm(r - centre, axis=1).max() <= radius * (1 + 1e-12)
+    table = SphereTable([contact])
+    n = len(table.spheres)
+    centres, radii = np.zeros((n, 3)), np.zeros(n)
+    live, closed = np.ones(1, dtype=bool), np.ones(1, dtype=bool)
+    live_idx = np.zeros(1, dtype=np.intp)
+    table.start(q, 0.0, centres, radii)
+    margin = contact.margin + contact.closing_tol
+    reach = np.max(np.linalg.norm(r - r.mean(axis=0), axis=1)) + 4 * RADIUS
+    flags = []
+    for k in range(400):
+        direction = rng.normal(size=3)
+        direction /= np.linalg.norm(direction)
+        if k % 2:       # touching or within the margin of a surface point: must stay live
+            c1 = r[rng.integers(len(r))] + (RADIUS + margin) * rng.uniform() * direction
+        else:           # anywhere around the surface
+            c1 = r[rng.integers(len(r))] + reach * rng.uniform() * direction
+        q[side.q_slice] = c1
+        table.prune(q, 0.0, centres, radii, live, closed, live_idx)
+        assert live[0] == live_pair(*sphere_pair(contact), margin, q, 0.0)
+        if not live[0]:
+            assert np.linalg.norm(r - c1, axis=1).min() > RADIUS + margin
+        flags.append(bool(live[0]))
+    assert 0 < sum(flags) < len(flags), "the samples should give live and pruned pairs"
+
+
+@pytest.mark.parametrize("kind", ["band", "cylinder"])
+def test_an_offset_contour_beyond_its_body_lies_in_its_grown_sphere(kind):
+    """A band 1 m wide and a cylinder of 0.5 m radius about the beam's top line reach far
+    beyond the beam's own sphere (radius about 0.14 m): their bounds grow by the offset's
+    reach and still hold every sampled point."""
+    from contours import Contour1sNeutralFFR, FlexibleBand, FlexibleCylinder
+    from ffrmbs_app.scenes import point_mass_beam as pmb
+
+    system = System()
+    beam = system.add(FlexibleBodyFFR(pmb.default_beam_data(), modes=20, frame=PrescribedFrameMotion.fixed(),
+                                      name="beam"))
+    line = Contour1sNeutralFFR.along_line(beam, (0.0, pmb.HEIGHT, pmb.WIDTH / 2), (1, 0, 0), normal=(0, 1, 0),
+                                          degree=4)
+    surface = FlexibleBand(line, width=1.0) if kind == "band" else FlexibleCylinder(line, radius=0.5)
+    q, u = system.initial_state()
+    q = _moved_state(system, q, np.random.default_rng(1))
+    surface.update(q[beam.q_slice], u[beam.u_slice], 0.0)
+    r = _samples(surface)
+    centre, radius = contour_sphere(surface)(q, 0.0)
+    beam_radius = contour_sphere(line)(q, 0.0)[1]
+    assert np.linalg.norm(r - centre, axis=1).max() > beam_radius, "the offset contour reaches beyond the beam"
+    assert np.linalg.norm(r - centre, axis=1).max() <= radius * (1 + 1e-12)
