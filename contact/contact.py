@@ -68,7 +68,7 @@ class Contact(ContactElement):
     ``friction`` only with a single-valued normal law."""
 
     unilateral = True
-    run_state = ("box1", "box2", "kinematics")     # (mbs.results.state_arrays)
+    state_slots = ("kinematics",)   # the run state (mbs.run.contact_state); box1, box2: broad-phase workspaces
 
     def __init__(self, kinematics: ContactKinematics, law, friction=None, name="contact", margin="auto",
                  closing_tol=1e-12):
@@ -139,7 +139,7 @@ class CurveConstraint(ContactElement):
     set_valued = True
     unilateral = False
     dim = 2
-    run_state = ("kinematics",)     # (mbs.results.state_arrays); whether it is closed is the run's Data
+    state_slots = ("kinematics",)   # the run state (mbs.run.contact_state); whether it is closed is the run's Data
 
     def __init__(self, kinematics: PointOnCurveConstraint, name="on curve"):
         if not isinstance(kinematics, PointOnCurveConstraint):

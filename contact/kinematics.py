@@ -82,18 +82,23 @@ class ContactKinematics(ABC):
         writes them as one array.
     """
 
-    #: what update() wrote (:mod:`mbs.results.state_arrays`)
-    run_state = ("buffer", "point1", "point2")
+    #: what update() wrote (the run state, :mod:`mbs.run.contact_state`)
+    state_slots = ("buffer", "point1", "point2")
     g_N, gd_N, active = BufferSlot(G_N_AT), BufferSlot(GD_N_AT), BufferSlot(ACTIVE_AT, bool)
 
     def __init__(self, contour1, contour2, nu_total=None):
         self.contour1, self.contour2 = contour1, contour2
         self.point1, self.point2 = contour1.new_point(), contour2.new_point()
         self._nu_total = nu_total
-        nu1, nu2 = contour1.nu, contour2.nu
+        self.buffer = np.zeros(buffer_layout(contour1.nu, contour2.nu)[-1])
+        self.buffer[G_N_AT] = self.buffer[GD_N_AT] = np.nan
+        self.bind_views()
+
+    def bind_views(self) -> None:
+        """The named views of :attr:`buffer` (again after it moved into a run's state)."""
+        nu1, nu2 = self.contour1.nu, self.contour2.nu
         n_at, T_at, gd_T_at, w_N1_at, w_N2_at, w_T1_at, w_T2_at, size = buffer_layout(nu1, nu2)
-        self.buffer = b = np.zeros(size)
-        b[G_N_AT] = b[GD_N_AT] = np.nan
+        b = self.buffer
         self.n = b[n_at:T_at]
         self.T = b[T_at:gd_T_at].reshape(3, 2)
         self.gd_T = b[gd_T_at:w_N1_at]
@@ -217,7 +222,7 @@ class _CentreContact(ContactKinematics):
     ``axes1`` the sphere's axes (3, 3) at the last update (identity for a point)."""
 
     side1: type
-    run_state = ContactKinematics.run_state + ("centre", "axes1")
+    state_slots = ContactKinematics.state_slots + ("centre", "axes1")     # a point's centre: a view of point1
 
     def __init__(self, contour1, contour2, nu_total):
         _require(contour1, self.side1, f"a {self.side1.__name__}")
@@ -225,6 +230,11 @@ class _CentreContact(ContactKinematics):
         self.radius = contour1.radius if self.side1 is SphereContour else 0.0
         self.centre = self.point1.r if self.side1 is PointContour else np.zeros(3)
         self.axes1 = np.eye(3)
+
+    def bind_views(self) -> None:
+        super().bind_views()
+        if self.side1 is PointContour:
+            self.centre = self.point1.r
 
     @abstractmethod
     def _project(self, c, velocity, jacobians) -> bool:
@@ -253,7 +263,7 @@ class _SearchContact(_CentreContact):
     search's ``hole`` when the nearest point lay in a trimmed contour's hole)."""
 
     search_class: type
-    run_state = _CentreContact.run_state + ("search", "start")     # the search and its warm start
+    state_slots = _CentreContact.state_slots + ("search", "start")     # the search and its warm start
 
     def __init__(self, contour1, contour2, search, nu_total):
         super().__init__(contour1, _require_dim(contour2, self.search_class.dim), nu_total)
@@ -380,7 +390,7 @@ class _SphereProjection(_CentreContact):
     T from sphere 2's frame at C2, ġ by eq. 3.8. Inactive when the centres coincide (no
     normal). ``axes2``: sphere 2's axes at the last update."""
 
-    run_state = _CentreContact.run_state + ("axes2",)
+    state_slots = _CentreContact.state_slots + ("axes2",)
 
     def __init__(self, contour1, sphere2, nu_total):
         super().__init__(contour1, _require(sphere2, SphereContour, "a SphereContour"), nu_total)
@@ -431,7 +441,7 @@ class PointOnCurveConstraint(ContactKinematicsPointContour1s):
     inside an open curve's domain).
     """
 
-    run_state = ContactKinematicsPointContour1s.run_state + ("g", "gd")
+    state_slots = ContactKinematicsPointContour1s.state_slots + ("g", "gd")
 
     def __init__(self, point, curve, search=None, nu_total=None):
         super().__init__(point, curve, search, nu_total)

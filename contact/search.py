@@ -169,8 +169,9 @@ class _Search:
     """
 
     dim: int
-    #: what a solve changes (:mod:`mbs.results.state_arrays`); ``_G``: the coarse grid's workspace
-    run_state = ("_length_scale", "counts", "_point", "_g", "_G", "hole")
+    #: what a solve changes and the next one reads (the run state, :mod:`mbs.run.contact_state`):
+    #: the length scale (NaN until the first search fixes it), the counters, the hole
+    state_slots = ("_scale", "counts", "hole")
 
     def __init__(self, contour, tol, max_iter, length_scale, compiled, edge_tol=EDGE_TOL):
         if contour.dim != self.dim:
@@ -181,7 +182,7 @@ class _Search:
         self.tol = float(tol)
         self.edge_tol = float(edge_tol)
         self.max_iter = int(max_iter)
-        self._length_scale = None if length_scale is None else float(length_scale)
+        self._scale = np.array([np.nan if length_scale is None else float(length_scale)])
         self.compiled = (bool(compiled) and isinstance(contour, (NeutralContour, OffsetContour))
                          and contour.compiled)
         self._work = contour.kernel_workspace() + (self._g,) if self.compiled else None
@@ -201,10 +202,10 @@ class _Search:
 
     @property
     def length_scale(self) -> float:
-        if self._length_scale is None:
+        if np.isnan(self._scale[0]):
             r = self._grid_positions()
-            self._length_scale = float(np.linalg.norm(r.max(axis=0) - r.min(axis=0))) or 1.0
-        return self._length_scale
+            self._scale[0] = float(np.linalg.norm(r.max(axis=0) - r.min(axis=0))) or 1.0
+        return float(self._scale[0])
 
     def _tol2(self):
         return (self.tol * self.length_scale) ** 2
@@ -229,7 +230,7 @@ class _Search:
         (edge_tol · length scale)² [m²], iterations) of Newton, as the kernels take them;
         None while the length scale is not known (it is fixed at the first search, module
         docstring)."""
-        if self._length_scale is None:
+        if np.isnan(self._scale[0]):
             return None
         return tuple(ax.max_step for ax in self.axes), self._tol2(), self._edge2(), self.max_iter
 

@@ -37,17 +37,19 @@ ETA_AT, XI_AT, DERIVS_AT, FRAME_AT, V_AT, J_AT = 0, 1, 2, 20, 29, 32
 
 
 class BufferSlot:
-    """An attribute kept as one entry of its object's ``buffer`` at ``index`` (a float
-    vector a compiled kernel writes), read as ``kind`` (float, or bool: non-zero)."""
+    """An attribute kept as one entry of its object's float vector ``array`` (default
+    ``buffer``, the vector a compiled kernel writes) at ``index``, read as ``kind``
+    (float, or bool: non-zero), so that it lives in the run's state arrays with the rest
+    (:mod:`mbs.run.contact_state`)."""
 
-    def __init__(self, index: int, kind=float):
-        self.index, self.kind = index, kind
+    def __init__(self, index: int, kind=float, array="buffer"):
+        self.index, self.kind, self.array = index, kind, array
 
     def __get__(self, obj, owner=None):
-        return self if obj is None else self.kind(obj.buffer[self.index])
+        return self if obj is None else self.kind(getattr(obj, self.array)[self.index])
 
     def __set__(self, obj, value):
-        obj.buffer[self.index] = float(value)
+        getattr(obj, self.array)[self.index] = float(value)
 
 
 class ContourPoint:
@@ -72,11 +74,16 @@ class ContourPoint:
         array.
     """
 
-    run_state = ("buffer",)     # (mbs.results.state_arrays)
+    state_slots = ("buffer",)   # the run state (mbs.run.contact_state)
     eta, xi = BufferSlot(ETA_AT), BufferSlot(XI_AT)
 
     def __init__(self, nu: int):
-        self.buffer = b = np.zeros(J_AT + 6 * nu)
+        self.buffer = np.zeros(J_AT + 6 * nu)
+        self.bind_views()
+
+    def bind_views(self) -> None:
+        """The named views of :attr:`buffer` (again after it moved into a run's state)."""
+        b, nu = self.buffer, (self.buffer.size - J_AT) // 6
         self.derivs = b[DERIVS_AT:FRAME_AT].reshape(6, 3)
         self.frame = b[FRAME_AT:V_AT].reshape(3, 3)
         self.v = b[V_AT:J_AT]

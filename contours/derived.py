@@ -67,7 +67,7 @@ class OffsetContour(Contour):
     """
 
     dim = 2
-    run_state = ("neutral",)    # its state is the neutral contour's (mbs.results.state_arrays)
+    state_slots = ("neutral",)  # its run state is the neutral contour's (mbs.run.contact_state)
 
     def __init__(self, neutral: Contour1sNeutralFactory, xi_domain, closed_xi, reach, name, compiled=True):
         if not isinstance(neutral, Contour1sNeutralFactory):

@@ -34,25 +34,30 @@ class _FrameContour(Contour):
     and Jacobians, read once per update (views of one vector ``state``, layout
     ``R_AT`` … ``J_AT``, so that a compiled kernel takes them as one array)."""
 
-    run_state = ("_r", "_A", "_v", "_w", "_J_T", "_J_R")     # what update() wrote (mbs.results.state_arrays)
+    state_slots = ("state",)    # what update() wrote (the run state, mbs.run.contact_state)
 
     def __init__(self, frame, name):
         body = None if frame.is_ground else frame.body
         super().__init__(body, name)
         self.frame_ref = frame
-        self.state = s = np.zeros(J_AT + 6 * self.nu)
-        self._r = s[R_AT:A_AT]
-        self._A = s[A_AT:V_AT].reshape(3, 3)
+        self.state = np.zeros(J_AT + 6 * self.nu)
+        self.bind_views()
         self._A[:] = np.eye(3)
-        self._v = s[V_AT:W_AT]
-        self._w = s[W_AT:J_AT]
-        self._J_T = s[J_AT:J_AT + 3 * self.nu].reshape(3, self.nu)
-        self._J_R = s[J_AT + 3 * self.nu:].reshape(3, self.nu)
         self._on_point_mass = body is not None and body.translation_only   # the shortcut of the module docstring
         if self._on_point_mass:
             self._A[:] = frame.A_rel
             self._J_T[:] = np.eye(3)
         self.update(None if body is None else body.q_init, None if body is None else body.u_init)
+
+    def bind_views(self) -> None:
+        """The named views of :attr:`state` (again after it moved into a run's state)."""
+        s, nu = self.state, self.nu
+        self._r = s[R_AT:A_AT]
+        self._A = s[A_AT:V_AT].reshape(3, 3)
+        self._v = s[V_AT:W_AT]
+        self._w = s[W_AT:J_AT]
+        self._J_T = s[J_AT:J_AT + 3 * nu].reshape(3, nu)
+        self._J_R = s[J_AT + 3 * nu:].reshape(3, nu)
 
     def update(self, q, u=None, t=0.0) -> None:
         """The frame's position, orientation and Jacobians at (q, t) and, with u, its

@@ -29,9 +29,12 @@ import numpy as np
 from ffrmbs.errors import ModelError
 from contours.nurbs.geomdl_io import to_geomdl_curve, to_geomdl_surface
 
-from ..base import Contour, ContourPoint
+from ..base import BufferSlot, Contour, ContourPoint
 from . import _kernels as K
 from .products import NeutralNurbsLocalPosition, NeutralNurbsModeShapes, NeutralNurbsPosition, NeutralNurbsVelocity
+
+
+HAS_U, FIELDS_STAMP, VELOCITY_STAMP, HAS_T = range(4)     # NeutralContour._flags
 
 
 class NeutralContour(Contour):
@@ -67,9 +70,13 @@ class NeutralContour(Contour):
         the state and the cache.
     """
 
-    #: what update() and the lazy products wrote (:mod:`mbs.results.state_arrays`)
-    run_state = ("_state", "_span", "T", "_has_u", "_fields_stamp", "_velocity_stamp", "_local_position",
-                 "_position_field", "_velocity_field")
+    #: what update() and the lazy products wrote (the run state, :mod:`mbs.run.contact_state`)
+    state_slots = ("_state", "_span", "_flags", "_T", "_local_position", "_position_field", "_velocity_field")
+    #: entries of ``_flags``: update() was given u; the state stamps the products were
+    #: synced at; a free frame's T is set
+    _has_u = BufferSlot(HAS_U, bool, "_flags")
+    _fields_stamp = BufferSlot(FIELDS_STAMP, float, "_flags")
+    _velocity_stamp = BufferSlot(VELOCITY_STAMP, float, "_flags")
 
     def __init__(self, body, space, nodal_u0, nodal_phi, name, compiled=True):
         super().__init__(body, name)
@@ -93,27 +100,43 @@ class NeutralContour(Contour):
         self.update(body.q_init, body.u_init)
 
     def _alloc_state(self, n_f):
-        """The state vector (layout of :mod:`._kernels`) and its named views."""
-        self._state = s = np.zeros(K.Q_AT + 2 * n_f)
-        self.R, self.v, self.w = s[K.R_AT:K.R_AT + 3], s[K.V_AT:K.V_AT + 3], s[K.W_AT:K.W_AT + 3]
-        self.A = s[K.A_AT:K.A_AT + 9].reshape(3, 3)
-        self.q_f, self.qdot_f = s[K.Q_AT:K.Q_AT + n_f], s[K.Q_AT + n_f:]
-        self.T = None
-        self._has_u = False
-        self._fields_stamp = self._velocity_stamp = -1.0   # the state stamps the products were synced at
+        """The state vector (layout of :mod:`._kernels`), the flags and a free frame's T."""
+        self._state = np.zeros(K.Q_AT + 2 * n_f)
+        self._flags = np.array([0.0, -1.0, -1.0, 0.0])
+        self._T = np.zeros((3, 3))
 
     def _alloc_kernel_data(self, n_f):
         """The kernels' arrays (P_ū0, P_Φ, state, span cache), the constants of the O(n_f)
         bounding box and the basis tables of :meth:`evaluate`."""
         ctrl0 = self._local_position.ctrl0
-        phi = self.mode_shapes.ctrl if n_f else np.zeros(self.space.ctrl_shape + (0,))
-        span = np.full(K.SPAN_KEY + 3 * int(np.prod([d.p + 1 for d in self._directions()])), -1.0)
-        self._span = span
-        self.kernel_data = self.space.geometry + (ctrl0, phi, self._state, span)
+        self._phi = self.mode_shapes.ctrl if n_f else np.zeros(self.space.ctrl_shape + (0,))
+        self._span = np.full(K.SPAN_KEY + 3 * int(np.prod([d.p + 1 for d in self._directions()])), -1.0)
+        self.bind_views()
         P0 = ctrl0.reshape(-1, 3)
         self._box0 = (P0.min(axis=0), P0.max(axis=0))
-        self._phi_bound = np.abs(phi.reshape(-1, 3, n_f)).max(axis=0) if n_f else np.zeros((3, 0))
+        self._phi_bound = np.abs(self._phi.reshape(-1, 3, n_f)).max(axis=0) if n_f else np.zeros((3, 0))
         self._B = self.kernel_workspace()[0]
+
+    def bind_views(self) -> None:
+        """The named views of the state vector (R, A, v, ω̄, q_f, q̇_f) and
+        :attr:`kernel_data` (again after the state moved into a run's state)."""
+        s, n_f = self._state, (self._state.size - K.Q_AT) // 2
+        self.R, self.v, self.w = s[K.R_AT:K.R_AT + 3], s[K.V_AT:K.V_AT + 3], s[K.W_AT:K.W_AT + 3]
+        self.A = s[K.A_AT:K.A_AT + 9].reshape(3, 3)
+        self.q_f, self.qdot_f = s[K.Q_AT:K.Q_AT + n_f], s[K.Q_AT + n_f:]
+        self.kernel_data = self.space.geometry + (self._local_position.ctrl0, self._phi, s, self._span)
+
+    @property
+    def T(self):
+        """ω̄ = T u_r of a free frame (3, 3), from the body's last update; None on a
+        prescribed frame."""
+        return self._T if self._flags[HAS_T] else None
+
+    @T.setter
+    def T(self, value):
+        self._flags[HAS_T] = value is not None
+        if value is not None:
+            self._T[...] = value
 
     def _directions(self):
         return (self.space.eta,) if self.dim == 1 else (self.space.eta, self.space.xi)
@@ -300,7 +323,7 @@ class Contour1sNeutralFactory(NeutralContour):
     n = the body-frame reference direction ``normal`` (rotated with the body, made
     perpendicular to t1), t2 = n × t1."""
 
-    run_state = NeutralContour.run_state + ("_n_ref",)
+    state_slots = NeutralContour.state_slots + ("_n_ref",)
 
     def __init__(self, body, space, nodal_u0, nodal_phi, normal, name, compiled=True):
         normal = np.asarray(normal, dtype=float).reshape(3)

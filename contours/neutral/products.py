@@ -32,7 +32,7 @@ class NeutralNurbs(ABC):
     ``ctrl`` has shape space.ctrl_shape + (width,).
     """
 
-    run_state = ("ctrl",)       # the control points at the last update (mbs.results.state_arrays)
+    state_slots = ("ctrl",)     # the control points at the last update (run state, mbs.run.contact_state)
 
     def __init__(self, space, width: int):
         self.space = space
@@ -78,6 +78,10 @@ class NeutralNurbsLocalPosition(NeutralNurbs):
         self.compute(nodal_u0)
         self.ctrl0 = self.ctrl.copy()
         self.modes = modes
+        self.bind_views()
+
+    def bind_views(self) -> None:
+        """The flat view of :attr:`ctrl` (again after it moved into a run's state)."""
         self._flat = self.ctrl.reshape(-1)
 
     def update(self, q_f) -> None:
@@ -100,11 +104,15 @@ class NeutralNurbsPosition(NeutralNurbs):
 class NeutralNurbsVelocity(NeutralNurbs):
     """ṙ = v + A (ω̄ × ū + Φ q̇_f), inertial [m/s] (thesis eq. 2.32)."""
 
-    run_state = ("ctrl", "_modal")
+    state_slots = ("ctrl", "_modal")
 
     def __init__(self, space):
         super().__init__(space, 3)
         self._modal = np.zeros_like(self.ctrl)  # control points of Φ q̇_f
+        self.bind_views()
+
+    def bind_views(self) -> None:
+        """The flat view of ``_modal`` (again after it moved into a run's state)."""
         self._modal_flat = self._modal.reshape(-1)
 
     def update(self, v, A, w, local: NeutralNurbsLocalPosition, qdot_f) -> None:

@@ -77,8 +77,8 @@ H · min(2, max(0.2, 0.9 e^(−1/2))) (first order in the positions across impac
 a rejected step is retaken with the smaller H. A step taken back (the step of H before
 its two halves, a rejected step) leaves no trace: what a step reads of the steps before
 it — the Data of :data:`mbs.run.model.CARRIED` (state, closed flags, warm starts, the
-compliant contacts' springs, counters) and the contours' and contacts' ``run_state``
-(the searches' warm starts and counters) — is copied before it and put back after
+compliant contacts' springs, counters, the contours' and contacts' run state with the
+searches' warm starts) — is copied before it and put back after
 (:class:`mbs.results.state_arrays.StateCopy`). An impact inside a step separates the
 two solutions by about the approach velocity times the mistimed interval, so the step
 shrinks around contact closing and grows again in free flight and steady contact.
@@ -272,8 +272,7 @@ class AdaptiveMoreauTimeStepping(MoreauTimeStepping):
         state = super()._prepare(*args)
         model, data = self.model, self.data
         data.stats.update(rejected_steps=0, forced_steps=0, smallest_dt=np.inf, largest_dt=0.0)
-        self._saved = state_arrays.StateCopy([(data, CARRIED)] + [(c, None) for c, *_ in model.contours]
-                                             + [(c, None) for c in model.contacts])
+        self._saved = state_arrays.StateCopy([(data, CARRIED)])
         self._q_full = np.zeros(model.nq)
         return state
 
@@ -309,8 +308,7 @@ class AdaptiveMoreauTimeStepping(MoreauTimeStepping):
     def _save(self):
         """Keep what a rejected or repeated step puts back: the Data a step reads of the
         steps before it (:data:`mbs.run.model.CARRIED`: t, q, u, closed flags, warm starts,
-        compliant springs, counters) and the run state of the contours and contacts
-        (searches' warm starts and counters)."""
+        compliant springs, counters, the contours' and contacts' run state)."""
         self._saved.save()
 
     def _restore(self):

@@ -5,7 +5,10 @@ for bit as if never stopped.
 What a checkpoint holds (:func:`snapshot`), each entry an array under a path-like name:
 
 - ``data/…``: every array and scalar of the run's :class:`~mbs.run.model.Data` (t, q, u,
-  the contact flags and warm starts, the factors of a constant M̂, counters, …);
+  the contact flags and warm starts, the factors of a constant M̂, counters, …), the
+  contours' and contacts' run state among them (``data/contact_f``, ``data/contact_i``:
+  their state vectors, contact points, kinematics, searches' warm starts and counters,
+  :mod:`mbs.run.contact_state`);
 - ``integrator/…``: the integrator's own state (:meth:`~mbs.integrators.driver.Integrator.collect`:
   step and iteration counters; generalized-α's u̇, ā, λ; Moreau's per-step trace rows;
   the adaptive step's next step size and last penetration);
@@ -13,10 +16,6 @@ What a checkpoint holds (:func:`snapshot`), each entry an array under a path-lik
   landing, samples recorded, CPU seconds so far, earlier resumes) and ``result/…`` the
   samples so far (rows [0, recorded) of t, q, u, outputs, energies, contact records);
   ``monitor/…`` the spin warnings given;
-- ``contour/<k>/…`` and ``contact/<i>/…``: the run state the contours, contact
-  kinematics and searches keep in their own arrays (each kind names it in its
-  ``run_state``, :mod:`mbs.results.state_arrays`), contour k of ``Model.contours``, contact i of
-  ``Model.contacts``;
 - ``header``: JSON (as bytes) — the format and version, the kinds of the entries
   (:mod:`mbs.results.state_arrays`), what identifies the run (integrator and options, Δt,
   t_end, output count, bodies with their coordinate counts, contacts, outputs, the
@@ -24,7 +23,7 @@ What a checkpoint holds (:func:`snapshot`), each entry an array under a path-lik
 
 Resuming (:meth:`Checkpoint.restore`) rebuilds nothing from the file: the caller makes
 the run again from its inputs (the scene, its plan re-made deterministically, the Model
-recompiled), and the arrays are loaded into the fresh Data and objects, each checked by
+recompiled), and the arrays are loaded into the fresh Data and integrator, each checked by
 name, shape and dtype against them; a checkpoint of another scene, integrator or mode
 count is refused with one line naming the file and the first mismatch.
 
@@ -55,7 +54,7 @@ from preprocess.inputfiles import regular_file
 from mbs.results import state_arrays
 from mbs.results.state_arrays import StateMismatch
 
-FORMAT, FORMAT_VERSION = "ffrmbs-checkpoint", 3
+FORMAT, FORMAT_VERSION = "ffrmbs-checkpoint", 4
 PICKLED_FORMATS = (b"ffrmbs-checkpoint-1\n", b"ffrmbs-checkpoint-2\n")    # the older formats: pickles
 HEADER = "header"
 
@@ -76,13 +75,9 @@ def snapshot(integ, recorder: dict) -> tuple[dict, dict]:
     """(header, arrays) of the run of ``integ`` at an output sample (module docstring);
     ``recorder``: its position {"samples", "trace_rows"} in the result file."""
     arrays, kinds = {}, {}
-    model, st, res = integ.model, integ.state, integ.state.result
+    st, res = integ.state, integ.state.result
     integ.data.collect("data", arrays, kinds)
     integ.collect("integrator", arrays, kinds)
-    for k, (contour, *_) in enumerate(model.contours):
-        state_arrays.collect(contour, f"contour/{k}", arrays, kinds)
-    for i, contact in enumerate(model.contacts):
-        state_arrays.collect(contact, f"contact/{i}", arrays, kinds)
     n = st.recorded
     run = {"run/next_landing": st.next_landing, "run/recorded": n, "run/cpu_s": st.cpu_s,
            "run/resumed_steps": st.resumed_steps, "run/resumed_at": np.array(st.resumed_at, dtype=float),
@@ -146,9 +141,9 @@ class Checkpoint:
                 raise self.refuse(f"its {key} is {quote(json.dumps(theirs.get(key)), 60)}, this run's "
                                   f"{quote(json.dumps(value), 60)}")
         try:
-            self._objects(integ)
+            integ.data.restore("data", self.arrays, self.kinds)
             integ.start(integ.t, integ.q, integ.u)       # the integrator's workspaces, at the saved state
-            self._objects(integ)                        # what starting changed, back to the saved state
+            integ.data.restore("data", self.arrays, self.kinds)     # what starting changed, back as saved
             integ.restore("integrator", self.arrays, self.kinds)
             self._run(integ)
         except StateMismatch as exc:
@@ -157,14 +152,6 @@ class Checkpoint:
     @property
     def kinds(self) -> dict:
         return self.header.get("kinds", {})
-
-    def _objects(self, integ):
-        model = integ.model
-        integ.data.restore("data", self.arrays, self.kinds)
-        for k, (contour, *_) in enumerate(model.contours):
-            state_arrays.restore(contour, f"contour/{k}", self.arrays, self.kinds)
-        for i, contact in enumerate(model.contacts):
-            state_arrays.restore(contact, f"contact/{i}", self.arrays, self.kinds)
 
     def _run(self, integ):
         """RunState, the samples so far and the spin warnings."""

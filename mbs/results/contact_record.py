@@ -11,9 +11,9 @@
   located afresh at the sample's state (t, q, u), the broad phase left out: a pair kind
   with a fused detection in copies of its arrays (:class:`mbs.run.fused_detection.Probe`),
   else (and when the probe cannot start from the run's or its own last contact point) the
-  contours updated and the search run there — which seeds the probe's own —, the contours'
-  and the contact's run state put back afterwards — either way recording changes nothing
-  of the run. NaN where no contact
+  contours updated and the search run there — which seeds the probe's own —, the run's
+  contact state (Data's ``contact_f``, ``contact_i``) put back afterwards — either way
+  recording changes nothing of the run. NaN where no contact
   point exists (a point beyond the contour's domain);
 * ``deflection`` [m]: δ of the normal row, the spring's deflection at the end of the last
   step of a closed contact through residual flexibility (0 otherwise);
@@ -25,8 +25,6 @@ A point kept on a curve (not unilateral) records what its last step located.
 from __future__ import annotations
 
 import numpy as np
-
-from mbs.results import state_arrays
 
 FIELDS = {"active": ((), np.int8, "1"), "gap": ((), float, "m"), "point": ((3,), float, "m"),
           "normal": ((3,), float, "1"), "deflection": ((), float, "m"), "force": ((3,), float, "N")}
@@ -67,8 +65,7 @@ class ContactRecorder:
         self.model = model
         self.slices = {id(contour): (qs, us) for contour, owners, qs, us in model.contours}
         self.probes = [None if f is None else f.probe() for f in model.fused]
-        self._kept = {}         # contact id -> StateCopy of its contours' and its own run state
-        self._saved = None
+        self._kept = None       # copies of Data's contact_f, contact_i while a contact is located afresh
 
     def record(self, data, records, i, t, q, u) -> None:
         """Sample ``i`` of every contact (but the force) into ``records`` at the state
@@ -85,14 +82,14 @@ class ContactRecorder:
                 gap, point, normal = found
                 rec["gap"][i], rec["point"][i], rec["normal"][i] = gap + delta, point, normal
                 continue
-            located = self.locate(c, t, q, u) if afresh else k.active
+            located = self.locate(data, c, t, q, u) if afresh else k.active
             rec["gap"][i] = k.g_N + delta if located else np.nan
             rec["point"][i] = k.point2.r if located else np.nan
             rec["normal"][i] = k.n if located else np.nan
             if afresh:
                 if located and self.probes[j] is not None:
                     self.probes[j].seed()           # its warm start while the run has none
-                self.put_back()
+                self.put_back(data)
 
     def deflection(self, data, j) -> float:
         """δ [m] of contact ``j``'s normal row at the end of the last step (0 without
@@ -102,18 +99,17 @@ class ContactRecorder:
             return 0.0
         return float(data.comp_delta[model.lam_at[j]])
 
-    def locate(self, contact, t, q, u) -> bool:
+    def locate(self, data, contact, t, q, u) -> bool:
         """Locate ``contact`` at (t, q, u) without the broad phase, its contours updated
-        there; their and its run state kept for :meth:`put_back` (in buffers made on the
-        first sample). True if a contact point exists (the kinematics then hold g_N, the
-        point and the normal)."""
+        there; the run's contact state (``data.contact_f``, ``contact_i``) kept for
+        :meth:`put_back` (in buffers made on the first sample). True if a contact point
+        exists (the kinematics then hold g_N, the point and the normal)."""
         k = contact.kinematics
-        kept = self._kept.get(id(contact))
-        if kept is None:
-            kept = self._kept[id(contact)] = state_arrays.StateCopy([(k.contour1, None), (k.contour2, None),
-                                                                     (k, None)])
-        kept.save()
-        self._saved = kept
+        if self._kept is None:
+            self._kept = (data.contact_f.copy(), data.contact_i.copy())
+        else:
+            np.copyto(self._kept[0], data.contact_f)
+            np.copyto(self._kept[1], data.contact_i)
         for contour in (k.contour1, k.contour2):
             qs, us = self.slices[id(contour)]
             if qs is None:
@@ -122,7 +118,7 @@ class ContactRecorder:
                 contour.update(q[qs], u[us], t)
         return bool(k.update(velocity=False, jacobians=False))
 
-    def put_back(self) -> None:
-        """The run state :meth:`locate` kept, restored."""
-        self._saved.restore()
-        self._saved = None
+    def put_back(self, data) -> None:
+        """The run's contact state :meth:`locate` kept, put back into ``data``."""
+        np.copyto(data.contact_f, self._kept[0])
+        np.copyto(data.contact_i, self._kept[1])

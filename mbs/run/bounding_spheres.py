@@ -103,9 +103,6 @@ class FixedSphere:
     def __call__(self, q, t):
         return self.centre, self.radius
 
-    def grown(self, reach) -> "FixedSphere":
-        return FixedSphere(self.centre, self.radius + reach)
-
 
 class GroundPlane:
     """The half-space behind a plane contour on the ground: ``centre`` its frame's origin

@@ -197,6 +197,11 @@ class _FusedCentre:
         """Newton's step caps and tolerance from the search into the tables."""
         _newton_settings(self.search, self._itab, self._ftab)
 
+    def refresh(self) -> None:
+        """The tables and the argument tuple made again on the contact's arrays, once
+        they moved into a run's Data (:mod:`mbs.run.contact_state`)."""
+        type(self).__init__(self, self.contact)
+
     def locate(self, q, u, t) -> bool:
         """Both contours updated at the global (q, u, t) and the contact located, as
         ``contour.update`` then :meth:`Contact.locate` (the Python path when the kernel
@@ -446,6 +451,11 @@ class _FusedAnalytic:
         self._work = np.zeros(K.WORK_SIZE)
         self._args = (itab, ftab, k.contour1.state, k.contour2.state, k.point1.buffer, k.point2.buffer, k.buffer,
                       k.centre, k.axes1, *((k.axes2,) if self.axes2 else ()), self._work)
+
+    def refresh(self) -> None:
+        """The tables and the argument tuple made again on the contact's arrays, once
+        they moved into a run's Data (:mod:`mbs.run.contact_state`)."""
+        type(self).__init__(self, self.contact)
 
     def locate(self, q, u, t) -> bool:
         """Both contours at the global (q, u, t) and the contact located, as

@@ -18,9 +18,10 @@ closed), penalty normal forces, the bounding spheres of a planned run, the close
 the buffers of W (nu, m), M̂⁻¹W, the Delassus matrix G (m, m), ξ_free, γ⁻, the
 gap-closing term, Λ and γ⁺ for the largest possible closed set, the warm starts (Λ of
 the last step per contact and for the joints), counters and the record of the last
-step. The contours' states and the searches' warm starts stay in the contour and
-contact-kinematics objects (their own preallocated arrays), which the contour and
-detection stages update.
+step, and the contours' and contacts' run state (``contact_f``, ``contact_i``: their state
+vectors, contact points, kinematics, the searches' warm starts and counters), of which
+the contour, contact-kinematics and search objects hold views (:mod:`mbs.run.contact_state`:
+made when the Data is, the fused detections' tables made again on them).
 
 A checkpoint (:mod:`mbs.results.checkpoint`) holds every array and scalar of Data
 (:meth:`Data.collect`, :meth:`Data.restore`) but its caches, rebuilt on demand from the
@@ -38,6 +39,7 @@ from contact.solver import WORK_ROWS
 from mbs.results import state_arrays
 from mbs.run.body_stage import BodyStage
 from mbs.run.bounding_spheres import SphereTable
+from mbs.run.contact_state import ContactState
 from mbs.run.equations import Equations
 from mbs.run.fused_detection import fused_detection
 from mbs.run.residual_contact import ResidualContacts
@@ -48,11 +50,12 @@ CACHES = ("contact_sets", "problem_views", "lapack_views", "solver_views", "comp
 # ^ Data rebuilt on demand (the last step's factor of a constant M̂ is looked up again in
 #   ``factors``; the compliant contacts' entries are made each step): not in a checkpoint
 CARRIED = ("t", "q", "u", "closed", "lam_prev", "warm", "lam_joints", "warm_joints", "comp_force", "comp_delta",
-           "comp_delta_dot", "stats")
+           "comp_delta_dot", "stats", "contact_f", "contact_i")
 # ^ the Data a Moreau step reads of the steps before it (the rest it writes before reading):
 #   the state, the closed flags (a planned run keeps closed contacts live), the warm
-#   starts, the compliant contacts' springs and the counters; what a step taken back
-#   puts back (mbs.integrators.moreau.AdaptiveMoreauTimeStepping)
+#   starts, the compliant contacts' springs, the counters and the contours' and contacts'
+#   run state (mbs.run.contact_state); what a step taken back puts back
+#   (mbs.integrators.moreau.AdaptiveMoreauTimeStepping)
 
 
 @dataclass(frozen=True)
@@ -117,6 +120,9 @@ class Model:
     residual : ResidualContacts or None
         The contacts on contours with residual flexibility and their compliances
         (:mod:`mbs.run.residual_contact`); None when there is none.
+    contact_state : ContactState
+        Where the contours' and contacts' run state lies in Data's ``contact_f`` and
+        ``contact_i`` (:mod:`mbs.run.contact_state`).
     """
 
     system: object
@@ -148,6 +154,7 @@ class Model:
     blocks: np.ndarray | None
     idle_rows: np.ndarray
     residual: ResidualContacts | None
+    contact_state: ContactState
 
     @property
     def n_act(self) -> int:
@@ -204,7 +211,8 @@ def compile_model(system, plan=None, theta=0.5, solver=None) -> Model:
                  penalty=penalty, spheres=SphereTable(contacts) if plan is not None else None, fused=fused,
                  contours=contours, owner_at=owner_at, owners=owners,
                  single_valued=tuple(i for i, sv in enumerate(set_valued) if not sv), m_max=system.n_c + sum(dims),
-                 blocks=blocks, idle_rows=idle_rows, residual=residual if residual else None)
+                 blocks=blocks, idle_rows=idle_rows, residual=residual if residual else None,
+                 contact_state=ContactState([k for k, *_ in contours] + list(contacts)))
 
 
 LAST_STEP = (0, 0.0, 0, 0.0, 0.0, 0, 0.0, 0.0)     # Data.last of a step not yet taken
@@ -294,6 +302,10 @@ class Data:
                                             # solver iterations, residual; impulse work; with a
                                             # trace (mbs.run.step_work) most contacts transmitting a
                                             # force, load work, damping loss
+        # the contours' and contacts' run state (mbs.run.contact_state): their arrays become
+        # views of these two vectors, the fused detections' tables follow
+        self.contact_f, self.contact_i = model.contact_state.pools()
+        model.contact_state.bind(self.contact_f, self.contact_i, model.fused)
 
     def problem(self, nu, m):
         """Views (W (nu, m), M̂⁻¹W (nu, m), G (m, m), Λ, γ⁺, ξ_free, γ⁻, closing, offset

@@ -28,6 +28,7 @@ from mbs import FlexibleBodyFFR, Joint, PointMass, PrescribedFrameMotion, RigidB
 from mbs.results import state_arrays
 from mbs.results.checkpoint import read_checkpoint
 from mbs.run.fused_detection import fused_detection
+from mbs.run.model import compile_model
 from mbs.integrators import INTEGRATORS, driver, integrator_class
 from mbs.links.joints import JOINTS
 from mbs.registry import BODIES, LOADS, ROTATIONS
@@ -163,20 +164,32 @@ def test_a_checkpoint_holds_only_plain_arrays(runs):
         assert all(i.compress_type == zipfile.ZIP_STORED for i in z.infolist())
     for name, value in ckpt.arrays.items():
         assert value.dtype.kind in "biufU", name
-    assert {"data/q", "data/u", "data/lam_prev", "integrator/trace/energy", "contour/1/_state",
-            "contact/0/kinematics/start", "result/outputs/y"} <= set(ckpt.arrays)
+    assert {"data/q", "data/u", "data/lam_prev", "integrator/trace/energy", "data/contact_f", "data/contact_i",
+            "result/outputs/y"} <= set(ckpt.arrays)
+    assert not any(name.startswith(("contour/", "contact/")) for name in ckpt.arrays), "the contact state is Data"
 
 
 def test_the_contour_and_search_state_is_in_the_checkpoint(runs):
-    """The run state that lives in objects: the contour's state vector (R, A, q_f, …)
-    equals the body state at the last midpoint, and the warm start of the search is a
-    point of the contour's domain."""
+    """The contours' and contacts' run state is Data's ``contact_f``/``contact_i``: at the
+    places the Model gives the contour's state vector (R, A, q_f, …) equals the body
+    state at the last midpoint, the search's warm start is a point of the contour's
+    domain and its counters count the Newton solves."""
     ckpt = runs["moreau"][2]
-    eta, xi = ckpt.arrays["contact/0/kinematics/start"]
+    system, _ = beam_on_mass()
+    model = compile_model(system)
+    k = model.contacts[0].kinematics
+    places = {(id(obj), name): (pool, at, shape) for obj, name, pool, at, shape in model.contact_state.slots}
+
+    def saved(obj, name):
+        pool, at, shape = places[id(obj), name]
+        vector = ckpt.arrays["data/contact_f" if pool == 0 else "data/contact_i"]
+        return vector[at:at + int(np.prod(shape))].reshape(shape)
+
+    eta, xi = saved(k, "start")
     assert 0.0 <= eta <= 1.0 and 0.0 <= xi <= 1.0
-    state = ckpt.arrays["contour/1/_state"]
     modes = 20
-    assert np.array_equal(state[-2 * modes:-modes], ckpt.arrays["data/q_m"][:modes])
+    assert np.array_equal(saved(k.contour2, "_state")[-2 * modes:-modes], ckpt.arrays["data/q_m"][:modes])
+    assert saved(k.search, "counts")[0] > 0
 
 
 # --- every contour kind, pair kind and law -----------------------------------------------------
@@ -374,14 +387,10 @@ def started(system, integrator, dt, t_end, **options):
 
 
 def run_state(integ) -> dict:
-    """What a checkpoint keeps of ``integ``'s Data and of its contours and contacts, but
-    the factors of M̂ kept per step size (a cache)."""
+    """What a checkpoint keeps of ``integ``'s Data (its contours' and contacts' run state
+    included), but the factors of M̂ kept per step size (a cache)."""
     arrays, kinds = {}, {}
     integ.data.collect("data", arrays, kinds)
-    for k, (contour, *_) in enumerate(integ.model.contours):
-        state_arrays.collect(contour, f"contour/{k}", arrays, kinds)
-    for i, contact in enumerate(integ.model.contacts):
-        state_arrays.collect(contact, f"contact/{i}", arrays, kinds)
     return {key: np.array(value) for key, value in arrays.items() if not key.startswith("data/factors/")}
 
 
@@ -437,8 +446,8 @@ def test_an_array_of_the_wrong_shape_is_refused(runs, tmp_path):
 
 def test_a_missing_array_is_refused(runs, tmp_path):
     edited = read_checkpoint(runs["moreau"][2].path)
-    del edited.arrays["contact/0/kinematics/search/_G"]
-    assert "contact/0/kinematics/search/_G is missing" in _resume_error("moreau", edited, tmp_path)
+    del edited.arrays["data/contact_f"]
+    assert "data/contact_f is missing" in _resume_error("moreau", edited, tmp_path)
 
 
 @pytest.mark.parametrize("magic", [b"ffrmbs-checkpoint-1\n", b"ffrmbs-checkpoint-2\n" + b"0" * 64 + b"\n"])

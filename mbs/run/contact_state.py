@@ -1,0 +1,122 @@
+"""The run state of the contours and contacts, as two vectors of Data.
+
+Each contour, contact point, contact kinematics, search and contact names the arrays of
+its run state — what a step writes and a later step reads: a contour's state vector and
+span cache, a kinematics' gap, frame and Jacobian pieces, a contact point's coordinates
+and fields, a search's warm start, counters and length scale — in a class attribute
+``state_slots``: attribute names of float64 or int64 arrays, or of objects with their own
+``state_slots`` (a kinematics' points and search, an offset contour's neutral curve).
+
+:class:`ContactState` lays those arrays end to end in one float64 and one int64 vector
+(:meth:`~ContactState.pools`), which Data holds (``Data.contact_f``, ``Data.contact_i``),
+and :meth:`~ContactState.bind` makes every slot a view of them: the current values
+copied in, then each object's ``bind_views`` (its named views and kernel tuples made
+again on the moved arrays) and each fused detection's ``refresh`` (its argument tuple).
+So the kernels and the Python path read and write Data: a checkpoint of Data holds the
+whole contact state, and a step taken back (adaptive Moreau) puts it back by copying
+Data's vectors. An array that views another slot (a point's centre, its point's
+position) is no slot of its own; its owner's ``bind_views`` derives it again.
+
+:meth:`~ContactState.bind` checks that no array of the objects and fused detections is
+left on the old memory (a view a ``bind_views`` forgot would go on reading a copy that
+the run no longer writes) and raises if one is.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+POOLS = (np.float64, np.int64)      # the two vectors: contact_f, contact_i
+
+
+class ContactState:
+    """The slots of the run state of ``roots`` (contours and contacts, each walked once
+    with what its ``state_slots`` name) in two vectors (module docstring).
+
+    Attributes
+    ----------
+    objects : list
+        Every object with state slots, each after those it holds (their views first).
+    slots : list of (object, name, pool, offset, shape)
+        Each array's place: pool 0 (float64) or 1 (int64), its offset and shape.
+    sizes : (int, int)
+        Lengths of the two vectors.
+    """
+
+    def __init__(self, roots):
+        self.objects, self.slots = [], []
+        sizes, seen, arrays = [0, 0], set(), []
+
+        def walk(obj):
+            if id(obj) in seen:
+                return
+            seen.add(id(obj))
+            for name in type(obj).state_slots:
+                value = getattr(obj, name)
+                if hasattr(type(value), "state_slots"):
+                    walk(value)
+                    continue
+                if not isinstance(value, np.ndarray) or value.dtype.type not in POOLS:
+                    raise TypeError(f"{type(obj).__name__}.{name}: run state must be a float64 or int64 array, "
+                                    f"got {type(value).__name__} {getattr(value, 'dtype', '')}")
+                if any(np.may_share_memory(value, a) for a in arrays):
+                    continue                    # a view of another slot: bind_views derives it
+                pool = POOLS.index(value.dtype.type)
+                self.slots.append((obj, name, pool, sizes[pool], value.shape))
+                sizes[pool] += value.size
+                arrays.append(value)
+            self.objects.append(obj)
+
+        for root in roots:
+            walk(root)
+        self.sizes = tuple(sizes)
+
+    def pools(self) -> tuple:
+        """(float64 vector, int64 vector) holding the slots' current values."""
+        pools = tuple(np.zeros(n, dtype=dtype) for n, dtype in zip(self.sizes, POOLS))
+        for obj, name, pool, at, shape in self.slots:
+            value = getattr(obj, name)
+            pools[pool][at:at + value.size] = value.ravel()
+        return pools
+
+    def bind(self, contact_f, contact_i, fused=()) -> None:
+        """Make every slot a view of ``contact_f``/``contact_i`` (their values the slots'
+        current ones), the objects' derived views and the ``fused`` detections' tables
+        again on them; RuntimeError if an array is left on the old memory."""
+        pools = (contact_f, contact_i)
+        old = []
+        for obj, name, pool, at, shape in self.slots:
+            value = getattr(obj, name)
+            view = pools[pool][at:at + value.size].reshape(shape)
+            view[...] = value
+            setattr(obj, name, view)
+            old.append(value)
+        for obj in self.objects:
+            bind_views = getattr(obj, "bind_views", None)
+            if bind_views is not None:
+                bind_views()
+        fused = [f for f in fused if f is not None]
+        for f in fused:
+            f.refresh()
+        left = _left_on(self.objects + fused, old)
+        if left:
+            raise RuntimeError(f"run state left outside Data after binding: {', '.join(left)}")
+
+
+def _left_on(objects, old) -> list:
+    """Names "Class.attribute" of the arrays of ``objects`` (attributes, also inside
+    tuples and lists) that share memory with an array of ``old``."""
+    left = []
+
+    def arrays(value):
+        if isinstance(value, np.ndarray):
+            yield value
+        elif isinstance(value, (tuple, list)):
+            for v in value:
+                yield from arrays(v)
+
+    for obj in objects:
+        for name, value in vars(obj).items():
+            if any(np.may_share_memory(a, o) for a in arrays(value) for o in old):
+                left.append(f"{type(obj).__name__}.{name}")
+    return left
