@@ -23,7 +23,6 @@ from threadpoolctl import threadpool_limits
 
 from ffrmbs.errors import ModelError, RunInterrupted, SimulationError
 
-from mbs.results import state_arrays
 from mbs.bodies._kernels import finite_sum
 from mbs.results.contact_record import ContactRecorder, empty_records
 from mbs.run.model import Data, compile_model
@@ -99,25 +98,56 @@ class RunState:
     resumed_steps: int = 0
 
 
+class CarriedEntry:
+    """An integrator's attribute kept in its run's Data (``data.integrator[name]``): what
+    it carries from step to step, so that a checkpoint of Data resumes it."""
+
+    def __set_name__(self, owner, name):
+        self.name = name
+
+    def __get__(self, obj, owner=None):
+        return self if obj is None else obj.data.integrator[self.name]
+
+    def __set__(self, obj, value):
+        obj.data.integrator[self.name] = value
+
+
 class Integrator:
     """Base class: subclasses implement ``start(t, q, u)`` and ``step(dt)`` on ``self.t``,
     ``self.q``, ``self.u`` (the run's Data: assigning copies into it) and count Newton
     iterations in ``self.iterations``; accepted steps are counted in ``self.steps``. The
     equations of the active bodies are ``self.model.equations``. :meth:`advance` takes
-    equal steps; step-size controlled integrators override it."""
+    equal steps; step-size controlled integrators override it. What an integrator carries
+    from step to step is Data's (the counters, ``data.integrator``): a checkpoint of Data
+    resumes it."""
 
     name = "integrator"
-    run_state = ("steps", "iterations")     # what a checkpoint keeps of the integrator (mbs.results.state_arrays)
 
     def __init__(self, system):
         self.system = system
-        self.iterations = 0
-        self.steps = 0
         self.plan = None        # the scene plan of a planned run (mbs.run.plan), set by run()
         self.state = None       # the RunState of the current run
         self.model = None       # the compiled Model of the current run
         self.data = None        # its Data
         self.contact_recorder = None    # samples Result.contacts (mbs.results.contact_record) when asked for
+
+    @property
+    def steps(self) -> int:
+        """Accepted steps of the run (Data's)."""
+        return 0 if self.data is None else self.data.steps
+
+    @steps.setter
+    def steps(self, n):
+        self.data.steps = n
+
+    @property
+    def iterations(self) -> int:
+        """Newton iterations of the run (Data's)."""
+        return 0 if self.data is None else self.data.iterations
+
+    @iterations.setter
+    def iterations(self, n):
+        self.data.iterations = n
 
     @property
     def t(self) -> float:
@@ -156,12 +186,11 @@ class Integrator:
         return spring_energy(self.model, self.data)
 
     def collect(self, prefix, arrays: dict, kinds: dict) -> None:
-        """The integrator's own run state (its ``run_state``) under ``prefix/…``."""
-        state_arrays.collect(self, prefix, arrays, kinds)
+        """What a checkpoint keeps of the integrator besides Data (its state between steps
+        is Data's): nothing here; Moreau's per-step trace rows."""
 
     def restore(self, prefix, arrays, kinds) -> None:
-        """The state :meth:`collect` saved (after :meth:`start` built the workspaces)."""
-        state_arrays.restore(self, prefix, arrays, kinds)
+        """What :meth:`collect` saved (after :meth:`start` built the workspaces)."""
 
     def model_options(self) -> dict:
         """Options of :func:`mbs.run.model.compile_model` the integrator fixes (Moreau: θ, solver)."""

@@ -40,7 +40,7 @@ import scipy.linalg
 from ffrmbs.errors import ModelError
 
 from mbs.integrators._kernels import combine_into, ga_base, ga_newton_update, ga_predict
-from mbs.integrators.driver import Integrator, StepFailure
+from mbs.integrators.driver import CarriedEntry, Integrator, StepFailure
 
 ROUNDOFF = 16 * np.finfo(float).eps     # the constraint residual's relative round-off (module docstring)
 
@@ -64,7 +64,6 @@ class GeneralizedAlpha(Integrator):
     """
 
     name = "generalized-alpha"
-    run_state = Integrator.run_state + ("a", "abar", "lam")      # u̇_n, ā_n, λ_n
 
     def __init__(self, system, rho_inf=0.9, tol=1e-10, max_iter=30):
         super().__init__(system)
@@ -78,6 +77,8 @@ class GeneralizedAlpha(Integrator):
 
     def options(self):
         return {"rho_inf": self.rho_inf, "tol": self.tol}
+
+    a, abar, lam = CarriedEntry(), CarriedEntry(), CarriedEntry()      # u̇_n, ā_n, λ_n
 
     def start(self, t, q, u):
         sys = self.model.equations

@@ -79,7 +79,7 @@ its two halves, a rejected step) leaves no trace: what a step reads of the steps
 it — the Data of :data:`mbs.run.model.CARRIED` (state, closed flags, warm starts, the
 compliant contacts' springs, counters, the contours' and contacts' run state with the
 searches' warm starts) — is copied before it and put back after
-(:class:`mbs.results.state_arrays.StateCopy`). An impact inside a step separates the
+(:class:`mbs.run.model.CarriedCopy`). An impact inside a step separates the
 two solutions by about the approach velocity times the mistimed interval, so the step
 shrinks around contact closing and grows again in free flight and steady contact.
 ``dt`` of ``simulate`` is the initial and largest step; ``dt_min`` the smallest (a step
@@ -99,10 +99,10 @@ from ffrmbs.errors import ModelError
 
 from mbs.run import stages
 
-from mbs.results import state_arrays
-from mbs.run.model import CARRIED, LAST_STEP
+from mbs.results.codec import StateMismatch, take
+from mbs.run.model import CarriedCopy, LAST_STEP
 from mbs.run.step_work import StepWork
-from mbs.integrators.driver import Integrator, StepFailure, non_finite
+from mbs.integrators.driver import CarriedEntry, Integrator, StepFailure, non_finite
 from mbs.integrators.step_trace import StepTrace
 
 TRACE_KEYS = ("t", "dt", "closed", "penetration", "iterations", "residual", "impulse_work", "pressed", "load_work",
@@ -183,18 +183,16 @@ class MoreauTimeStepping(Integrator):
     trace_units = TRACE_UNITS
 
     def collect(self, prefix, arrays, kinds):
-        """The counters and the per-step trace rows so far (``prefix/trace/<key>``)."""
-        super().collect(prefix, arrays, kinds)
+        """The per-step trace rows so far (``prefix/trace/<key>``)."""
         for key, rows in self.trace().items():
             arrays[f"{prefix}/trace/{key}"], kinds[f"{prefix}/trace/{key}"] = rows, "array"
 
     def restore(self, prefix, arrays, kinds):
-        super().restore(prefix, arrays, kinds)
         if self._trace is not None:
-            self._trace.load({key: state_arrays.take(f"{prefix}/trace/{key}", None, arrays, kinds)
+            self._trace.load({key: take(f"{prefix}/trace/{key}", None, arrays, kinds)
                               for key in TRACE_KEYS})
         elif any(key.startswith(f"{prefix}/trace/") for key in kinds):
-            raise state_arrays.StateMismatch("the checkpoint has a trace, this run keeps none")
+            raise StateMismatch("the checkpoint has a trace, this run keeps none")
 
     def trace(self, start=0):
         if self._trace is None:
@@ -252,7 +250,7 @@ class AdaptiveMoreauTimeStepping(MoreauTimeStepping):
     """
 
     name = "moreau-adaptive"
-    run_state = MoreauTimeStepping.run_state + ("h_next", "_pen")      # the next step size, the last penetration
+    h_next, _pen = CarriedEntry(), CarriedEntry()       # the next step size [s], the last penetration [m]
 
     def __init__(self, system, atol=1e-6, rtol=1e-4, dt_min=1e-9, gap_tol=None, **options):
         super().__init__(system, **options)
@@ -261,8 +259,6 @@ class AdaptiveMoreauTimeStepping(MoreauTimeStepping):
             raise ModelError(f"need atol > 0, rtol >= 0, dt_min > 0 and gap_tol > 0, got {atol}, {rtol}, "
                              f"{dt_min}, {gap_tol}")
         self.atol, self.rtol, self.dt_min, self.gap_tol = float(atol), float(rtol), float(dt_min), float(gap_tol)
-        self.h_next = None
-        self._pen = 0.0
 
     def options(self):
         return {**super().options(), "atol": self.atol, "rtol": self.rtol, "dt_min": self.dt_min,
@@ -272,7 +268,8 @@ class AdaptiveMoreauTimeStepping(MoreauTimeStepping):
         state = super()._prepare(*args)
         model, data = self.model, self.data
         data.stats.update(rejected_steps=0, forced_steps=0, smallest_dt=np.inf, largest_dt=0.0)
-        self._saved = state_arrays.StateCopy([(data, CARRIED)])
+        self.h_next, self._pen = None, 0.0
+        self._saved = CarriedCopy(data)
         self._q_full = np.zeros(model.nq)
         return state
 

@@ -9,15 +9,15 @@ What a checkpoint holds (:func:`snapshot`), each entry an array under a path-lik
   contours' and contacts' run state among them (``data/contact_f``, ``data/contact_i``:
   their state vectors, contact points, kinematics, searches' warm starts and counters,
   :mod:`mbs.run.contact_state`);
-- ``integrator/…``: the integrator's own state (:meth:`~mbs.integrators.driver.Integrator.collect`:
-  step and iteration counters; generalized-α's u̇, ā, λ; Moreau's per-step trace rows;
-  the adaptive step's next step size and last penetration);
+- ``integrator/…``: Moreau's per-step trace rows (:meth:`~mbs.integrators.driver.Integrator.collect`;
+  what an integrator carries from step to step — counters, generalized-α's u̇, ā, λ, the
+  adaptive step's next step size and last penetration — is Data's, ``data/integrator/…``);
 - ``run/…``: where the sampling stands (:class:`~mbs.integrators.driver.RunState`: next
   landing, samples recorded, CPU seconds so far, earlier resumes) and ``result/…`` the
   samples so far (rows [0, recorded) of t, q, u, outputs, energies, contact records);
   ``monitor/…`` the spin warnings given;
 - ``header``: JSON (as bytes) — the format and version, the kinds of the entries
-  (:mod:`mbs.results.state_arrays`), what identifies the run (integrator and options, Δt,
+  (:mod:`mbs.results.codec`), what identifies the run (integrator and options, Δt,
   t_end, output count, bodies with their coordinate counts, contacts, outputs, the
   scene plan) and the recorder's position (samples and trace rows in the result file).
 
@@ -51,8 +51,8 @@ import numpy as np
 from ffrmbs.errors import InputFileError, quote
 from preprocess.inputfiles import regular_file
 
-from mbs.results import state_arrays
-from mbs.results.state_arrays import StateMismatch
+from mbs.results import codec
+from mbs.results.codec import StateMismatch, put
 
 FORMAT, FORMAT_VERSION = "ffrmbs-checkpoint", 4
 PICKLED_FORMATS = (b"ffrmbs-checkpoint-1\n", b"ffrmbs-checkpoint-2\n")    # the older formats: pickles
@@ -92,7 +92,7 @@ def snapshot(integ, recorder: dict) -> tuple[dict, dict]:
                 "monitor/spin": np.array([e[2] for e in events], dtype=float),
                 "monitor/omega1": np.array([e[3] for e in events], dtype=float)})
     for key, value in run.items():
-        state_arrays.put(key, value, arrays, kinds)
+        put(key, value, arrays, kinds)
     header = {"format": FORMAT, "format_version": FORMAT_VERSION, "run": fingerprint(integ), "kinds": kinds,
               "recorder": dict(recorder)}
     return header, arrays
@@ -155,7 +155,7 @@ class Checkpoint:
 
     def _run(self, integ):
         """RunState, the samples so far and the spin warnings."""
-        take = lambda key, current=None: state_arrays.take(key, current, self.arrays, self.kinds)  # noqa: E731
+        take = lambda key, current=None: codec.take(key, current, self.arrays, self.kinds)  # noqa: E731
         st, res = integ.state, integ.state.result
         st.next_landing, st.recorded = take("run/next_landing", 0), take("run/recorded", 0)
         st.cpu_s, st.resumed_steps = take("run/cpu_s", 0.0), take("run/resumed_steps", 0)

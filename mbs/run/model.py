@@ -36,7 +36,7 @@ import numpy as np
 
 from contact.solver import WORK_ROWS
 
-from mbs.results import state_arrays
+from mbs.results.codec import StateMismatch, put, take
 from mbs.run.body_stage import BodyStage
 from mbs.run.bounding_spheres import SphereTable
 from mbs.run.contact_state import ContactState
@@ -218,6 +218,32 @@ def compile_model(system, plan=None, theta=0.5, solver=None) -> Model:
 LAST_STEP = (0, 0.0, 0, 0.0, 0.0, 0, 0.0, 0.0)     # Data.last of a step not yet taken
 
 
+class CarriedCopy:
+    """What a step reads of the steps before it (:data:`CARRIED` of ``data``), copied by
+    :meth:`save` into buffers made once and put back by :meth:`restore`: a step taken back
+    leaves no trace (:class:`mbs.integrators.moreau.AdaptiveMoreauTimeStepping`)."""
+
+    def __init__(self, data):
+        self.data = data
+        self._arrays = {name: getattr(data, name).copy() for name in CARRIED
+                        if isinstance(getattr(data, name), np.ndarray)}
+        self._values = {}
+
+    def save(self) -> None:
+        data = self.data
+        for name, kept in self._arrays.items():
+            np.copyto(kept, getattr(data, name))
+        self._values = {name: dict(value) if isinstance(value, dict) else value
+                        for name in CARRIED if name not in self._arrays for value in (getattr(data, name),)}
+
+    def restore(self) -> None:
+        data = self.data
+        for name, kept in self._arrays.items():
+            np.copyto(getattr(data, name), kept)
+        for name, value in self._values.items():
+            setattr(data, name, dict(value) if isinstance(value, dict) else value)
+
+
 class Data:
     """The state and workspaces of a run of ``model`` (module docstring). Arrays of the
     current contact problem are views of the ``*_buf`` buffers sized for ``m_max``
@@ -298,6 +324,9 @@ class Data:
         self.solution = None                # (iterations, residual, converged) of the last solve
         self.h_last = 0.0
         self.stats = {"closed_contacts": 0, "solver_iterations": 0, "max_penetration": 0.0, "pruned_contacts": 0}
+        self.steps = self.iterations = 0    # the integrator's accepted steps and Newton iterations
+        self.integrator = {}                # its own state between steps by name (generalized-α's u̇,
+                                            # ā, λ; the adaptive step's next size), set at its start
         self.last = list(LAST_STEP)         # this accepted step: most closed contacts, penetration,
                                             # solver iterations, residual; impulse work; with a
                                             # trace (mbs.run.step_work) most contacts transmitting a
@@ -352,27 +381,26 @@ class Data:
         return C
 
     def collect(self, prefix, arrays: dict, kinds: dict) -> None:
-        """Every array and scalar of the run under ``prefix/…`` (:mod:`mbs.results.state_arrays`):
+        """Every array and scalar of the run under ``prefix/…`` (:func:`mbs.results.codec.put`):
         the factors of a constant M̂ as ``factors/<j>/step`` [s] and ``factors/<j>/factor``
-        (in their memory order), ``stats`` and ``last`` entry by entry; the caches
+        (in their memory order), ``stats``, ``integrator`` and ``last`` entry by entry; the caches
         (:data:`CACHES`) left out."""
         for name, value in vars(self).items():
             if name in CACHES:
                 continue
             if name == "factors":
                 for j, (step, factor) in enumerate(value):
-                    state_arrays.put(f"{prefix}/factors/{j}/step", step, arrays, kinds)
-                    state_arrays.put(f"{prefix}/factors/{j}/factor", factor, arrays, kinds)
-            elif name in ("stats", "last"):
-                for key, entry in (value.items() if name == "stats" else enumerate(value)):
-                    state_arrays.put(f"{prefix}/{name}/{key}", entry, arrays, kinds)
+                    put(f"{prefix}/factors/{j}/step", step, arrays, kinds)
+                    put(f"{prefix}/factors/{j}/factor", factor, arrays, kinds)
+            elif name in ("stats", "integrator", "last"):
+                for key, entry in (enumerate(value) if name == "last" else value.items()):
+                    put(f"{prefix}/{name}/{key}", entry, arrays, kinds)
             else:
-                state_arrays.put(f"{prefix}/{name}", value, arrays, kinds)
+                put(f"{prefix}/{name}", value, arrays, kinds)
 
     def restore(self, prefix, arrays, kinds) -> None:
         """The state :meth:`collect` saved, into this Data of the same Model
-        (:class:`~mbs.results.state_arrays.StateMismatch` if it does not fit)."""
-        take = state_arrays.take
+        (:class:`~mbs.results.codec.StateMismatch` if it does not fit)."""
         for name, value in vars(self).items():
             if name in CACHES:
                 continue
@@ -383,12 +411,12 @@ class Data:
                     step, factor = take(f"{at}/step", 0.0, arrays, kinds), take(f"{at}/factor", None, arrays, kinds)
                     if factor.ndim != 2 or factor.shape[0] != factor.shape[1] or factor.shape[0] not in (
                             self.rhs.size, self.rhs_act.size):
-                        raise state_arrays.StateMismatch(f"{at}/factor has shape {factor.shape}, not this run's")
+                        raise StateMismatch(f"{at}/factor has shape {factor.shape}, not this run's")
                     self.factors.append((step, factor))
-            elif name == "stats":
-                at = f"{prefix}/stats/"             # the saved keys in their order
-                self.stats = {k[len(at):]: take(k, value.get(k[len(at):]), arrays, kinds)
-                              for k in kinds if k.startswith(at)}
+            elif name in ("stats", "integrator"):
+                at = f"{prefix}/{name}/"            # the saved keys in their order
+                setattr(self, name, {k[len(at):]: take(k, value.get(k[len(at):]), arrays, kinds)
+                                     for k in kinds if k.startswith(at)})
             elif name == "last":
                 value[:] = [take(f"{prefix}/last/{i}", v, arrays, kinds) for i, v in enumerate(value)]
             else:

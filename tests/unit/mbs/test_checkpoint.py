@@ -1,4 +1,4 @@
-"""Checkpoints are the run's state as arrays (mbs.results.checkpoint, mbs.results.state_arrays): a run
+"""Checkpoints are the run's state as arrays (mbs.results.checkpoint, mbs.results.codec): a run
 stopped at an output sample and continued from its checkpoint — the scene built afresh,
 the arrays loaded into it — gives the uninterrupted run's result bit for bit, for every
 integrator, with contacts closed at the checkpoint, and for a scene of every registered
@@ -25,7 +25,7 @@ from ffrmbs.errors import InputFileError, RunInterrupted
 from ffrmbs_app.scenes import point_mass_beam as pmb
 from ffrmbs_app.scenes.cache import cache_dir
 from mbs import FlexibleBodyFFR, Joint, PointMass, PrescribedFrameMotion, RigidBody, System, ground_frame
-from mbs.results import state_arrays
+from mbs.results import codec
 from mbs.results.checkpoint import read_checkpoint
 from mbs.run.fused_detection import fused_detection
 from mbs.run.model import compile_model
@@ -516,50 +516,35 @@ def test_a_directory_as_checkpoint_is_refused(tmp_path):
 
 # --- the codec ---------------------------------------------------------------------------------
 
-class _Thing:
-    run_state = ("x", "n", "flag", "h", "start", "nothing", "inner", "view_base")
-
-    def __init__(self):
-        self.x, self.n, self.flag, self.h, self.start, self.nothing = 1.5, np.int64(3), True, None, (0.25, 0.5), None
-        self.inner = _Inner()
-        self.view_base = np.zeros(4)
-        self.view = self.view_base[1:3]        # a view that must stay one after a restore
+VALUES = {"x": 2.5, "n": 7, "flag": False, "h": 1e-3, "start": (0.125, 0.75), "nothing": None}
 
 
-class _Inner:
-    run_state = ("a",)
-
-    def __init__(self):
-        self.a = np.arange(3.0)
-
-
-def test_state_arrays_round_trip_keeps_types_and_views():
-    saved = _Thing()
-    saved.x, saved.n, saved.flag, saved.h, saved.start = 2.5, 7, False, 1e-3, (0.125, 0.75)
-    saved.inner.a[:] = [4.0, 5.0, 6.0]
-    saved.view_base[:] = [1.0, 2.0, 3.0, 4.0]
+def test_the_codec_round_trip_keeps_types_and_views():
+    """Scalars come back as their Python types, tuples as tuples, None as None, and an
+    array is written into the one the fresh run holds (a view of it stays one)."""
     arrays, kinds = {}, {}
-    state_arrays.collect(saved, "thing", arrays, kinds)
-    assert kinds == {"thing/x": "float", "thing/n": "int", "thing/flag": "bool", "thing/h": "float",
-                     "thing/start": "tuple", "thing/nothing": "none", "thing/inner/a": "array",
-                     "thing/view_base": "array"}
-    fresh = _Thing()
-    state_arrays.restore(fresh, "thing", arrays, kinds)
-    assert (fresh.x, fresh.n, fresh.flag, fresh.h, fresh.start, fresh.nothing) == (2.5, 7, False, 1e-3, (0.125, 0.75),
-                                                                                  None)
-    assert type(fresh.n) is int and type(fresh.flag) is bool and type(fresh.x) is float
-    assert np.array_equal(fresh.inner.a, [4.0, 5.0, 6.0])
-    assert np.array_equal(fresh.view, [2.0, 3.0]) and np.shares_memory(fresh.view, fresh.view_base)
+    for key, value in VALUES.items():
+        codec.put(key, value, arrays, kinds)
+    codec.put("a", np.array([1.0, 2.0, 3.0, 4.0]), arrays, kinds)
+    assert kinds == {"x": "float", "n": "int", "flag": "bool", "h": "float", "start": "tuple", "nothing": "none",
+                     "a": "array"}
+    back = {key: codec.take(key, None, arrays, kinds) for key in VALUES}
+    assert back == VALUES
+    assert [type(back[k]) for k in ("x", "n", "flag", "start")] == [float, int, bool, tuple]
+    base = np.zeros(4)
+    view = base[1:3]
+    assert codec.take("a", base, arrays, kinds) is base
+    assert np.array_equal(view, [2.0, 3.0])
 
 
-def test_state_arrays_refuse_what_does_not_fit():
+def test_the_codec_refuses_what_does_not_fit():
     arrays, kinds = {}, {}
-    state_arrays.collect(_Thing(), "thing", arrays, kinds)
-    arrays["thing/inner/a"] = np.zeros(5)
-    with pytest.raises(state_arrays.StateMismatch, match=r"thing/inner/a has shape \(5,\) float64, this run's "
-                                                         r"\(3,\) float64"):
-        state_arrays.restore(_Thing(), "thing", arrays, kinds)
-    arrays["thing/inner/a"] = np.zeros(3)
-    arrays["thing/n"] = np.array(1.5)
-    with pytest.raises(state_arrays.StateMismatch, match="thing/n is not a int"):
-        state_arrays.restore(_Thing(), "thing", arrays, kinds)
+    codec.put("a", np.zeros(5), arrays, kinds)
+    codec.put("n", 3, arrays, kinds)
+    with pytest.raises(codec.StateMismatch, match=r"a has shape \(5,\) float64, this run's \(3,\) float64"):
+        codec.take("a", np.zeros(3), arrays, kinds)
+    arrays["n"] = np.array(1.5)
+    with pytest.raises(codec.StateMismatch, match="n is not a int"):
+        codec.take("n", 0, arrays, kinds)
+    with pytest.raises(codec.StateMismatch, match="b is missing"):
+        codec.take("b", None, arrays, kinds)

@@ -1,0 +1,97 @@
+"""The contours' and contacts' run state lies in Data (mbs.run.contact_state): for every
+registered pair kind each state array of the contours, points, kinematics and searches is
+a view of Data's two vectors, and so are the arrays the fused detection's kernel takes;
+a view that a class forgets to re-derive is refused when Data is made; a second Data of
+the same Model takes the state over, and the first one keeps what it had."""
+
+import numpy as np
+import pytest
+
+from contact import BILATERAL_KINEMATICS, PAIR_KINEMATICS
+from contact.solver import ProxSolver
+from mbs.run import stages
+from mbs.run.contact_state import ContactState
+from mbs.run.model import Data, compile_model
+from validation.bench.pair_cost import pair_scene
+
+PAIRS = [(pair, False) for pair in PAIR_KINEMATICS.names()] + [(pair, True) for pair in BILATERAL_KINEMATICS.names()]
+
+
+def _model(pair, bilateral):
+    system, contact, q, u = pair_scene(pair, bilateral)
+    model = compile_model(system, None, theta=0.5, solver=ProxSolver("gauss-seidel", tol=1e-10, max_iter=2000))
+    return model, q, u
+
+
+def _in(array, data) -> bool:
+    return np.shares_memory(array, data.contact_f) or np.shares_memory(array, data.contact_i)
+
+
+@pytest.mark.parametrize("pair, bilateral", PAIRS, ids=lambda v: "/".join(v) if isinstance(v, tuple) else str(v))
+def test_every_state_array_and_kernel_argument_is_data(pair, bilateral):
+    model, q, u = _model(pair, bilateral)
+    data = Data(model)
+    assert model.contact_state.slots, "the pair keeps run state"
+    for obj, name, *_ in model.contact_state.slots:
+        assert _in(getattr(obj, name), data), f"{type(obj).__name__}.{name}"
+    fused = model.fused[0]
+    k = fused.kinematics
+    args = [a for a in fused._args if isinstance(a, np.ndarray)]
+    for array in (k.buffer, k.point1.buffer, k.point2.buffer, k.contour1.state if hasattr(k.contour1, "state")
+                  else k.contour1._state):
+        assert any(a is array for a in args) and _in(array, data)
+
+
+class _Forgetful:
+    """State in ``buffer`` whose bind_views forgets the view ``head``."""
+
+    state_slots = ("buffer",)
+
+    def __init__(self):
+        self.buffer = np.arange(4.0)
+        self.head = self.buffer[:2]
+
+    def bind_views(self):
+        pass
+
+
+class _Careful(_Forgetful):
+    def bind_views(self):
+        self.head = self.buffer[:2]
+
+
+def test_a_view_left_on_the_old_memory_is_refused():
+    state = ContactState([_Forgetful()])
+    with pytest.raises(RuntimeError, match=r"_Forgetful\.head"):
+        state.bind(*state.pools())
+    careful = _Careful()
+    state = ContactState([careful])
+    f, i = state.pools()
+    state.bind(f, i)
+    careful.head[0] = 7.0
+    assert f[0] == 7.0 and np.array_equal(f, [7.0, 1.0, 2.0, 3.0])
+
+
+def test_state_that_is_no_array_is_refused():
+    thing = _Careful()
+    thing.buffer = 1.5
+    with pytest.raises(TypeError, match=r"_Careful\.buffer: run state must be a float64 or int64 array"):
+        ContactState([thing])
+
+
+def test_a_second_data_takes_the_state_over():
+    """Steps on a second Data of the same Model change its vectors, not the first's; the
+    first keeps the state it had when the second was made."""
+    model, q, u = _model(("point", "2s"), False)
+    first = Data(model)
+    first.q[:], first.u[:] = q, u
+    for _ in range(5):
+        stages.step(model, first, 1e-5)
+    kept_f, kept_i = first.contact_f.copy(), first.contact_i.copy()
+    second = Data(model)
+    assert np.array_equal(second.contact_f, kept_f, equal_nan=True) and np.array_equal(second.contact_i, kept_i)
+    second.q[:], second.u[:] = first.q, first.u
+    for _ in range(5):
+        stages.step(model, second, 1e-5)
+    assert not np.array_equal(second.contact_f, kept_f, equal_nan=True)
+    assert np.array_equal(first.contact_f, kept_f, equal_nan=True) and np.array_equal(first.contact_i, kept_i)
