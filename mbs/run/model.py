@@ -225,22 +225,23 @@ class CarriedCopy:
 
     def __init__(self, data):
         self.data = data
-        self._arrays = {name: getattr(data, name).copy() for name in CARRIED
-                        if isinstance(getattr(data, name), np.ndarray)}
-        self._values = {}
+        self._arrays = [(name, getattr(data, name).copy()) for name in CARRIED
+                        if isinstance(getattr(data, name), np.ndarray)]
+        self._others = [name for name in CARRIED if not isinstance(getattr(data, name), np.ndarray)]
+        self._values = []
 
     def save(self) -> None:
         data = self.data
-        for name, kept in self._arrays.items():
+        for name, kept in self._arrays:
             np.copyto(kept, getattr(data, name))
-        self._values = {name: dict(value) if isinstance(value, dict) else value
-                        for name in CARRIED if name not in self._arrays for value in (getattr(data, name),)}
+        self._values = [getattr(data, name) for name in self._others]
+        self._values = [dict(v) if isinstance(v, dict) else v for v in self._values]
 
     def restore(self) -> None:
         data = self.data
-        for name, kept in self._arrays.items():
+        for name, kept in self._arrays:
             np.copyto(getattr(data, name), kept)
-        for name, value in self._values.items():
+        for name, value in zip(self._others, self._values):
             setattr(data, name, dict(value) if isinstance(value, dict) else value)
 
 
