@@ -2,7 +2,9 @@
 resume a killed run, estimate the accuracy, report the cost, write the plot and the
 ParaView export.
 
-The job, for a scene (:class:`ffrmbs_app.scene.Scene`) built fresh by ``make_scene()``:
+The job, for a scene (:class:`ffrmbs_app.scene.Scene`) built by ``make_scene()`` and
+compiled once (:func:`compiled`: its Model serves the warm-up, the run and the Δt/2 check,
+each with a new Data from the same start, as a fresh build would give):
 
 0. the checks, before anything is written: the options, the step count and memory
    (:mod:`ffrmbs_app.limits`), the lock ``OUT/<scene>.lock`` held for the job
@@ -119,24 +121,37 @@ def energy_balance(trace, initial) -> dict | None:
     return b
 
 
-def _simulate(scene, dt=None, t_end=None, n_out=None, **extra):
+def _options(scene) -> dict:
+    """The integrator options of ``scene``'s runs (a Moreau run keeps its trace when the
+    scene asks for what needs it)."""
     options = dict(scene.options)
     if scene.integrator in MOREAU:
         options["trace"] = scene.keeps_trace()
+    return options
+
+
+def compiled(scene):
+    """The compiled Model of ``scene``'s run (:meth:`mbs.System.compile`, planned for its
+    t_end), on which the warm-up, the run and the Δt/2 check run, each with a new Data."""
+    return scene.system.compile(scene.t_end, integrator=scene.integrator, plan=scene.plan,
+                                tolerance=scene.tolerance, outputs=scene.outputs, **_options(scene))[0]
+
+
+def _simulate(scene, dt=None, t_end=None, n_out=None, **extra):
     t_end = scene.t_end if t_end is None else t_end
     n_out = scene.n_out if n_out is None else n_out
     return scene.system.simulate(t_end, scene.dt if dt is None else dt, integrator=scene.integrator,
                                  t_out=np.linspace(0.0, t_end, n_out), outputs=scene.outputs,
-                                 energies=scene.energies, plan=scene.plan, tolerance=scene.tolerance, **options,
-                                 **extra)
+                                 energies=scene.energies, plan=scene.plan, tolerance=scene.tolerance,
+                                 **_options(scene), **extra)
 
 
-def warm_up(scene) -> tuple:
+def warm_up(scene, model=None) -> tuple:
     """Run ``scene``'s warm-up (``scene.warmup`` = (t_end, dt) [s], two output samples), so
-    that the kernels it calls are compiled or loaded from numba's cache; returns
-    ``scene.warmup``."""
+    that the kernels it calls are compiled or loaded from numba's cache (on ``model``, the
+    run's compiled Model, when given); returns ``scene.warmup``."""
     t_end, dt = scene.warmup
-    _simulate(scene, dt=dt, t_end=t_end, n_out=2)
+    _simulate(scene, dt=dt, t_end=t_end, n_out=2, model=model)
     return scene.warmup
 
 
@@ -223,7 +238,7 @@ class JobRecorder(ResultRecorder):
 
 def run_scene(make_scene, out, check=True, resume=False, checkpoint_every=60.0, flush_every=2.0,
               export=True, plot=True, log=print, no_limits=False, result=None) -> dict:
-    """Run the job (module docstring) on ``make_scene()`` (a fresh Scene per call);
+    """Run the job (module docstring) on the Scene ``make_scene()`` builds (called once);
     returns the summary. A diverging run raises SimulationError after closing the file
     with its samples so far (status "failed: …"); an interrupted one RunInterrupted.
 
@@ -242,10 +257,10 @@ def run_scene(make_scene, out, check=True, resume=False, checkpoint_every=60.0, 
     with output_lock(path):
         if not resume:
             warn_another_scene(path, scene)
-        return _run(make_scene, scene, path, check, resume, checkpoint_every, flush_every, export, plot, log)
+        return _run(scene, path, check, resume, checkpoint_every, flush_every, export, plot, log)
 
 
-def _run(make_scene, scene, path, check, resume, checkpoint_every, flush_every, export, plot, log) -> dict:
+def _run(scene, path, check, resume, checkpoint_every, flush_every, export, plot, log) -> dict:
     log(header(scene))
     units = scene.output_units()
     recorder = JobRecorder(path, {"scene": scene.name, "description": scene.description, "inputs": scene.inputs,
@@ -253,9 +268,10 @@ def _run(make_scene, scene, path, check, resume, checkpoint_every, flush_every, 
                          flush_every=flush_every, checkpoint_every=checkpoint_every)
     warm_s = 0.0
     with CompileClock(log) as clock:
+        model = compiled(scene)
         if scene.warmup is not None:
             w0 = time.perf_counter()
-            t_w, dt_w = warm_up(make_scene())
+            t_w, dt_w = warm_up(scene, model)
             warm_s = time.perf_counter() - w0
             log(f"warm-up run (compiles the kernels or loads them from numba's cache, then runs {t_w:g} s of "
                 f"simulated time at dt = {dt_w:g} s; not counted in the cost): {warm_s:.2f} s")
@@ -266,9 +282,10 @@ def _run(make_scene, scene, path, check, resume, checkpoint_every, flush_every, 
             if resume:
                 log(f"resuming {shown(path)} from its checkpoint")
                 checkpoint = resume_checkpoint(recorder, inputs=scene.inputs, overrides=scene.overrides)
-                res = _simulate(scene, recorder=recorder, progress=bar.update_to, contacts=True, checkpoint=checkpoint)
+                res = _simulate(scene, recorder=recorder, progress=bar.update_to, contacts=True, checkpoint=checkpoint,
+                                model=model)
             else:
-                res = _simulate(scene, recorder=recorder, progress=bar.update_to, contacts=True)
+                res = _simulate(scene, recorder=recorder, progress=bar.update_to, contacts=True, model=model)
         in_run = clock.seconds - compiling_before       # compilation inside the run: not its cost
         wall = max(time.perf_counter() - w0 - in_run, 0.0)
         cpu = max(time.process_time() - c0 - (clock.cpu_seconds - compiling_cpu_before), 0.0)
@@ -278,7 +295,7 @@ def _run(make_scene, scene, path, check, resume, checkpoint_every, flush_every, 
     side = side_process.start(lambda: _derived_files(path, plot, export)) if check and (plot or export) else None
     try:
         if check:
-            _check(make_scene, scene, res, units, summary)
+            _check(model, scene, res, units, summary)
         written = side is not None and side.join()
     except BaseException:
         if side is not None:
@@ -291,9 +308,10 @@ def _run(make_scene, scene, path, check, resume, checkpoint_every, flush_every, 
     return summary
 
 
-def _check(make_scene, scene, res, units, summary) -> None:
-    """Step 3 of the job (module docstring): the error estimates into ``summary``."""
-    half = _simulate(make_scene(), dt=0.5 * scene.dt)
+def _check(model, scene, res, units, summary) -> None:
+    """Step 3 of the job (module docstring): the error estimates into ``summary`` (the
+    Δt/2 run on the run's ``model``)."""
+    half = _simulate(scene, dt=0.5 * scene.dt, model=model)
     summary["error_estimate"] = {name: error_estimate(res[name], half[name], units[name]) for name in res.outputs}
     summary["error_parts"] = {}
     for label, (what, make) in scene.variants.items():

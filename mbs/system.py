@@ -198,9 +198,33 @@ class System:
         return sum(b.angular_momentum(q[b.q_slice], u[b.u_slice], t) for b in self.bodies)
 
     # --- simulation ---------------------------------------------------------------------
+    def compile(self, t_end, integrator="generalized-alpha", plan=True, tolerance=None, outputs=None, **options):
+        """(Model, Data) of a run to ``t_end`` [s] with ``integrator`` and its ``options``,
+        planned as :meth:`simulate` plans (``plan``, ``tolerance``, ``outputs``): the
+        compiled Model (:mod:`mbs.run.model`) that :meth:`simulate` runs on when given it
+        as ``model`` — for several runs of one scene (another Δt or t_end, the warm-up
+        and the check of a job), each with a new Data from the same start — and a Data of it."""
+        from mbs.integrators import integrator_class
+
+        integ = integrator_class(integrator)(self, **options)
+        integ.compile(self._plan(t_end, plan, tolerance, outputs))
+        return integ.model, integ.data
+
+    def _plan(self, t_end, plan, tolerance, outputs):
+        """The scene plan :meth:`simulate` takes for ``plan`` (True: made and logged; a
+        Plan: as given; False or None: none)."""
+        the_plan = None
+        if plan is True:
+            the_plan = self.plan(t_end, tolerance, outputs=outputs)
+        elif plan:
+            the_plan = plan
+        if the_plan is not None:
+            logging.getLogger("ffrmbs.plan").info("%s", the_plan)
+        return the_plan
+
     def simulate(self, t_end, dt, integrator="generalized-alpha", t_out=None, outputs=None,
                  energies=False, q0=None, u0=None, breakpoints=(), plan=True, tolerance=None, contacts=False,
-                 recorder=None, progress=None, checkpoint=None, **options):
+                 recorder=None, progress=None, checkpoint=None, model=None, **options):
         """Integrate from t = 0 to ``t_end`` [s] with step ``dt`` [s].
 
         ``integrator``: "generalized-alpha" (implicit, default; option ``rho_inf``),
@@ -229,6 +253,10 @@ class System:
         ``checkpoint``: a :class:`mbs.results.checkpoint.Checkpoint` of this same run (same
         arguments, same System built afresh): the run continues from it
         (:meth:`mbs.integrators.driver.Integrator.run`).
+        ``model``: a Model of this System from :meth:`compile` with the same integrator
+        options, run with a new Data instead of compiling one (its plan is the run's:
+        ``plan`` and ``tolerance`` are not used); ModelError if it was compiled for
+        another System or other options.
         """
         from mbs.integrators import integrator_class
 
@@ -236,14 +264,8 @@ class System:
             q_init, u_init = self.initial_state()
             q0 = q_init if q0 is None else np.asarray(q0, dtype=float)
             u0 = u_init if u0 is None else np.asarray(u0, dtype=float)
-        the_plan = None
-        if plan is True:
-            the_plan = self.plan(t_end, tolerance, outputs=outputs)
-        elif plan:
-            the_plan = plan
-        if the_plan is not None:
-            logging.getLogger("ffrmbs.plan").info("%s", the_plan)
+        the_plan = None if model is not None else self._plan(t_end, plan, tolerance, outputs)
         return integrator_class(integrator)(self, **options).run(
             q0, u0, t_end, dt, t_out, outputs or {}, energies,
             set(breakpoints).union(*(f.breakpoints() for f in self.forces)), the_plan,
-            recorder=recorder, progress=progress, contacts=contacts, checkpoint=checkpoint)
+            recorder=recorder, progress=progress, contacts=contacts, checkpoint=checkpoint, model=model)

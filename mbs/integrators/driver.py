@@ -173,12 +173,29 @@ class Integrator:
     def u(self, value):
         self.data.u[...] = value
 
-    def compile(self, plan=None) -> None:
+    def compile(self, plan=None, model=None) -> None:
         """Compile the System under ``plan`` (None: every body integrated) into the run's
-        :class:`~mbs.run.model.Model` and a new :class:`~mbs.run.model.Data` (before ``start``)."""
-        self.plan = plan
-        self.model = compile_model(self.system, plan, **self.model_options())
-        self.data = Data(self.model)
+        :class:`~mbs.run.model.Model`, or take ``model`` (compiled before for this System
+        and this integrator's options, :meth:`mbs.System.compile`: its plan is the run's),
+        and make a new :class:`~mbs.run.model.Data` (before ``start``)."""
+        if model is None:
+            model = compile_model(self.system, plan, **self.model_options())
+        else:
+            self.check_model(model)
+        self.model, self.plan = model, model.plan
+        self.data = Data(model)
+
+    def check_model(self, model) -> None:
+        """ModelError unless ``model`` was compiled for this System with this integrator's
+        options (θ and the contact solver's settings)."""
+        if model.system is not self.system:
+            raise ModelError("the Model was compiled for another System")
+        options = self.model_options()
+        theta, solver = options.get("theta", 0.5), options.get("solver")
+        if model.theta != theta or (solver is None) != (model.solver is None) or (
+                solver is not None and vars(solver) != vars(model.solver)):
+            raise ModelError(f"the Model was compiled with theta = {model.theta:g} and the solver "
+                             f"{_settings(model.solver)}; this run asks for theta = {theta:g} and {_settings(solver)}")
 
     def spring_energy(self) -> float:
         """½ Σ Fᵀδ [J] of the compliant contacts' springs (:mod:`mbs.run.residual_contact`),
@@ -245,7 +262,7 @@ class Integrator:
         raise NotImplementedError
 
     def run(self, q0, u0, t_end, dt, t_out, outputs, energies, breakpoints=(), plan=None,
-            recorder=None, progress=None, contacts=False, checkpoint=None):
+            recorder=None, progress=None, contacts=False, checkpoint=None, model=None):
         """Integrate and sample (see ``System.simulate``). At each breakpoint t_b the
         integration ends at t_b − 1e-12 max(1, t_b) s, safely below t_b despite rounding
         (so loads that jump at t_b act with their left limit), and restarts at t_b with
@@ -270,16 +287,23 @@ class Integrator:
         sample): continue from it — the run is prepared as above from the same inputs,
         its state loaded from the checkpoint's arrays, and the result (samples before the
         checkpoint included) equals the uninterrupted run's bit for bit; the recorder
-        gets ``resume(self)``."""
+        gets ``resume(self)``.
+
+        ``model``: a :class:`~mbs.run.model.Model` of this System compiled before
+        (:meth:`mbs.System.compile`) to run on, with a new Data, instead of compiling one;
+        its plan is the run's (``plan`` is not used)."""
         self.dt = dt
-        self.state = self._prepare(q0, u0, t_end, dt, t_out, outputs, energies, breakpoints, plan, contacts)
+        if model is not None:
+            self.check_model(model)
+            plan = model.plan
+        self.state = self._prepare(q0, u0, t_end, dt, t_out, outputs, energies, breakpoints, plan, contacts, model)
         if checkpoint is not None:
             checkpoint.restore(self)
             self.state.resumed_at.append(float(self.t))
             self.state.resumed_steps = self.steps
         return self._go(recorder, progress, fresh=checkpoint is None)
 
-    def _prepare(self, q0, u0, t_end, dt, t_out, outputs, energies, breakpoints, plan, contacts):
+    def _prepare(self, q0, u0, t_end, dt, t_out, outputs, energies, breakpoints, plan, contacts, model=None):
         sys = self.system
         times = output_times(t_end, dt, t_out)
         breaks = sorted(float(b) for b in breakpoints if 0.0 < b < t_end)
@@ -294,7 +318,7 @@ class Integrator:
         sys.normalize(q)
         cpu0 = time.process_time()
         modal = plan.solve_modal(sys, times, q, u, dt) if plan is not None else {}
-        self.compile(plan)
+        self.compile(plan, model)
         self.contact_recorder = ContactRecorder(self.model) if contacts else None
         res.plan = "" if plan is None else str(plan)
         if self.model.idle:
@@ -424,3 +448,10 @@ class Integrator:
         if energies is None:
             energies = sys.kinetic_energy(self.t, q, u), sys.potential_energy(self.t, q)
         return energies[0], energies[1] + self.spring_energy()
+
+
+def _settings(solver) -> str:
+    """A contact solver's settings in words (none without one)."""
+    if solver is None:
+        return "none"
+    return f"{solver.method} (tol = {solver.tol:g}, max_iter = {solver.max_iter})"

@@ -7,14 +7,15 @@ and fields, a search's warm start, counters and length scale — in a class attr
 ``state_slots``: attribute names of float64 or int64 arrays, or of objects with their own
 ``state_slots`` (a kinematics' points and search, an offset contour's neutral curve).
 
-:class:`ContactState` lays those arrays end to end in one float64 and one int64 vector
-(:meth:`~ContactState.pools`), which Data holds (``Data.contact_f``, ``Data.contact_i``),
-and :meth:`~ContactState.bind` makes every slot a view of them: the current values
-copied in, then each object's ``bind_views`` (its named views and kernel tuples made
-again on the moved arrays) and each fused detection's ``refresh`` (its argument tuple).
-So the kernels and the Python path read and write Data: a checkpoint of Data holds the
-whole contact state, and a step taken back (adaptive Moreau) puts it back by copying
-Data's vectors. An array that views another slot (a point's centre, its point's
+:class:`ContactState` lays those arrays end to end in one float64 and one int64 vector,
+which Data holds (``Data.contact_f``, ``Data.contact_i``), and :meth:`~ContactState.bind`
+makes every slot a view of them, then calls each object's ``bind_views`` (its named views
+and kernel tuples made again on the moved arrays) and each fused detection's ``refresh``
+(its argument tuple). So the kernels and the Python path read and write Data: a
+checkpoint of Data holds the whole contact state, and a step taken back (adaptive Moreau)
+puts it back by copying Data's vectors. A new Data starts from the values the slots held
+when the Model was compiled (:meth:`~ContactState.pools`), so the runs of one Model, one
+Data each, start alike. An array that views another slot (a point's centre, its point's
 position) is no slot of its own; its owner's ``bind_views`` derives it again.
 
 :meth:`~ContactState.bind` checks that no array of the objects and fused detections is
@@ -70,27 +71,25 @@ class ContactState:
         for root in roots:
             walk(root)
         self.sizes = tuple(sizes)
-
-    def pools(self) -> tuple:
-        """(float64 vector, int64 vector) holding the slots' current values."""
-        pools = tuple(np.zeros(n, dtype=dtype) for n, dtype in zip(self.sizes, POOLS))
+        self.initial = tuple(np.zeros(n, dtype=dtype) for n, dtype in zip(self.sizes, POOLS))
         for obj, name, pool, at, shape in self.slots:
             value = getattr(obj, name)
-            pools[pool][at:at + value.size] = value.ravel()
-        return pools
+            self.initial[pool][at:at + value.size] = value.ravel()
+
+    def pools(self) -> tuple:
+        """(float64 vector, int64 vector) holding the slots' values when the layout was
+        made (the Model compiled): the contact state a run starts from."""
+        return tuple(v.copy() for v in self.initial)
 
     def bind(self, contact_f, contact_i, fused=()) -> None:
-        """Make every slot a view of ``contact_f``/``contact_i`` (their values the slots'
-        current ones), the objects' derived views and the ``fused`` detections' tables
-        again on them; RuntimeError if an array is left on the old memory."""
+        """Make every slot a view of ``contact_f``/``contact_i`` (with the values they
+        hold), the objects' derived views and the ``fused`` detections' tables again on
+        them; RuntimeError if an array is left on the old memory."""
         pools = (contact_f, contact_i)
         old = []
         for obj, name, pool, at, shape in self.slots:
-            value = getattr(obj, name)
-            view = pools[pool][at:at + value.size].reshape(shape)
-            view[...] = value
-            setattr(obj, name, view)
-            old.append(value)
+            old.append(getattr(obj, name))
+            setattr(obj, name, pools[pool][at:at + int(np.prod(shape))].reshape(shape))
         for obj in self.objects:
             bind_views = getattr(obj, "bind_views", None)
             if bind_views is not None:

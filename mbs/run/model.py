@@ -65,6 +65,8 @@ class Model:
     Attributes
     ----------
     system : System
+    plan : Plan or None
+        The scene plan it was compiled under (:mod:`mbs.run.plan`).
     equations : Equations
         M, h, tangents, constraints over the active bodies (allocating; implicit and
         explicit integrators).
@@ -126,6 +128,7 @@ class Model:
     """
 
     system: object
+    plan: object
     equations: Equations
     body_stage: BodyStage
     nq: int
@@ -202,7 +205,7 @@ def compile_model(system, plan=None, theta=0.5, solver=None) -> Model:
     idle_rows = np.array([i for b in equations.idle for i in range(b.u_slice.start, b.u_slice.stop)],
                          dtype=np.int64)
     residual = ResidualContacts(contacts, set_valued, getattr(system, "cache_dir", None))
-    return Model(system=system, equations=equations, body_stage=body_stage,
+    return Model(system=system, plan=plan, equations=equations, body_stage=body_stage,
                  nq=system.nq, nu=system.nu, n_c=system.n_c, idle=equations.idle, active_u=active_u,
                  theta=float(theta), solver=solver, constant_iteration=equations.constant_iteration_matrix,
                  prune=plan is not None, contacts=contacts, set_valued=set_valued,

@@ -2,7 +2,7 @@
 registered pair kind each state array of the contours, points, kinematics and searches is
 a view of Data's two vectors, and so are the arrays the fused detection's kernel takes;
 a view that a class forgets to re-derive is refused when Data is made; a second Data of
-the same Model takes the state over, and the first one keeps what it had."""
+the same Model starts afresh and takes the state over, the first one keeps what it had."""
 
 import numpy as np
 import pytest
@@ -79,19 +79,25 @@ def test_state_that_is_no_array_is_refused():
         ContactState([thing])
 
 
-def test_a_second_data_takes_the_state_over():
-    """Steps on a second Data of the same Model change its vectors, not the first's; the
-    first keeps the state it had when the second was made."""
+def test_a_second_data_starts_afresh_and_takes_the_state_over():
+    """A second Data of the same Model starts from the contact state the first started
+    from (the Model's, not where the first run stands); steps on it change its vectors,
+    not the first's, and give what the first run's steps gave."""
     model, q, u = _model(("point", "2s"), False)
     first = Data(model)
+    start_f, start_i = first.contact_f.copy(), first.contact_i.copy()
     first.q[:], first.u[:] = q, u
     for _ in range(5):
         stages.step(model, first, 1e-5)
     kept_f, kept_i = first.contact_f.copy(), first.contact_i.copy()
+    assert not np.array_equal(kept_f, start_f, equal_nan=True)
     second = Data(model)
-    assert np.array_equal(second.contact_f, kept_f, equal_nan=True) and np.array_equal(second.contact_i, kept_i)
-    second.q[:], second.u[:] = first.q, first.u
+    assert np.array_equal(second.contact_f, start_f, equal_nan=True) and np.array_equal(second.contact_i, start_i)
+    second.q[:], second.u[:] = q, u
     for _ in range(5):
         stages.step(model, second, 1e-5)
-    assert not np.array_equal(second.contact_f, kept_f, equal_nan=True)
+    assert np.array_equal(second.contact_f, kept_f, equal_nan=True) and np.array_equal(second.contact_i, kept_i)
+    assert np.array_equal(second.q, first.q) and np.array_equal(second.u, first.u)
+    for _ in range(5):
+        stages.step(model, second, 1e-5)
     assert np.array_equal(first.contact_f, kept_f, equal_nan=True) and np.array_equal(first.contact_i, kept_i)
