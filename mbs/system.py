@@ -203,7 +203,9 @@ class System:
         planned as :meth:`simulate` plans (``plan``, ``tolerance``, ``outputs``): the
         compiled Model (:mod:`mbs.run.model`) that :meth:`simulate` runs on when given it
         as ``model`` — for several runs of one scene (another Δt or t_end, the warm-up
-        and the check of a job), each with a new Data from the same start — and a Data of it."""
+        and the check of a job), each with a new Data from the same start — and a Data of it.
+        The contours and contacts hold views of the state of the Data made last
+        (:mod:`mbs.run.contact_state`): one run at a time per Model."""
         from mbs.integrators import integrator_class
 
         integ = integrator_class(integrator)(self, **options)

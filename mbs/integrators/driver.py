@@ -294,7 +294,6 @@ class Integrator:
         its plan is the run's (``plan`` is not used)."""
         self.dt = dt
         if model is not None:
-            self.check_model(model)
             plan = model.plan
         self.state = self._prepare(q0, u0, t_end, dt, t_out, outputs, energies, breakpoints, plan, contacts, model)
         if checkpoint is not None:

@@ -237,8 +237,7 @@ class CarriedCopy:
         data = self.data
         for name, kept in self._arrays:
             np.copyto(kept, getattr(data, name))
-        self._values = [getattr(data, name) for name in self._others]
-        self._values = [dict(v) if isinstance(v, dict) else v for v in self._values]
+        self._values = [dict(v) if isinstance(v, dict) else v for v in (getattr(data, n) for n in self._others)]
 
     def restore(self) -> None:
         data = self.data

@@ -27,7 +27,9 @@ within 10 %) for every unilateral pair kind: the same scene run by Moreau's stag
 a plan, alone, with 16 more point masses (2 m and more out along the surface's normal,
 flying away) each in a contact of the same kind with the same surface, and with those
 masses but no contacts. The pairs' share is (with pairs − without) / alone: what the
-planned broad phase (:mod:`mbs.run.bounding_spheres`) leaves of the far pairs' cost.
+planned broad phase (:mod:`mbs.run.bounding_spheres`) leaves of the far pairs' cost. For
+a surface on the beam the scene alone also runs with the beam meshed 20 x 8 x 8 (its 40
+lowest modes stored, 20 used as before): the per-step cost against the node count.
 
 Run::
 
@@ -48,7 +50,9 @@ RADIUS = 0.01           # [m], the sphere about the point mass
 PRESS = 1e-6            # [m], how far the side is pressed into the surface (closed)
 FAR = 2.0               # [m], the nearest far-apart side's distance from the surface
 FAR_PAIRS = 16          # far-apart pairs of the step-cost table
-FLAT_TOL = 0.10         # far pairs: per-step cost within 10 % of the step without them
+FLAT_TOL = 0.10         # far pairs, finer mesh: per-step cost within 10 % of the step without
+FINE = (20, 8, 8)       # the finer mesh of the beam (tet4 divisions) of the node-count column
+ON_BEAM = ("2s", "1s", "edge", "band", "cylinder")     # the surface kinds on the beam
 
 
 def surface(kind, beam, table):
@@ -74,21 +78,29 @@ def surface(kind, beam, table):
             "sphere": lambda: SphereContour(ground_frame((0.0, 0.0, -1.0)), 0.1)}[kind]()
 
 
-def pair_scene(pair, bilateral=False, far=0, far_contacts=True):
+def beam_data(divisions=None):
+    """The beam's body data: the default scene's tet4 beam (10 x 4 x 4, all modes), or
+    the same beam meshed with ``divisions`` (its 40 lowest modes)."""
+    from ffrmbs_app.scenes import point_mass_beam as pmb
+
+    return pmb.default_beam_data() if divisions is None else pmb.default_beam_data(divisions=divisions, modes=40)
+
+
+def pair_scene(pair, bilateral=False, far=0, far_contacts=True, divisions=None):
     """(system, contact, q, u) of the contour pair ``pair`` (module docstring), the side
     pressed into the surface (on it for a ``bilateral`` pair); with ``far`` point masses
     more, FAR + k metres out along the surface's normal and flying away at 0.1 m/s, each
-    (``far_contacts``) with a side of the same kind in a contact with the same surface."""
+    (``far_contacts``) with a side of the same kind in a contact with the same surface;
+    the beam meshed with ``divisions`` (:func:`beam_data`)."""
     from contact import connect
     from contours import PointContour, SphereContour
-    from ffrmbs_app.scenes import point_mass_beam as pmb
     from mbs import FlexibleBodyFFR, PointMass, PrescribedFrameMotion, RigidBody, System
 
     def side_of(mass):
         return PointContour(mass.point) if pair[0] == "point" else SphereContour(mass.point, RADIUS)
 
     system = System()
-    beam = system.add(FlexibleBodyFFR(pmb.default_beam_data(), modes=20, frame=PrescribedFrameMotion.fixed(),
+    beam = system.add(FlexibleBodyFFR(beam_data(divisions), modes=20, frame=PrescribedFrameMotion.fixed(),
                                       name="beam"))
     table = system.add(RigidBody(10.0, 0.1 * np.eye(3), name="table"))
     mass = system.add(PointMass(0.05, name="side"))
@@ -158,12 +170,12 @@ def measure(pair, bilateral, batch, rounds) -> dict:
             "g_N": float(gaps[0])}
 
 
-def _planned_run(pair, far, far_contacts):
+def _planned_run(pair, far, far_contacts, divisions=None):
     """(Model, Data) of a planned Moreau run of :func:`pair_scene` (θ = ½, Gauss–Seidel)."""
     from contact.solver import ProxSolver
     from mbs.run.model import Data, compile_model
 
-    system, _, q, u = pair_scene(pair, far=far, far_contacts=far_contacts)
+    system, _, q, u = pair_scene(pair, far=far, far_contacts=far_contacts, divisions=divisions)
     model = compile_model(system, system.plan(1.0), theta=0.5,
                           solver=ProxSolver("gauss-seidel", tol=1e-10, max_iter=2000))
     data = Data(model)
@@ -173,13 +185,16 @@ def _planned_run(pair, far, far_contacts):
 
 def far_pairs_row(pair, steps, rounds) -> dict:
     """The per-step cost [µs] of the pair's scene alone, with FAR_PAIRS far-apart pairs of
-    its kind, and with their point masses but no contacts (module docstring), medians of
-    ``rounds`` batches of ``steps`` Moreau steps (Δt = 1e-5 s) alternating; the far pairs'
-    own share = (pairs − bodies) / alone."""
+    its kind, with their point masses but no contacts, and (a surface on the beam) alone
+    on the finer mesh FINE (module docstring), medians of ``rounds`` batches of ``steps``
+    Moreau steps (Δt = 1e-5 s) alternating; the far pairs' own share = (pairs − bodies) /
+    alone."""
     from mbs.run import stages
 
     runs = {"alone": _planned_run(pair, 0, True), "far_pairs": _planned_run(pair, FAR_PAIRS, True),
             "far_bodies": _planned_run(pair, FAR_PAIRS, False)}
+    if pair[1] in ON_BEAM:
+        runs["fine"] = _planned_run(pair, 0, True, FINE)
 
     def batch(run):
         model, data = run
@@ -196,18 +211,22 @@ def far_pairs_row(pair, steps, rounds) -> dict:
             times[name].append(batch(run))
     med = {f"{name}_us": float(np.median(t)) for name, t in times.items()}
     return {"pair": "/".join(pair), **med, "share": (med["far_pairs_us"] - med["far_bodies_us"]) / med["alone_us"],
+            "fine_ratio": med["fine_us"] / med["alone_us"] if "fine_us" in med else None,
             "searched": int(runs["far_pairs"][1].n_live)}
 
 
 def _far_table(rows, settings) -> list:
+    nodes = [beam_data(d).u0.shape[0] for d in (None, FINE)]
     lines = [f"µs per Moreau step (planned run), median of {settings['rounds']} batches of {settings['batch'] // 2} "
              f"steps, alternating: the scene alone, with {FAR_PAIRS} far-apart pairs of its kind "
-             f"({FAR:g} m and more out, flying away), with their point masses but no contacts", "",
-             "| pair kind | alone | far pairs | far bodies | the pairs' share | contacts searched |",
-             "|---|---|---|---|---|---|"]
+             f"({FAR:g} m and more out, flying away), with their point masses but no contacts, and alone with "
+             f"the beam meshed {' x '.join(map(str, FINE))} ({nodes[1]} nodes, against {nodes[0]})", "",
+             "| pair kind | alone | far pairs | far bodies | the pairs' share | contacts searched | finer mesh | "
+             "finer / alone |", "|---|---|---|---|---|---|---|---|"]
     for r in rows:
+        fine = "" if r["fine_ratio"] is None else f"{r['fine_us']:.1f} | {r['fine_ratio']:.2f}"
         lines.append(f"| {r['pair']} | {r['alone_us']:.1f} | {r['far_pairs_us']:.1f} | {r['far_bodies_us']:.1f} | "
-                     f"{100 * r['share']:+.1f} % | {r['searched']} of {FAR_PAIRS + 1} |")
+                     f"{100 * r['share']:+.1f} % | {r['searched']} of {FAR_PAIRS + 1} | {fine or ' | '} |")
     return lines
 
 
@@ -237,8 +256,12 @@ def run(quick=False) -> dict:
     steep = [f"{r['pair']} {100 * r['share']:+.0f} %" for r in far if r["share"] > FLAT_TOL]
     flat = (f"target (per-step cost flat within {100 * FLAT_TOL:.0f} % in {FAR_PAIRS} far-apart pairs, every "
             f"unilateral pair kind): {'met' if not steep else 'NOT met (' + ', '.join(steep) + ')'}")
+    growing = [f"{r['pair']} {r['fine_ratio']:.2f}" for r in far
+               if r["fine_ratio"] is not None and abs(r["fine_ratio"] - 1.0) > FLAT_TOL]
+    mesh = (f"target (per-step cost flat within {100 * FLAT_TOL:.0f} % in node count, every pair kind on the "
+            f"beam): {'met' if not growing else 'NOT met (' + ', '.join(growing) + ')'}")
     return {"benchmark": "pair_cost", "machine": machine(), "settings": settings, "rows": rows, "far_pairs": far,
-            "table": "\n".join(lines), "verdicts": [verdict, flat]}
+            "table": "\n".join(lines), "verdicts": [verdict, flat, mesh]}
 
 
 def main(argv=None):
