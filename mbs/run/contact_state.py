@@ -46,7 +46,7 @@ class ContactState:
 
     def __init__(self, roots):
         self.objects, self.slots = [], []
-        sizes, seen, arrays = [0, 0], set(), []
+        sizes, seen, owners = [0, 0], set(), set()
 
         def walk(obj):
             if id(obj) in seen:
@@ -60,12 +60,12 @@ class ContactState:
                 if not isinstance(value, np.ndarray) or value.dtype.type not in POOLS:
                     raise TypeError(f"{type(obj).__name__}.{name}: run state must be a float64 or int64 array, "
                                     f"got {type(value).__name__} {getattr(value, 'dtype', '')}")
-                if any(np.may_share_memory(value, a) for a in arrays):
+                if id(_owner(value)) in owners:
                     continue                    # a view of another slot: bind_views derives it
                 pool = POOLS.index(value.dtype.type)
                 self.slots.append((obj, name, pool, sizes[pool], value.shape))
                 sizes[pool] += value.size
-                arrays.append(value)
+                owners.add(id(_owner(value)))
             self.objects.append(obj)
 
         for root in roots:
@@ -86,9 +86,8 @@ class ContactState:
         hold), the objects' derived views and the ``fused`` detections' tables again on
         them; RuntimeError if an array is left on the old memory."""
         pools = (contact_f, contact_i)
-        old = []
+        old = [_owner(getattr(obj, name)) for obj, name, *_ in self.slots]     # alive until checked
         for obj, name, pool, at, shape in self.slots:
-            old.append(getattr(obj, name))
             setattr(obj, name, pools[pool][at:at + int(np.prod(shape))].reshape(shape))
         for obj in self.objects:
             bind_views = getattr(obj, "bind_views", None)
@@ -104,8 +103,9 @@ class ContactState:
 
 def _left_on(objects, old) -> list:
     """Names "Class.attribute" of the arrays of ``objects`` (attributes, also inside
-    tuples and lists) that share memory with an array of ``old``."""
-    left = []
+    tuples and lists) that view the memory of an array of ``old`` (the arrays owning the
+    slots' memory before)."""
+    old_ids, left = {id(a) for a in old}, []
 
     def arrays(value):
         if isinstance(value, np.ndarray):
@@ -116,6 +116,11 @@ def _left_on(objects, old) -> list:
 
     for obj in objects:
         for name, value in vars(obj).items():
-            if any(np.may_share_memory(a, o) for a in arrays(value) for o in old):
+            if any(id(_owner(a)) in old_ids for a in arrays(value)):
                 left.append(f"{type(obj).__name__}.{name}")
     return left
+
+
+def _owner(array):
+    """The array that owns ``array``'s memory (numpy's ``base`` of a view is its owner)."""
+    return array if array.base is None else array.base
