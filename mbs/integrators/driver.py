@@ -99,17 +99,29 @@ class RunState:
 
 
 class CarriedEntry:
-    """An integrator's attribute kept in its run's Data (``data.integrator[name]``): what
-    it carries from step to step, so that a checkpoint of Data resumes it."""
+    """An integrator's attribute kept in its run's Data — what it carries from step to
+    step, so that a checkpoint of Data resumes it: the Data attribute of its name
+    (``attribute``: the counters) or its entry of ``data.integrator``; ``default``
+    before a run."""
+
+    def __init__(self, attribute=False, default=None):
+        self.attribute, self.default = attribute, default
 
     def __set_name__(self, owner, name):
         self.name = name
 
     def __get__(self, obj, owner=None):
-        return self if obj is None else obj.data.integrator[self.name]
+        if obj is None:
+            return self
+        if obj.data is None:
+            return self.default
+        return getattr(obj.data, self.name) if self.attribute else obj.data.integrator[self.name]
 
     def __set__(self, obj, value):
-        obj.data.integrator[self.name] = value
+        if self.attribute:
+            setattr(obj.data, self.name, value)
+        else:
+            obj.data.integrator[self.name] = value
 
 
 class Integrator:
@@ -131,23 +143,8 @@ class Integrator:
         self.data = None        # its Data
         self.contact_recorder = None    # samples Result.contacts (mbs.results.contact_record) when asked for
 
-    @property
-    def steps(self) -> int:
-        """Accepted steps of the run (Data's)."""
-        return 0 if self.data is None else self.data.steps
-
-    @steps.setter
-    def steps(self, n):
-        self.data.steps = n
-
-    @property
-    def iterations(self) -> int:
-        """Newton iterations of the run (Data's)."""
-        return 0 if self.data is None else self.data.iterations
-
-    @iterations.setter
-    def iterations(self, n):
-        self.data.iterations = n
+    steps = CarriedEntry(attribute=True, default=0)          # accepted steps of the run
+    iterations = CarriedEntry(attribute=True, default=0)     # Newton iterations of the run
 
     @property
     def t(self) -> float:
