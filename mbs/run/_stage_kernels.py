@@ -1,7 +1,9 @@
 """numba kernels of the step's stages (:mod:`mbs.run.stages`): which contours and contacts
 the contour and detection stages visit, in one call each instead of a Python loop over
-every contact (far-apart pairs cost nothing per step); the contact problem's products
-(G, ξ_free, γ⁻), the velocity update and the impulses' work, each one call.
+every contact (far-apart pairs cost nothing per step); the closed contacts' columns of W
+and gap-closing terms from their kinematics in Data (:func:`contact_rows_into`, over the
+Model's contact table); the contact problem's products (G, ξ_free, γ⁻), the velocity
+update and the impulses' work, each one call.
 
 Plain-Python or numpy references in the docstrings; ``tests/unit/mbs/test_stages.py`` compares them.
 """
@@ -10,7 +12,15 @@ from __future__ import annotations
 
 from numba import njit
 
+from contact.kinematics import G_N_AT
 from mbs.run.linalg_kernels import block_cho_solve_vector
+
+# columns of Model.contact_table, one row per contact: where its kinematics buffer lies in
+# Data's contact_f, the offsets of w_N1, w_N2, w_T1, w_T2 in it (contact.kinematics.buffer_layout),
+# the bodies' velocity counts and first rows in u (−1: the ground), its rows of Λ, whether it
+# is unilateral, whether it is a point kept on a curve (W = [w_N, w_T2])
+(KIN_AT, W_N1_AT, W_N2_AT, W_T1_AT, W_T2_AT, NU1, NU2, START1, START2, DIM, UNILATERAL,
+ ON_CURVE, TABLE_COLUMNS) = range(13)
 
 
 @njit(cache=True)
@@ -200,3 +210,36 @@ def spring_energy(compliant, warm, lam_rows, force, delta):
                 s += force[at + k] * delta[at + k]
             e += 0.5 * s
     return e
+
+
+@njit(cache=True)
+def contact_rows_into(W, closing, contact_f, table, closed_idx, n_closed, n_c, warm, dt):
+    """Stage 5's columns of the closed set-valued contacts: for each contact i of
+    closed_idx[:n_closed], from its kinematics in ``contact_f`` (rows of ``table``, the
+    columns above), W[:, row:row + dim] += [w_N] (dim 1), [w_N, W_T] (dim 3) or
+    [w_N, w_T2] (a point kept on a curve) at each body's rows of u (eq. 3.8; body 1's
+    then body 2's, both may be one body), and closing[row] = g_N/Δt [m/s] for a unilateral
+    contact resting within its closing tolerance (g_N > 0 while warm[i]); rows from n_c on.
+    W and closing zero on entry. Reference: ``Contact.jacobian`` and ``kinematics.g_N / dt``
+    per closed contact."""
+    row = n_c
+    for j in range(n_closed):
+        i = closed_idx[j]
+        kin, dim = table[i, KIN_AT], table[i, DIM]
+        for side in range(2):
+            start = table[i, START1 + side]
+            if start < 0:
+                continue
+            w_N, w_T = kin + table[i, W_N1_AT + side], kin + table[i, W_T1_AT + side]
+            for k in range(table[i, NU1 + side]):
+                W[start + k, row] += contact_f[w_N + k]
+                if table[i, ON_CURVE]:
+                    W[start + k, row + 1] += contact_f[w_T + 2 * k + 1]
+                elif dim == 3:
+                    W[start + k, row + 1] += contact_f[w_T + 2 * k]
+                    W[start + k, row + 2] += contact_f[w_T + 2 * k + 1]
+        g_N = contact_f[kin + G_N_AT]
+        if table[i, UNILATERAL] and g_N > 0.0 and warm[i]:
+            closing[row] = g_N / dt
+        row += dim
+

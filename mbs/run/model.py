@@ -34,9 +34,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from contact.kinematics import PointOnCurveConstraint, buffer_layout
 from contact.solver import WORK_ROWS
 
 from mbs.results.codec import StateMismatch, put, take
+from mbs.run import _stage_kernels as SK
 from mbs.run.body_stage import BodyStage
 from mbs.run.bounding_spheres import SphereTable
 from mbs.run.contact_state import ContactState
@@ -125,6 +127,9 @@ class Model:
     contact_state : ContactState
         Where the contours' and contacts' run state lies in Data's ``contact_f`` and
         ``contact_i`` (:mod:`mbs.run.contact_state`).
+    contact_table : (n, TABLE_COLUMNS) int array
+        Per contact where its kinematics lies in ``contact_f`` and what the kernels over
+        the closed contacts need of it (the columns of :mod:`mbs.run._stage_kernels`).
     """
 
     system: object
@@ -158,6 +163,7 @@ class Model:
     idle_rows: np.ndarray
     residual: ResidualContacts | None
     contact_state: ContactState
+    contact_table: np.ndarray
 
     @property
     def n_act(self) -> int:
@@ -205,6 +211,7 @@ def compile_model(system, plan=None, theta=0.5, solver=None) -> Model:
     idle_rows = np.array([i for b in equations.idle for i in range(b.u_slice.start, b.u_slice.stop)],
                          dtype=np.int64)
     residual = ResidualContacts(contacts, set_valued, getattr(system, "cache_dir", None))
+    contact_state = ContactState([k for k, *_ in contours] + list(contacts))
     return Model(system=system, plan=plan, equations=equations, body_stage=body_stage,
                  nq=system.nq, nu=system.nu, n_c=system.n_c, idle=equations.idle, active_u=active_u,
                  theta=float(theta), solver=solver, constant_iteration=equations.constant_iteration_matrix,
@@ -215,7 +222,21 @@ def compile_model(system, plan=None, theta=0.5, solver=None) -> Model:
                  contours=contours, owner_at=owner_at, owners=owners,
                  single_valued=tuple(i for i, sv in enumerate(set_valued) if not sv), m_max=system.n_c + sum(dims),
                  blocks=blocks, idle_rows=idle_rows, residual=residual if residual else None,
-                 contact_state=ContactState([k for k, *_ in contours] + list(contacts)))
+                 contact_state=contact_state, contact_table=_contact_table(contacts, dims, contact_state))
+
+
+def _contact_table(contacts, dims, contact_state) -> np.ndarray:
+    """Model.contact_table: a row per contact (the columns of :mod:`mbs.run._stage_kernels`)."""
+    at = {id(obj): offset for obj, name, pool, offset, shape in contact_state.slots if name == "buffer" and pool == 0}
+    table = np.zeros((len(contacts), SK.TABLE_COLUMNS), dtype=np.int64)
+    for i, (c, dim) in enumerate(zip(contacts, dims)):
+        k = c.kinematics
+        nu1, nu2 = k.contour1.nu, k.contour2.nu
+        s1, s2 = k.u_slices()
+        w_N1, w_N2, w_T1, w_T2 = buffer_layout(nu1, nu2)[3:7]
+        table[i] = (at[id(k)], w_N1, w_N2, w_T1, w_T2, nu1, nu2, -1 if s1 is None else s1.start,
+                    -1 if s2 is None else s2.start, dim, c.unilateral, isinstance(k, PointOnCurveConstraint))
+    return table
 
 
 LAST_STEP = (0, 0.0, 0, 0.0, 0.0, 0, 0.0, 0.0)     # Data.last of a step not yet taken

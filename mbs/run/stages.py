@@ -151,15 +151,8 @@ def constraints(model, data, dt):
     if n_c:
         W[:, :n_c] = eq.constraint_jacobian(data.t_m, data.q_m).T
         offset[:n_c] = eq.constraint_velocity_term(data.t_m, data.q_m)
-    row = n_c
-    for j in range(data.n_closed):
-        i = data.closed_idx[j]
-        c = model.contacts[i]
-        dim = model.dims[i]
-        c.jacobian(W, row)
-        if model.unilateral[i] and c.kinematics.g_N > 0.0 and data.warm[i]:   # resting within closing_tol
-            closing[row] = c.kinematics.g_N / dt
-        row += dim
+    K.contact_rows_into(W, closing, data.contact_f, model.contact_table, data.closed_idx, data.n_closed, n_c,
+                        data.warm, dt)     # the closed contacts' columns; closing for those resting within closing_tol
     solve_matrix(model, data, factor, W, MW)
     K.contact_problem_into(W, MW, data.u_free, data.u, offset, closing, G, xi_free, gamma_pre)
     data.comp_r = 0

@@ -86,12 +86,12 @@ def beam_data(divisions=None):
     return pmb.default_beam_data() if divisions is None else pmb.default_beam_data(divisions=divisions, modes=40)
 
 
-def pair_scene(pair, bilateral=False, far=0, far_contacts=True, divisions=None):
+def pair_scene(pair, bilateral=False, far=0, far_contacts=True, divisions=None, law="impact"):
     """(system, contact, q, u) of the contour pair ``pair`` (module docstring), the side
     pressed into the surface (on it for a ``bilateral`` pair); with ``far`` point masses
     more, FAR + k metres out along the surface's normal and flying away at 0.1 m/s, each
     (``far_contacts``) with a side of the same kind in a contact with the same surface;
-    the beam meshed with ``divisions`` (:func:`beam_data`)."""
+    the beam meshed with ``divisions`` (:func:`beam_data`); ``law`` a unilateral law or its name."""
     from contact import connect
     from contours import PointContour, SphereContour
     from mbs import FlexibleBodyFFR, PointMass, PrescribedFrameMotion, RigidBody, System
@@ -105,7 +105,7 @@ def pair_scene(pair, bilateral=False, far=0, far_contacts=True, divisions=None):
     table = system.add(RigidBody(10.0, 0.1 * np.eye(3), name="table"))
     mass = system.add(PointMass(0.05, name="side"))
     other = surface(pair[1], beam, table)
-    contact = system.add(connect(side_of(mass), other, "bilateral" if bilateral else "impact", name="/".join(pair)))
+    contact = system.add(connect(side_of(mass), other, "bilateral" if bilateral else law, name="/".join(pair)))
     far_masses = [system.add(PointMass(0.05, name=f"far {k}")) for k in range(far)]
     if far_contacts:
         for k, m in enumerate(far_masses):

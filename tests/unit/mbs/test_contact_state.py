@@ -1,14 +1,17 @@
 """The contours' and contacts' run state lies in Data (mbs.run.contact_state): for every
 registered pair kind each state array of the contours, points, kinematics and searches is
 a view of Data's two vectors, and so are the arrays the fused detection's kernel takes;
+the closed contacts' columns of W and closing terms read from Data through the Model's
+contact table are those of the contact objects;
 a view that a class forgets to re-derive is refused when Data is made; a second Data of
 the same Model starts afresh and takes the state over, the first one keeps what it had."""
 
 import numpy as np
 import pytest
 
-from contact import BILATERAL_KINEMATICS, PAIR_KINEMATICS
+from contact import BILATERAL_KINEMATICS, PAIR_KINEMATICS, UnilateralCoulombContact
 from contact.solver import ProxSolver
+from mbs.run import _stage_kernels as SK
 from mbs.run import stages
 from mbs.run.contact_state import ContactState
 from mbs.run.model import Data, compile_model
@@ -17,8 +20,8 @@ from validation.bench.pair_cost import pair_scene
 PAIRS = [(pair, False) for pair in PAIR_KINEMATICS.names()] + [(pair, True) for pair in BILATERAL_KINEMATICS.names()]
 
 
-def _model(pair, bilateral):
-    system, contact, q, u = pair_scene(pair, bilateral)
+def _model(pair, bilateral, law="impact"):
+    system, contact, q, u = pair_scene(pair, bilateral, law=law)
     model = compile_model(system, None, theta=0.5, solver=ProxSolver("gauss-seidel", tol=1e-10, max_iter=2000))
     return model, q, u
 
@@ -101,3 +104,37 @@ def test_a_second_data_starts_afresh_and_takes_the_state_over():
     for _ in range(5):
         stages.step(model, second, 1e-5)
     assert np.array_equal(first.contact_f, kept_f, equal_nan=True) and np.array_equal(first.contact_i, kept_i)
+
+
+ROWS = [pytest.param(pair, bilateral, law, id=f"{'/'.join(pair)}-{name}")
+        for pair, bilateral in PAIRS
+        for name, law in ((("bilateral", None),) if bilateral else
+                          (("impact", "impact"), ("coulomb", UnilateralCoulombContact(0.0, 0.3))))]
+
+
+@pytest.mark.parametrize("pair, bilateral, law", ROWS)
+@pytest.mark.parametrize("g_N", [None, 4e-13])
+def test_the_contact_rows_from_the_table_are_the_contacts_own(pair, bilateral, law, g_N):
+    """W's columns of the closed contact (after a joint row's worth of offset) and its
+    closing term by :func:`contact_rows_into` over Data and the contact table, against
+    ``Contact.jacobian`` and g_N/Δt of the objects, bit for bit — W_N alone (impact),
+    with W_T (Coulomb), [w_N, w_T2] (a point kept on a curve); pressed in (no closing)
+    and resting 4e-13 m apart (closing g_N/Δt for a unilateral contact)."""
+    model, q, u = _model(pair, bilateral, law)
+    data = Data(model)
+    contact = model.contacts[0]
+    assert model.fused[0].locate(q, u, 0.0)
+    if g_N is not None:
+        contact.kinematics.g_N = g_N
+    n_c, dim, dt = 1, model.dims[0], 1e-5
+    warm = np.array([True])
+    W, closing = np.zeros((model.nu, n_c + dim)), np.zeros(n_c + dim)
+    SK.contact_rows_into(W, closing, data.contact_f, model.contact_table, np.array([0]), 1, n_c, warm, dt)
+    W_ref, closing_ref = np.zeros_like(W), np.zeros_like(closing)
+    contact.jacobian(W_ref, n_c)
+    if contact.unilateral and contact.kinematics.g_N > 0.0:
+        closing_ref[n_c] = contact.kinematics.g_N / dt
+    assert np.any(W_ref[:, n_c:] != 0.0)
+    assert W.tobytes() == W_ref.tobytes() and closing.tobytes() == closing_ref.tobytes()
+    assert (closing[n_c] > 0.0) == (g_N is not None and contact.unilateral)
+
