@@ -12,15 +12,16 @@ from __future__ import annotations
 
 from numba import njit
 
-from contact.kinematics import G_N_AT
+from contact.kinematics import ACTIVE_AT, G_N_AT
 from mbs.run.linalg_kernels import block_cho_solve_vector
 
 # columns of Model.contact_table, one row per contact: where its kinematics buffer lies in
 # Data's contact_f, the offsets of w_N1, w_N2, w_T1, w_T2 in it (contact.kinematics.buffer_layout),
-# the bodies' velocity counts and first rows in u (−1: the ground), its rows of Λ, whether it
-# is unilateral, whether it is a point kept on a curve (W = [w_N, w_T2])
-(KIN_AT, W_N1_AT, W_N2_AT, W_T1_AT, W_T2_AT, NU1, NU2, START1, START2, DIM, UNILATERAL,
- ON_CURVE, TABLE_COLUMNS) = range(13)
+# the bodies' velocity counts and first rows in u (−1: the ground), its rows of Λ (0:
+# single-valued) and the first of them in Data.lam_prev, whether it is unilateral, a point
+# kept on a curve (W = [w_N, w_T2]), a contact through residual flexibility (compliant)
+(KIN_AT, W_N1_AT, W_N2_AT, W_T1_AT, W_T2_AT, NU1, NU2, START1, START2, DIM, LAM_AT, UNILATERAL,
+ ON_CURVE, COMPLIANT, TABLE_COLUMNS) = range(15)
 
 
 @njit(cache=True)
@@ -210,6 +211,37 @@ def spring_energy(compliant, warm, lam_rows, force, delta):
                 s += force[at + k] * delta[at + k]
             e += 0.5 * s
     return e
+
+
+@njit(cache=True)
+def closed_set(located, live_idx, n_live, table, contact_f, warm, comp_force, comp_delta, closed, closed_idx, n_c):
+    """Stage 4's bookkeeping over the live contacts live_idx[:n_live], each located
+    (``located[i]``: g_N <= its closing tolerance): closed[i] — located, or a compliant
+    contact apart only by its spring's deflection (warm, spring force comp_force > 0, its
+    kinematics active in ``contact_f``: the spring must release first) —; the closed
+    set-valued contacts into closed_idx; their penetration max(0, −g_N) (−g_N − δ of a
+    compliant one: its effective gap). Returns (closed set-valued contacts, rows m from
+    n_c on, the largest penetration [m] or 0). Reference: the loop it replaced in
+    :func:`mbs.run.stages.detect`."""
+    n_closed, m, largest = 0, n_c, 0.0
+    for j in range(n_live):
+        i = live_idx[j]
+        kin, at = table[i, KIN_AT], table[i, LAM_AT]
+        spring = table[i, COMPLIANT] != 0 and warm[i]
+        c = located[i] or (spring and comp_force[at] > 0.0 and contact_f[kin + ACTIVE_AT] != 0.0)
+        closed[i] = c
+        if not c:
+            continue
+        if table[i, DIM] > 0:
+            closed_idx[n_closed] = i
+            n_closed += 1
+            m += table[i, DIM]
+        if table[i, UNILATERAL]:
+            pen = -contact_f[kin + G_N_AT]
+            if spring:
+                pen -= comp_delta[at]
+            largest = max(largest, pen)
+    return n_closed, m, largest
 
 
 @njit(cache=True)

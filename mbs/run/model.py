@@ -222,20 +222,22 @@ def compile_model(system, plan=None, theta=0.5, solver=None) -> Model:
                  contours=contours, owner_at=owner_at, owners=owners,
                  single_valued=tuple(i for i, sv in enumerate(set_valued) if not sv), m_max=system.n_c + sum(dims),
                  blocks=blocks, idle_rows=idle_rows, residual=residual if residual else None,
-                 contact_state=contact_state, contact_table=_contact_table(contacts, dims, contact_state))
+                 contact_state=contact_state,
+                 contact_table=_contact_table(contacts, dims, lam_at, residual if residual else None, contact_state))
 
 
-def _contact_table(contacts, dims, contact_state) -> np.ndarray:
+def _contact_table(contacts, dims, lam_at, residual, contact_state) -> np.ndarray:
     """Model.contact_table: a row per contact (the columns of :mod:`mbs.run._stage_kernels`)."""
     at = {id(obj): offset for obj, name, pool, offset, shape in contact_state.slots if name == "buffer" and pool == 0}
     table = np.zeros((len(contacts), SK.TABLE_COLUMNS), dtype=np.int64)
-    for i, (c, dim) in enumerate(zip(contacts, dims)):
+    for i, (c, dim, lam) in enumerate(zip(contacts, dims, lam_at)):
         k = c.kinematics
         nu1, nu2 = k.contour1.nu, k.contour2.nu
         s1, s2 = k.u_slices()
         w_N1, w_N2, w_T1, w_T2 = buffer_layout(nu1, nu2)[3:7]
         table[i] = (at[id(k)], w_N1, w_N2, w_T1, w_T2, nu1, nu2, -1 if s1 is None else s1.start,
-                    -1 if s2 is None else s2.start, dim, c.unilateral, isinstance(k, PointOnCurveConstraint))
+                    -1 if s2 is None else s2.start, dim, lam, c.unilateral, isinstance(k, PointOnCurveConstraint),
+                    residual is not None and residual.compliant[i])
     return table
 
 
@@ -300,6 +302,7 @@ class Data:
         self.n_live = n                                        # unless a planned run prunes)
         self.contour_idx = np.zeros(len(model.contours), dtype=np.intp)   # contours of live contacts
         self.closed = np.zeros(n, dtype=bool)
+        self.located = np.zeros(n, dtype=bool)      # located this step (g_N <= closing_tol)
         self.force_N = np.zeros(n)
         self.closed_idx = np.zeros(n, dtype=np.intp)
         self.n_closed = 0

@@ -94,32 +94,19 @@ def contours(model, data, dt):
 def detect(model, data, dt):
     """Stage 4: locate the live contacts; closed flags, the closed set-valued contacts
     (``closed_idx``, ``n_closed``, ``m`` rows with the joints) and the largest
-    penetration max(0, −g_N) [m] (−g_N − δ of a compliant contact: its effective gap)."""
-    n_closed = 0
-    last = data.last
-    m = model.n_c
-    fused = model.fused
+    penetration max(0, −g_N) [m] (−g_N − δ of a compliant contact: its effective gap),
+    the bookkeeping one kernel over the contact table (:func:`._stage_kernels.closed_set`)."""
+    fused, located = model.fused, data.located
     for j in range(data.n_live):
         i = data.live_idx[j]
-        c = model.contacts[i]
         f = fused[i]
-        closed = c.locate() if f is None else f.locate(data.q_m, data.u, data.t_m)
-        if not closed and model.residual is not None and model.residual.compliant[i] and data.warm[i] \
-                and data.comp_force[model.lam_at[i]] > 0.0 and c.kinematics.active:
-            closed = True       # apart only by the spring's deflection: it must release first
-        data.closed[i] = closed
-        if closed:
-            if model.set_valued[i]:
-                data.closed_idx[n_closed] = i
-                n_closed += 1
-                m += model.dims[i]
-            if model.unilateral[i]:
-                pen = -c.kinematics.g_N
-                if model.residual is not None and model.residual.compliant[i] and data.warm[i]:
-                    pen -= data.comp_delta[model.lam_at[i]]         # the effective gap g_N + δ
-                if pen > last[1]:
-                    last[1] = pen
-    data.n_closed, data.m = n_closed, m
+        located[i] = model.contacts[i].locate() if f is None else f.locate(data.q_m, data.u, data.t_m)
+    data.n_closed, data.m, pen = K.closed_set(located, data.live_idx, data.n_live, model.contact_table,
+                                              data.contact_f, data.warm, data.comp_force, data.comp_delta,
+                                              data.closed, data.closed_idx, model.n_c)
+    last = data.last
+    if pen > last[1]:
+        last[1] = pen
     if model.contacts and last[1] > data.stats["max_penetration"]:
         data.stats["max_penetration"] = last[1]
 

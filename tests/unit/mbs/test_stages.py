@@ -7,7 +7,9 @@ import pytest
 
 from centre_scenes import PAIRS, centre_scene
 from contact import _kernels as kern
+from contact.kinematics import ACTIVE_AT, G_N_AT
 from contact.solver import ProxSolver, _diagonal
+from mbs.run import _stage_kernels as SK
 from mbs.run import stages
 from mbs.run.model import Data, compile_model
 
@@ -144,6 +146,54 @@ def test_free_velocity_kernels_equal_numpy_and_scipy():
     SK.free_velocity_update(u_new, u_free, u_prev)
     np.testing.assert_array_equal(u_prev, u)
     np.testing.assert_array_equal(u_new, u_free)
+
+
+def _closed_set_reference(located, live, table, contact_f, warm, comp_force, comp_delta, n_c):
+    """The detection stage's bookkeeping as a loop over the contact objects' fields."""
+    closed, closed_idx, m, largest = {}, [], n_c, 0.0
+    for i in live:
+        kin, at = table[i, SK.KIN_AT], table[i, SK.LAM_AT]
+        c = bool(located[i])
+        compliant = bool(table[i, SK.COMPLIANT]) and bool(warm[i])
+        if not c and compliant and comp_force[at] > 0.0 and bool(contact_f[kin + ACTIVE_AT]):
+            c = True
+        closed[i] = c
+        if c:
+            if table[i, SK.DIM]:
+                closed_idx.append(i)
+                m += table[i, SK.DIM]
+            if table[i, SK.UNILATERAL]:
+                pen = -contact_f[kin + G_N_AT] - (comp_delta[at] if compliant else 0.0)
+                largest = max(largest, pen)
+    return closed, closed_idx, m, largest
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_the_closed_set_kernel_is_the_loop_over_the_contacts(seed):
+    """Random contact tables (set-valued of 1–3 rows or single-valued, unilateral or not,
+    compliant or not), gaps, active flags, springs and live sets: the kernel's closed
+    flags, closed set, rows and largest penetration are the loop's."""
+    rng = np.random.default_rng(seed)
+    n, width = 9, 20
+    table = np.zeros((n, SK.TABLE_COLUMNS), dtype=np.int64)
+    table[:, SK.KIN_AT] = np.arange(n) * width
+    table[:, SK.DIM] = rng.choice([0, 1, 2, 3], size=n)
+    table[:, SK.LAM_AT] = np.concatenate(([0], np.cumsum(table[:-1, SK.DIM])))
+    table[:, SK.UNILATERAL] = rng.random(n) < 0.8
+    table[:, SK.COMPLIANT] = rng.random(n) < 0.5
+    contact_f = rng.normal(scale=1e-6, size=n * width)
+    contact_f[table[:, SK.KIN_AT] + ACTIVE_AT] = rng.random(n) < 0.7
+    rows = int(table[:, SK.DIM].sum()) + 1
+    comp_force, comp_delta = rng.normal(size=rows), rng.normal(scale=1e-7, size=rows)
+    located, warm = rng.random(n) < 0.4, rng.random(n) < 0.6
+    live = np.sort(rng.choice(n, size=6, replace=False)).astype(np.intp)
+    closed, closed_idx = np.zeros(n, dtype=bool), np.zeros(n, dtype=np.intp)
+    n_closed, m, largest = SK.closed_set(located, live, live.size, table, contact_f, warm, comp_force, comp_delta,
+                                         closed, closed_idx, 2)
+    ref_closed, ref_idx, ref_m, ref_largest = _closed_set_reference(located, live, table, contact_f, warm,
+                                                                    comp_force, comp_delta, 2)
+    assert {i: bool(closed[i]) for i in live} == ref_closed
+    assert closed_idx[:n_closed].tolist() == ref_idx and m == ref_m and largest == ref_largest
 
 
 def test_warm_start_kernels_equal_the_loops_over_the_closed_contacts():
