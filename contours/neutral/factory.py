@@ -222,7 +222,7 @@ class NeutralContour(Contour):
         """Note that a compiled kernel wrote the body state into the state vector of
         :attr:`kernel_data` as :meth:`update` does (R, A, q_f and, with ``velocity``, v, ω̄,
         q̇_f), e.g. the fused detection of :mod:`mbs.run.fused_detection`."""
-        self._has_u = bool(velocity)
+        self._flags[HAS_U] = 1.0 if velocity else 0.0
 
     def evaluate(self, point, eta, xi=0.0, velocity=False, jacobians=False):
         """Fields at (η, ξ) (see :meth:`Contour.evaluate`); J_T = [1, −A ũ T, A Φ] and

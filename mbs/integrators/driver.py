@@ -223,8 +223,8 @@ class Integrator:
     def accepted(self, dt):
         """Book an accepted step of size ``dt`` [s]; a NaN or infinite state stops the run, so
         does a requested stop (:func:`request_stop`)."""
-        self.steps += 1
         data = self.data
+        data.steps += 1
         if not math.isfinite(finite_sum(data.q, data.u)):       # a NaN or inf anywhere propagates
             raise non_finite(self.t, self.steps, "q/u")
         if _stop[1] > 1:

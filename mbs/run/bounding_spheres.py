@@ -20,8 +20,8 @@ but a plane on a moving frame:
 - a plane on the ground: not a sphere but the half-space behind it (:class:`GroundPlane`;
   its pairs are live while the other sphere reaches within the margin of the plane).
 
-:class:`SphereTable` holds the distinct spheres of all prunable contacts of a run as
-arrays and prunes every pair in one call of the kernels of :mod:`._sphere_kernels`
+:class:`SphereTable` holds the distinct spheres of all prunable contacts of a run (two or
+more: :func:`pruned`) as arrays and prunes every pair in one call of the kernels of :mod:`._sphere_kernels`
 (the spheres of point masses, of flexible bodies at rest, of bodies on a free
 quaternion frame and those fixed in space computed there, the others by their
 callables), so the cost per far-apart pair is a few array reads.
@@ -38,6 +38,9 @@ from contours.derived import OffsetContour
 from mbs.run import _sphere_kernels as K
 from mbs.bodies.rigid_body import PointMass, RigidBody
 
+MIN_PAIRS = 2
+# ^ a planned run prunes from two prunable contacts on: one contact's own detection tests
+#   its contours' bounding boxes first, at about the cost of the spheres' test
 NEUTRAL_FFR = (Contour1sNeutralFFR, Contour2sNeutralFFR)
 NEUTRAL_RIGID = (Contour1sNeutralRigid, Contour2sNeutralRigid)
 
@@ -158,6 +161,13 @@ def live_pair(sphere1, sphere2, margin, q, t) -> bool:
     return not float(d @ d) > reach * reach
 
 
+def pruned(contacts) -> list:
+    """The contacts a planned run prunes: those with a :func:`sphere_pair`, when there
+    are at least :data:`MIN_PAIRS` of them, else none."""
+    prunable = [c for c in contacts if sphere_pair(c) is not None]
+    return prunable if len(prunable) >= MIN_PAIRS else []
+
+
 def sphere_pair(contact):
     """(sphere1, sphere2) of a prunable contact (unilateral, with a margin, both contours
     bounded), else None."""
@@ -173,7 +183,8 @@ class SphereTable:
     Parameters
     ----------
     contacts : sequence
-        The System's contacts; those with a :func:`sphere_pair` are pruned.
+        The System's contacts; those with a :func:`sphere_pair` are pruned, if there
+        are at least :data:`MIN_PAIRS` of them (:func:`pruned`).
 
     Attributes
     ----------
@@ -197,8 +208,9 @@ class SphereTable:
 
     def __init__(self, contacts):
         self.spheres, index, pairs = [], {}, []
+        kept = {id(c) for c in pruned(contacts)}
         for i, c in enumerate(contacts):
-            pair = sphere_pair(c)
+            pair = sphere_pair(c) if id(c) in kept else None
             if pair is None:
                 continue
             ids = []

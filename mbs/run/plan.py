@@ -28,10 +28,13 @@ or list keeps it. The other half of the tolerance bounds the neglected coupling 
 
 Contacts: a contact on a contour with residual flexibility acts through the static
 compliance of the modes its body leaves out (:mod:`contours.residual`), which the plan
-says. A contour is updated, and its contact searched, only in steps where the
-bodies' bounding spheres (their nodes, grown by the bound of the elastic displacement,
-:meth:`~mbs.bodies.body.Body.bounding_sphere`) come within the contact's broad-phase margin
-(:meth:`contact.Contact.may_touch`); the contact is open otherwise.
+says. With two prunable contacts or more (:func:`mbs.run.bounding_spheres.pruned`), a
+contour is updated, and its contact searched, only in steps where the bodies' bounding
+spheres (their nodes, grown by the bound of the elastic displacement,
+:meth:`~mbs.bodies.body.Body.bounding_sphere`; every contour kind but a plane on a moving
+frame has one) come within the contact's broad-phase margin; the contact is open
+otherwise. A single contact is searched every step: its detection tests the contours'
+bounding boxes first, at about the cost of the spheres' test.
 
 Outputs: only the requested ones, each from its own rows of Φ (a node's three rows;
 the boundary approach of report Sec. 4.2.1 taken to its end). Terms that vanish: Q_v of
@@ -48,6 +51,7 @@ from scipy.spatial.transform import Rotation
 from preprocess.residual import clamped_nodes_of
 
 from mbs.bodies.flexible_body import FlexibleBodyFFR
+from mbs.run.bounding_spheres import MIN_PAIRS, pruned, sphere_pair
 
 MODAL_EXACT = "exact modal propagation (PureMA)"
 SIMPLE_RB = "SimpleRB (rigid motion + exact modes, uncoupled)"
@@ -124,8 +128,11 @@ def make_plan(system, t_end, tolerance=TOLERANCE, outputs=None) -> Plan:
         plans.append(bp)
         if bp.modal:
             absorbed += own
-    contacts = [f"contact {c.name!r}: contours updated and searched only while the bodies' bounding "
-                f"spheres come within {_margin(c)} (broad phase), open otherwise" + _correction(c)
+    kept = {id(c) for c in pruned(system.contacts)}
+    contacts = [f"contact {c.name!r}: " + (f"contours updated and searched only while the bodies' bounding spheres "
+                                           f"come within {_margin(c)} (broad phase), open otherwise"
+                                           if id(c) in kept else "contours updated and searched every step"
+                                           + _unpruned(c, system.contacts)) + _correction(c)
                 for c in system.contacts]
     names = sorted(outputs or {})
     out = [f"outputs: {', '.join(names) if names else 'none'} requested; each evaluated from its own "
@@ -145,6 +152,17 @@ def _correction(contact) -> str:
                          f"{body.name!r} leaves out (residual flexibility: {body.n_modes} of its FE model's "
                          f"{n_dof} modes kept, no extra coordinates)")
     return "".join(notes)
+
+
+def _unpruned(contact, contacts) -> str:
+    """Why a contact is searched every step (:func:`mbs.run.bounding_spheres.pruned`)."""
+    if not contact.unilateral:
+        return " (a point kept on a curve)"
+    if getattr(contact, "margin", None) is None:
+        return " (margin off)"
+    if sphere_pair(contact) is None:
+        return " (its contours have no bounding sphere)"
+    return f" (fewer than {MIN_PAIRS} prunable contacts: its detection's own box test is the broad phase)"
 
 
 def _margin(contact) -> str:

@@ -198,7 +198,7 @@ def test_every_surface_kind_is_bounded_and_no_pair_within_the_margin_is_pruned(k
     the margin — pruning never drops a pair that could close."""
     from validation.bench.pair_cost import RADIUS, pair_scene
 
-    system, contact, q, u = pair_scene(("sphere", kind))
+    system, contact, q, u = pair_scene(("sphere", kind), far=1)     # two contacts: the table prunes
     surface = contact.kinematics.contour2
     side = contact.kinematics.contour1.body
     bound = contour_sphere(surface)
@@ -213,11 +213,12 @@ def test_every_surface_kind_is_bounded_and_no_pair_within_the_margin_is_pruned(k
         np.testing.assert_allclose((r - centre) @ bound.normal, 0.0, atol=1e-15)
     else:
         assert np.linalg.norm(r - centre, axis=1).max() <= radius * (1 + 1e-12)
-    table = SphereTable([contact])
+    table = SphereTable(list(system.contacts))
+    assert len(table) == 2
     n = len(table.spheres)
     centres, radii = np.zeros((n, 3)), np.zeros(n)
-    live, closed = np.ones(1, dtype=bool), np.ones(1, dtype=bool)
-    live_idx = np.zeros(1, dtype=np.intp)
+    live, closed = np.ones(2, dtype=bool), np.ones(2, dtype=bool)
+    live_idx = np.zeros(2, dtype=np.intp)
     table.start(q, 0.0, centres, radii)
     margin = contact.margin + contact.closing_tol
     reach = np.max(np.linalg.norm(r - r.mean(axis=0), axis=1)) + 4 * RADIUS
@@ -260,3 +261,17 @@ def test_an_offset_contour_beyond_its_body_lies_in_its_grown_sphere(kind):
     beam_radius = contour_sphere(line)(q, 0.0)[1]
     assert np.linalg.norm(r - centre, axis=1).max() > beam_radius, "the offset contour reaches beyond the beam"
     assert np.linalg.norm(r - centre, axis=1).max() <= radius * (1 + 1e-12)
+
+
+def test_a_single_prunable_contact_is_searched_every_step():
+    """One prunable contact: no sphere table (its detection's box test is its broad
+    phase), and the plan says so; two: both pruned, and the plan says that."""
+    from validation.bench.pair_cost import pair_scene
+
+    for far, pruned in ((0, False), (1, True)):
+        system, contact, q, u = pair_scene(("sphere", "plane"), far=far)
+        assert len(SphereTable(list(system.contacts))) == (2 if pruned else 0)
+        line = next(c for c in system.plan(0.1).contacts if contact.name in c)
+        assert ("only while the bodies' bounding spheres" in line) == pruned
+        assert ("its detection's own box test is the broad phase" in line) == (not pruned)
+
