@@ -121,7 +121,16 @@ def _python_updates(updates, q, u, t):
             contour.update(q[qs], u[us], t)
 
 
-class _FusedCentre:
+class _Refreshed:
+    """A fused detection made from its ``contact`` alone (its constructor's argument)."""
+
+    def refresh(self) -> None:
+        """The tables and the argument tuple made again on the contact's arrays, once
+        they moved into a run's Data (:mod:`mbs.run.contact_state`)."""
+        type(self).__init__(self, self.contact)
+
+
+class _FusedCentre(_Refreshed):
     """What the fused detections of a centre (a point or a sphere on any body or the
     ground) on a surface of a floating-frame body share: the tables' common entries (the layouts of
     :mod:`._fused_detection_kernels`), Newton's settings, and :meth:`locate` around the
@@ -196,11 +205,6 @@ class _FusedCentre:
     def _newton_settings(self):
         """Newton's step caps and tolerance from the search into the tables."""
         _newton_settings(self.search, self._itab, self._ftab)
-
-    def refresh(self) -> None:
-        """The tables and the argument tuple made again on the contact's arrays, once
-        they moved into a run's Data (:mod:`mbs.run.contact_state`)."""
-        type(self).__init__(self, self.contact)
 
     def locate(self, q, u, t) -> bool:
         """Both contours updated at the global (q, u, t) and the contact located, as
@@ -409,7 +413,7 @@ class PointKeptOnCurve(CentreOnNeutral1s):
         return True
 
 
-class _FusedAnalytic:
+class _FusedAnalytic(_Refreshed):
     """What the fused detections of the analytic pairs share (:class:`CentreOnPlane`,
     :class:`SphereOnSphere`): :meth:`applies` by the kinematics' type and the contours'
     types (``kinds``: {kinematics: (side 1's contour, side 2's contour)}), the tables
@@ -451,11 +455,6 @@ class _FusedAnalytic:
         self._work = np.zeros(K.WORK_SIZE)
         self._args = (itab, ftab, k.contour1.state, k.contour2.state, k.point1.buffer, k.point2.buffer, k.buffer,
                       k.centre, k.axes1, *((k.axes2,) if self.axes2 else ()), self._work)
-
-    def refresh(self) -> None:
-        """The tables and the argument tuple made again on the contact's arrays, once
-        they moved into a run's Data (:mod:`mbs.run.contact_state`)."""
-        type(self).__init__(self, self.contact)
 
     def locate(self, q, u, t) -> bool:
         """Both contours at the global (q, u, t) and the contact located, as
