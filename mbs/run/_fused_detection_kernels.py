@@ -340,9 +340,9 @@ def centre_on_neutral_1s(q, u, itab, ftab, knots, ints, floats, ctrl0, phi, stat
     at the root (the contour's work arrays ``contour_work`` = B, ū rows, Φ rows) with
     J_T, J_R; on a sharp edge (``itab[EDGE]``) the frame of
     :func:`~contact._detection_kernels.edge_frame` (NO_POINT when the centre lies on the
-    curve). On a free quaternion frame the kernel writes (``itab[FRAME_Q]``) ``n_ref`` = A n̄_ref
-    follows the frame (n̄_ref in ``ftab``), as the curve's update. Returns as
-    :func:`centre_on_neutral_2s` (C2's ξ = 0)."""
+    curve). On a free quaternion frame (``itab[FRAME_Q]``) the kernel also writes the
+    curve's reference normal ``n_ref`` = A n̄_ref (n̄_ref in ``ftab``), as the curve's
+    update does. Returns as :func:`centre_on_neutral_2s` (C2's ξ = 0)."""
     ready = _begin(q, u, itab, ftab, 0.0, state, frame1, point1, centre, axes1, start, work)
     if itab[FRAME_Q] >= 0:
         for c in range(3):

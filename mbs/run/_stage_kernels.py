@@ -114,18 +114,18 @@ def free_velocity_update(u, u_free, u_prev):
 
 
 @njit(cache=True)
-def warm_start_into(lam_rows, closed_idx, n_closed, warm, lam_prev, n_c, lam):
+def warm_start_into(table, closed_idx, n_closed, warm, lam_prev, n_c, lam):
     """Λ (m,) of stage 6 from the last step's: the block of each of the first ``n_closed``
     contacts of ``closed_idx`` (rows n_c.. in order, contact i's block at
-    lam_prev[lam_rows[i, 0]:][:lam_rows[i, 1]]) when ``warm[i]``, else zero; the joints'
-    rows [0, n_c) zero (the caller copies theirs). Python reference:
-    :func:`mbs.run.stages.warm_start`'s loop."""
+    lam_prev[table[i, LAM_AT]:][:table[i, DIM]], the contact table's columns) when
+    ``warm[i]``, else zero; the joints' rows [0, n_c) zero (the caller copies theirs).
+    Python reference: :func:`mbs.run.stages.warm_start`'s loop."""
     for r in range(lam.shape[0]):
         lam[r] = 0.0
     row = n_c
     for j in range(n_closed):
         i = closed_idx[j]
-        at, dim = lam_rows[i, 0], lam_rows[i, 1]
+        at, dim = table[i, LAM_AT], table[i, DIM]
         if warm[i]:
             for k in range(dim):
                 lam[row + k] = lam_prev[at + k]
@@ -133,7 +133,7 @@ def warm_start_into(lam_rows, closed_idx, n_closed, warm, lam_prev, n_c, lam):
 
 
 @njit(cache=True)
-def keep_warm_start_into(lam_rows, closed_idx, n_closed, lam, n_c, warm, lam_prev):
+def keep_warm_start_into(table, closed_idx, n_closed, lam, n_c, warm, lam_prev):
     """The closed contacts' blocks of Λ (rows n_c.. in order) into ``lam_prev`` and
     ``warm[i]`` True for them, False for every other contact (the inverse of
     :func:`warm_start_into`)."""
@@ -142,7 +142,7 @@ def keep_warm_start_into(lam_rows, closed_idx, n_closed, lam, n_c, warm, lam_pre
     row = n_c
     for j in range(n_closed):
         i = closed_idx[j]
-        at, dim = lam_rows[i, 0], lam_rows[i, 1]
+        at, dim = table[i, LAM_AT], table[i, DIM]
         for k in range(dim):
             lam_prev[at + k] = lam[row + k]
         warm[i] = True
@@ -177,16 +177,17 @@ def damping_power(theta, u, u_prev, rows, D):
 
 
 @njit(cache=True)
-def pressed_contacts(warm, lam_rows, lam_prev, comp_force, closed, force_N, set_valued):
-    """The contacts that transmit a force in the last step: a set-valued contact closed
-    in it (``warm``) with a non-zero impulse Λ or spring force F (compliant contacts) in
-    its block lam_prev[lam_rows[i, 0]:][:lam_rows[i, 1]], a single-valued one closed with
-    a non-zero normal force. Reference: the same loop in Python."""
+def pressed_contacts(table, warm, lam_prev, comp_force, closed, force_N):
+    """The contacts that transmit a force in the last step: a set-valued contact (rows of
+    Λ: table[i, DIM] > 0) closed in it (``warm``) with a non-zero impulse Λ or spring force
+    F (compliant contacts) in its block lam_prev[table[i, LAM_AT]:][:table[i, DIM]], a
+    single-valued one closed with a non-zero normal force. Reference: the same loop in
+    Python."""
     n = 0
     for i in range(warm.shape[0]):
-        if set_valued[i]:
+        at, dim = table[i, LAM_AT], table[i, DIM]
+        if dim > 0:
             if warm[i]:
-                at, dim = lam_rows[i, 0], lam_rows[i, 1]
                 for k in range(dim):
                     if lam_prev[at + k] != 0.0 or comp_force[at + k] != 0.0:
                         n += 1
@@ -197,15 +198,15 @@ def pressed_contacts(warm, lam_rows, lam_prev, comp_force, closed, force_N, set_
 
 
 @njit(cache=True)
-def spring_energy(compliant, warm, lam_rows, force, delta):
-    """½ Σ Fᵀ δ [J] over the compliant contacts closed in the last step (``compliant[i]``
-    and ``warm[i]``), each with its block force[lam_rows[i, 0]:][:lam_rows[i, 1]] [N] of
+def spring_energy(table, warm, force, delta):
+    """½ Σ Fᵀ δ [J] over the compliant contacts closed in the last step (table[i, COMPLIANT]
+    and ``warm[i]``), each with its block force[table[i, LAM_AT]:][:table[i, DIM]] [N] of
     spring forces and the same block of ``delta`` [m] of deflections. Reference:
     ``Σ 0.5 * force[block] @ delta[block]`` over those contacts."""
     e = 0.0
-    for i in range(compliant.shape[0]):
-        if compliant[i] and warm[i]:
-            at, dim = lam_rows[i, 0], lam_rows[i, 1]
+    for i in range(warm.shape[0]):
+        if table[i, COMPLIANT] != 0 and warm[i]:
+            at, dim = table[i, LAM_AT], table[i, DIM]
             s = 0.0
             for k in range(dim):
                 s += force[at + k] * delta[at + k]

@@ -112,8 +112,6 @@ class GroundPlane:
     p0 [m], ``normal`` its unit normal n (the frame's z axis). Called it gives (p0, 0);
     a pair with it is live while nᵀ(c1 − p0) <= r1 + margin (:func:`live_pair`)."""
 
-    radius = 0.0
-
     def __init__(self, frame):
         self.centre = np.array(frame.position(None), dtype=float)
         self.normal = np.array(frame.orientation(None), dtype=float)[:, 2]

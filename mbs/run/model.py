@@ -93,8 +93,6 @@ class Model:
         Rows of Λ of each set-valued contact (0 for single-valued).
     lam_at : tuple of int
         First entry of each contact's warm start in ``Data.lam_prev``.
-    lam_rows : (n, 2) int array
-        (lam_at, dims) of each contact, for the warm-start kernels.
     penalty : tuple of int
         Single-valued unilateral contacts with law derivatives (their stiffness is
         checked against the step).
@@ -128,8 +126,9 @@ class Model:
         Where the contours' and contacts' run state lies in Data's ``contact_f`` and
         ``contact_i`` (:mod:`mbs.run.contact_state`).
     contact_table : (n, TABLE_COLUMNS) int array
-        Per contact where its kinematics lies in ``contact_f`` and what the kernels over
-        the closed contacts need of it (the columns of :mod:`mbs.run._stage_kernels`).
+        Per contact where its kinematics lies in ``contact_f``, its rows of Λ and what
+        else the kernels over the contacts need of it (the columns of
+        :mod:`mbs.run._stage_kernels`).
     """
 
     system: object
@@ -150,7 +149,6 @@ class Model:
     unilateral: tuple
     dims: tuple
     lam_at: tuple
-    lam_rows: np.ndarray
     penalty: tuple
     spheres: SphereTable | None
     fused: tuple
@@ -217,7 +215,6 @@ def compile_model(system, plan=None, theta=0.5, solver=None) -> Model:
                  theta=float(theta), solver=solver, constant_iteration=equations.constant_iteration_matrix,
                  prune=plan is not None, contacts=contacts, set_valued=set_valued,
                  unilateral=tuple(bool(c.unilateral) for c in contacts), dims=dims, lam_at=lam_at,
-                 lam_rows=np.ascontiguousarray(np.array([lam_at, dims], dtype=np.int64).T.reshape(-1, 2)),
                  penalty=penalty, spheres=SphereTable(contacts) if plan is not None else None, fused=fused,
                  contours=contours, owner_at=owner_at, owners=owners,
                  single_valued=tuple(i for i, sv in enumerate(set_valued) if not sv), m_max=system.n_c + sum(dims),

@@ -21,8 +21,6 @@ deflection opens the gap.
 
 from __future__ import annotations
 
-import numpy as np
-
 from contact.kinematics import PointOnCurveConstraint
 from contours._residual_kernels import add_contact_block
 from contours.residual import residual_compliances
@@ -48,7 +46,8 @@ class ResidualContacts:
         Per contact a tuple of (sign, ResidualCompliance, side) — side 1 or 2 — of its
         corrected contours (empty: a rigid contact).
     compliant : tuple of bool
-        The contact has a corrected contour (``compliant_flags``: the same as an array).
+        The contact has a corrected contour (the contact table's COMPLIANT column, for the
+        kernels).
     compliances : dict
         The ResidualCompliance of each corrected contour, by id.
     skip : tuple of int
@@ -84,7 +83,6 @@ class ResidualContacts:
             sides.append(tuple(s))
         self.sides = tuple(sides)
         self.compliant = tuple(bool(s) for s in sides)
-        self.compliant_flags = np.array(self.compliant, dtype=np.bool_)     # for the kernels
         self.skip = tuple(int(isinstance(c.kinematics, PointOnCurveConstraint)) for c in contacts)
 
     def __bool__(self):
@@ -158,5 +156,4 @@ def spring_energy(model, data) -> float:
     energy; zero without residual flexibility)."""
     if model.residual is None:
         return 0.0
-    return SK.spring_energy(model.residual.compliant_flags, data.warm, model.lam_rows, data.comp_force,
-                            data.comp_delta)
+    return SK.spring_energy(model.contact_table, data.warm, data.comp_force, data.comp_delta)

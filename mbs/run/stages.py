@@ -358,7 +358,7 @@ def warm_start(model, data, lam):
     """Λ of the last step for the joints and the contacts closed again, else zero
     (:func:`mbs.run._stage_kernels.warm_start_into`)."""
     n_c = model.n_c
-    K.warm_start_into(model.lam_rows, data.closed_idx, data.n_closed, data.warm, data.lam_prev, n_c, lam)
+    K.warm_start_into(model.contact_table, data.closed_idx, data.n_closed, data.warm, data.lam_prev, n_c, lam)
     if n_c and data.warm_joints:
         lam[:n_c] = data.lam_joints
 
@@ -370,4 +370,4 @@ def keep_warm_start(model, data, lam):
     if n_c:
         data.lam_joints[:] = lam[:n_c]
     data.warm_joints = True
-    K.keep_warm_start_into(model.lam_rows, data.closed_idx, data.n_closed, lam, n_c, data.warm, data.lam_prev)
+    K.keep_warm_start_into(model.contact_table, data.closed_idx, data.n_closed, lam, n_c, data.warm, data.lam_prev)

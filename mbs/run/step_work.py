@@ -54,7 +54,6 @@ class StepWork:
         self.D = np.ascontiguousarray(D[np.ix_(self.damped_rows, self.damped_rows)])
         self.Q = np.zeros(model.nu)
         self.v = np.zeros(model.nu)
-        self.set_valued = np.array(model.set_valued, dtype=np.bool_)
 
     def load_work(self, data, dt) -> float:
         """W_loads of the step [J] (module docstring)."""
@@ -82,6 +81,6 @@ class StepWork:
     def pressed(self, data) -> int:
         """Contacts that transmitted a force in the step: a non-zero impulse or spring
         force (set-valued), a non-zero normal force (single-valued)."""
-        return int(K.pressed_contacts(data.warm, self.model.lam_rows, data.lam_prev, data.comp_force, data.closed,
-                                      data.force_N, self.set_valued))
+        return int(K.pressed_contacts(self.model.contact_table, data.warm, data.lam_prev, data.comp_force,
+                                      data.closed, data.force_N))
 

@@ -216,6 +216,8 @@ def test_the_energy_term_kernels_are_their_numpy_references():
     warm = np.array([True, True, False, False, True])
     set_valued = np.array([True, True, True, False, False])
     lam_rows = np.array([[0, 3], [3, 1], [4, 3], [7, 0], [7, 0]], dtype=np.int64)
+    table = np.zeros((5, SK.TABLE_COLUMNS), dtype=np.int64)        # the contact table's columns
+    table[:, SK.LAM_AT], table[:, SK.DIM] = lam_rows.T
     lam_prev, comp_force = np.zeros(7), np.zeros(7)
     lam_prev[1] = 0.1           # contact 0: a tangential impulse only
     comp_force[3] = 2.0         # contact 1: its spring pushes
@@ -225,13 +227,14 @@ def test_the_energy_term_kernels_are_their_numpy_references():
     reference = sum(1 for i in range(5) if (set_valued[i] and warm[i] and (
         lam_prev[lam_rows[i, 0]:][:lam_rows[i, 1]].any() or comp_force[lam_rows[i, 0]:][:lam_rows[i, 1]].any()))
         or (not set_valued[i] and closed[i] and force_N[i] != 0.0))
-    assert SK.pressed_contacts(warm, lam_rows, lam_prev, comp_force, closed, force_N, set_valued) == reference == 3
+    assert SK.pressed_contacts(table, warm, lam_prev, comp_force, closed, force_N) == reference == 3
     compliant = np.array([True, True, True, False, True])
+    table[:, SK.COMPLIANT] = compliant
     delta = rng.normal(size=7)
     comp_force[:] = rng.normal(size=7)
     springs = sum(0.5 * comp_force[a:a + d] @ delta[a:a + d] for i, (a, d) in enumerate(lam_rows)
                   if compliant[i] and warm[i])
-    assert SK.spring_energy(compliant, warm, lam_rows, comp_force, delta) == pytest.approx(springs, rel=1e-14)
+    assert SK.spring_energy(table, warm, comp_force, delta) == pytest.approx(springs, rel=1e-14)
 
 
 def test_the_trace_terms_allocate_no_more_than_the_step_s_own_loads(cantilever):

@@ -199,12 +199,11 @@ def test_the_closed_set_kernel_is_the_loop_over_the_contacts(seed):
 def test_warm_start_kernels_equal_the_loops_over_the_closed_contacts():
     """warm_start_into / keep_warm_start_into against the Python loops over the closed
     contacts (blocks of dims 1, 3, 2, 1 at lam_at in lam_prev; two joint rows first)."""
-    from mbs.run import _stage_kernels as SK
-
     rng = np.random.default_rng(6)
     dims = [1, 3, 2, 1]
     lam_at = [0, 1, 4, 6]
-    lam_rows = np.array([lam_at, dims], dtype=np.int64).T.copy()
+    table = np.zeros((4, SK.TABLE_COLUMNS), dtype=np.int64)        # the contact table's columns
+    table[:, SK.LAM_AT], table[:, SK.DIM] = lam_at, dims
     n_c = 2
     closed_idx = np.array([1, 2, 3, 0], dtype=np.intp)
     n_closed = 3                                  # contacts 1, 2, 3
@@ -212,7 +211,7 @@ def test_warm_start_kernels_equal_the_loops_over_the_closed_contacts():
     lam_prev = rng.normal(size=7)
     m = n_c + 3 + 2 + 1
     lam = np.full(m, np.nan)
-    SK.warm_start_into(lam_rows, closed_idx, n_closed, warm, lam_prev, n_c, lam)
+    SK.warm_start_into(table, closed_idx, n_closed, warm, lam_prev, n_c, lam)
     ref = np.zeros(m)
     row = n_c
     for i in closed_idx[:n_closed]:
@@ -227,7 +226,7 @@ def test_warm_start_kernels_equal_the_loops_over_the_closed_contacts():
         prev_ref[lam_at[i]:lam_at[i] + dims[i]] = new[row:row + dims[i]]
         warm_ref[i] = True
         row += dims[i]
-    SK.keep_warm_start_into(lam_rows, closed_idx, n_closed, new, n_c, warm, lam_prev)
+    SK.keep_warm_start_into(table, closed_idx, n_closed, new, n_c, warm, lam_prev)
     np.testing.assert_array_equal(lam_prev, prev_ref)
     np.testing.assert_array_equal(warm, warm_ref)
 
