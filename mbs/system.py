@@ -1,7 +1,10 @@
 """System: bodies and links assembled into M(q) u̇ = h(q, u, t) + W λ, g(q, t) = 0.
 
 The System owns the flat state arrays: q (nq,) and u (nu,) with q̇ = Y(q) u (thesis
-eq. 3.1a); every body gets its slices when added. Its equations of motion — the
+eq. 3.1a); its bodies' rows of them follow the order they were added in (:meth:`System.layout`).
+A body may belong to several Systems: it holds as ``q_slice``, ``u_slice`` the rows of the
+System that placed it last — when it was added, when that System was compiled or asked
+for its equations, and when a run's Data is made. Its equations of motion — the
 block-diagonal mass matrix, the smooth forces h (bodies' Q_v − K q − D u, gravity,
 force elements), the constraint residuals g, their Jacobian C_q (W = C_qᵀ) and
 acceleration terms γ, energies — come from :class:`~mbs.run.equations.Equations` over all
@@ -29,7 +32,7 @@ import numpy as np
 from contact.contact import ContactElement
 from ffrmbs.errors import ModelError
 
-from mbs.bodies.body import Body, Frame, ground_frame
+from mbs.bodies.body import Body, Frame, ground_frame, place_bodies
 from mbs.run.equations import Equations
 from mbs.links.link import Constraint, ForceElement
 
@@ -54,8 +57,8 @@ class System:
     def add(self, item):
         """Add a body, a force element or a constraint; returns it (for chaining)."""
         if isinstance(item, Body):
-            if item.q_slice is not None:
-                raise ModelError(f"body {item.name!r} already belongs to a system")
+            if any(item is b for b in self.bodies):
+                raise ModelError(f"body {item.name!r} is already in this system")
             item.q_slice = slice(self.nq, self.nq + item.nq)
             item.u_slice = slice(self.nu, self.nu + item.nu)
             self.nq += item.nq
@@ -83,6 +86,16 @@ class System:
         """A frame fixed in the inertial frame."""
         return ground_frame(position, orientation, name or "ground")
 
+    def layout(self) -> tuple:
+        """((body, q_slice, u_slice), …): each body's rows of this System's q and u, in the
+        order the bodies were added; the bodies take them as their ``q_slice``, ``u_slice``."""
+        layout, nq, nu = [], 0, 0
+        for b in self.bodies:
+            layout.append((b, slice(nq, nq + b.nq), slice(nu, nu + b.nu)))
+            nq, nu = nq + b.nq, nu + b.nu
+        place_bodies(layout)
+        return tuple(layout)
+
     # --- state --------------------------------------------------------------------------
     def initial_state(self):
         """(q0, u0): the bodies' initial states concatenated (copies)."""
@@ -100,11 +113,13 @@ class System:
         h(q, 0, t) + W λ = 0, g(q) = 0; for a clamped FFR body K_ff q_f = Q_f)."""
         from mbs.run.static import static_equilibrium
 
+        self.layout()
         return static_equilibrium(self, t, bodies, tol, max_iter)
 
     def equations(self):
         """The :class:`~mbs.run.equations.Equations` of all bodies and force elements (rebuilt
         when the System grows)."""
+        self.layout()
         key = (len(self.bodies), len(self.forces), len(self.constraints))
         if self._equations is None or self._equations[0] != key:
             self._equations = (key, Equations(self))
@@ -130,6 +145,7 @@ class System:
         requested outputs. ``print(system.plan(1.0))`` shows it."""
         from mbs.run.plan import TOLERANCE, make_plan
 
+        self.layout()
         return make_plan(self, t_end, TOLERANCE if tolerance is None else tolerance, outputs)
 
     # --- dynamics (:class:`~mbs.run.equations.Equations` over all bodies) ------------------
@@ -191,10 +207,12 @@ class System:
 
     def linear_momentum(self, t, q, u):
         """Σ over bodies of Σ m ṙ [kg m/s]."""
+        self.layout()
         return sum(b.linear_momentum(q[b.q_slice], u[b.u_slice], t) for b in self.bodies)
 
     def angular_momentum(self, t, q, u):
         """Σ m r × ṙ about the inertial origin [kg m²/s]."""
+        self.layout()
         return sum(b.angular_momentum(q[b.q_slice], u[b.u_slice], t) for b in self.bodies)
 
     # --- simulation ---------------------------------------------------------------------

@@ -20,7 +20,8 @@ from ffrmbs.errors import ModelError
 
 
 class Body:
-    """Base of all bodies: a name, sizes, initial state and the slices given by the System."""
+    """Base of all bodies: a name, sizes, initial state and its rows of q and u (``q_slice``,
+    ``u_slice``) in the System that placed it last (:meth:`mbs.system.System.layout`)."""
 
     nq: int
     nu: int
@@ -226,3 +227,9 @@ class Frame:
 def ground_frame(position=(0.0, 0.0, 0.0), orientation=None, name="ground") -> Frame:
     """A frame fixed in the inertial frame at ``position`` [m]."""
     return Frame(None, position, orientation=orientation, name=name)
+
+
+def place_bodies(layout) -> None:
+    """Give each body of ``layout`` ((body, q_slice, u_slice), …) its rows of q and u."""
+    for body, q_slice, u_slice in layout:
+        body.q_slice, body.u_slice = q_slice, u_slice

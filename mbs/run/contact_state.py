@@ -14,8 +14,8 @@ and kernel tuples made again on the moved arrays) and each fused detection's ``r
 (its argument tuple). So the kernels and the Python path read and write Data: a
 checkpoint of Data holds the whole contact state, and a step taken back (adaptive Moreau)
 puts it back by copying Data's vectors. A new Data starts from the values the slots held
-when the Model was compiled (:meth:`~ContactState.pools`), so the runs of one Model, one
-Data each, start alike. An array that views another slot (a point's centre, its point's
+when they were first laid out (:meth:`~ContactState.pools`), so the runs of one Model, one
+Data each, start alike, and so do the runs of a System compiled again. An array that views another slot (a point's centre, its point's
 position) is no slot of its own; its owner's ``bind_views`` derives it again.
 
 :meth:`~ContactState.bind` checks that no array of the objects and fused detections is
@@ -24,6 +24,8 @@ the run no longer writes) and raises if one is.
 """
 
 from __future__ import annotations
+
+import bisect
 
 import numpy as np
 
@@ -46,7 +48,7 @@ class ContactState:
 
     def __init__(self, roots):
         self.objects, self.slots = [], []
-        sizes, seen, owners = [0, 0], set(), set()
+        sizes, seen, spans = [0, 0], set(), _Spans()
 
         def walk(obj):
             if id(obj) in seen:
@@ -60,12 +62,13 @@ class ContactState:
                 if not isinstance(value, np.ndarray) or value.dtype.type not in POOLS:
                     raise TypeError(f"{type(obj).__name__}.{name}: run state must be a float64 or int64 array, "
                                     f"got {type(value).__name__} {getattr(value, 'dtype', '')}")
-                if id(_owner(value)) in owners:
+                if value.size and spans.inside(value):
                     continue                    # a view of another slot: bind_views derives it
                 pool = POOLS.index(value.dtype.type)
                 self.slots.append((obj, name, pool, sizes[pool], value.shape))
                 sizes[pool] += value.size
-                owners.add(id(_owner(value)))
+                if value.size:
+                    spans.add(value, f"{type(obj).__name__}.{name}")
             self.objects.append(obj)
 
         for root in roots:
@@ -73,12 +76,12 @@ class ContactState:
         self.sizes = tuple(sizes)
         self.initial = tuple(np.zeros(n, dtype=dtype) for n, dtype in zip(self.sizes, POOLS))
         for obj, name, pool, at, shape in self.slots:
-            value = getattr(obj, name)
+            value = _first_value(obj, name)
             self.initial[pool][at:at + value.size] = value.ravel()
 
     def pools(self) -> tuple:
-        """(float64 vector, int64 vector) holding the slots' values when the layout was
-        made (the Model compiled): the contact state a run starts from."""
+        """(float64 vector, int64 vector) holding the slots' values when the objects were
+        first laid out (their first Model compiled): the contact state a run starts from."""
         return tuple(v.copy() for v in self.initial)
 
     def bind(self, contact_f, contact_i, fused=()) -> None:
@@ -99,6 +102,44 @@ class ContactState:
         left = _left_on(self.objects + fused, old)
         if left:
             raise RuntimeError(f"run state left outside Data after binding: {', '.join(left)}")
+
+
+def _first_value(obj, name) -> np.ndarray:
+    """A copy of slot ``name`` of ``obj`` as it was when first laid out (kept on the object
+    as ``_first_state``): a System compiled again after a run starts where its first run
+    did, not from that run's last warm starts and counters."""
+    kept = vars(obj).setdefault("_first_state", {})
+    if name not in kept:
+        kept[name] = getattr(obj, name).copy()
+    return kept[name]
+
+
+class _Spans:
+    """The memory of the slots found so far, as disjoint address intervals: an array
+    inside one views that slot — whether the slots are arrays of their own (a Model's
+    first compile) or views of a Data's vectors (the System compiled again after a run)."""
+
+    def __init__(self):
+        self._starts, self._ends = [], []
+
+    @staticmethod
+    def _interval(array):
+        start = array.__array_interface__["data"][0]
+        return start, start + array.nbytes
+
+    def inside(self, array) -> bool:
+        start, end = self._interval(array)
+        k = bisect.bisect_right(self._starts, start) - 1
+        return k >= 0 and end <= self._ends[k]
+
+    def add(self, array, name) -> None:
+        start, end = self._interval(array)
+        k = bisect.bisect_right(self._starts, start)
+        if (k > 0 and self._ends[k - 1] > start) or (k < len(self._starts) and self._starts[k] < end):
+            raise TypeError(f"{name}: run state overlapping another slot (a slot must be named before "
+                            "the views of it)")
+        self._starts.insert(k, start)
+        self._ends.insert(k, end)
 
 
 def _left_on(objects, old) -> list:

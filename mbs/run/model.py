@@ -37,6 +37,7 @@ import numpy as np
 from contact.kinematics import PointOnCurveConstraint, buffer_layout
 from contact.solver import WORK_ROWS
 
+from mbs.bodies.body import place_bodies
 from mbs.results.codec import StateMismatch, put, take
 from mbs.run import _stage_kernels as SK
 from mbs.run.body_stage import BodyStage
@@ -129,6 +130,9 @@ class Model:
         Per contact where its kinematics lies in ``contact_f``, its rows of Λ and what
         else the kernels over the contacts need of it (the columns of
         :mod:`mbs.run._stage_kernels`).
+    layout : tuple of (body, q_slice, u_slice)
+        Each body's rows of q and u (:meth:`mbs.system.System.layout`), given to the
+        bodies again when a Data is made (a body may belong to several Systems).
     """
 
     system: object
@@ -162,6 +166,7 @@ class Model:
     residual: ResidualContacts | None
     contact_state: ContactState
     contact_table: np.ndarray
+    layout: tuple
 
     @property
     def n_act(self) -> int:
@@ -174,6 +179,7 @@ def compile_model(system, plan=None, theta=0.5, solver=None) -> Model:
     or None: every body integrated, every contour updated each step); ``theta`` and
     ``solver`` the Moreau options (module docstring). The residual flexibility of
     corrected contours is cached in ``system.cache_dir`` (None: computed each time)."""
+    layout = system.layout()
     idle = tuple(bp.body for bp in plan.modal_bodies) if plan is not None else ()
     equations = Equations(system, idle, plan.forces if plan is not None else ())
     active_u = None
@@ -220,7 +226,8 @@ def compile_model(system, plan=None, theta=0.5, solver=None) -> Model:
                  single_valued=tuple(i for i, sv in enumerate(set_valued) if not sv), m_max=system.n_c + sum(dims),
                  blocks=blocks, idle_rows=idle_rows, residual=residual if residual else None,
                  contact_state=contact_state,
-                 contact_table=_contact_table(contacts, dims, lam_at, residual if residual else None, contact_state))
+                 contact_table=_contact_table(contacts, dims, lam_at, residual if residual else None, contact_state),
+                 layout=layout)
 
 
 def _contact_table(contacts, dims, lam_at, residual, contact_state) -> np.ndarray:
@@ -275,6 +282,7 @@ class Data:
     def __init__(self, model: Model):
         nq, nu, m, n = model.nq, model.nu, model.m_max, len(model.contacts)
         n_act = model.n_act
+        place_bodies(model.layout)          # the bodies' rows in this Model's System
         self.t = self.t_m = 0.0
         self.q, self.u = np.zeros(nq), np.zeros(nu)
         self.q_m = np.zeros(nq)
