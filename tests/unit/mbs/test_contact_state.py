@@ -4,7 +4,8 @@ a view of Data's two vectors, and so are the arrays the fused detection's kernel
 the closed contacts' columns of W and closing terms read from Data through the Model's
 contact table are those of the contact objects;
 a view that a class forgets to re-derive is refused when Data is made; a second Data of
-the same Model starts afresh and takes the state over, the first one keeps what it had."""
+the same Model starts afresh and takes the state over, the first one keeps what it had;
+a System compiled again after a run starts from its first contact state."""
 
 import numpy as np
 import pytest
@@ -104,6 +105,32 @@ def test_a_second_data_starts_afresh_and_takes_the_state_over():
     for _ in range(5):
         stages.step(model, second, 1e-5)
     assert np.array_equal(first.contact_f, kept_f, equal_nan=True) and np.array_equal(first.contact_i, kept_i)
+
+
+@pytest.mark.parametrize("pair, bilateral", PAIRS, ids=lambda v: "/".join(v) if isinstance(v, tuple) else str(v))
+def test_a_system_compiled_again_after_a_run_lays_out_its_first_state(pair, bilateral):
+    """Every pair kind: a second Model of the System, compiled while the contact state is
+    a first run's Data, finds the same slots (the views told apart by memory, not by
+    owner) and starts from the state the first started from, not where that run stands;
+    five steps on it give what the first run's five steps gave."""
+    system, contact, q, u = pair_scene(pair, bilateral)
+    solver = ProxSolver("gauss-seidel", tol=1e-10, max_iter=2000)
+    first_model = compile_model(system, None, theta=0.5, solver=solver)
+    first = Data(first_model)
+    start_f, start_i = first.contact_f.copy(), first.contact_i.copy()
+    first.q[:], first.u[:] = q, u
+    for _ in range(5):
+        stages.step(first_model, first, 1e-5)
+    assert not np.array_equal(first.contact_f, start_f, equal_nan=True)
+    model = compile_model(system, None, theta=0.5, solver=solver)
+    assert [s[1:] for s in model.contact_state.slots] == [s[1:] for s in first_model.contact_state.slots]
+    data = Data(model)
+    assert np.array_equal(data.contact_f, start_f, equal_nan=True) and np.array_equal(data.contact_i, start_i)
+    data.q[:], data.u[:] = q, u
+    for _ in range(5):
+        stages.step(model, data, 1e-5)
+    assert np.array_equal(data.q, first.q) and np.array_equal(data.u, first.u)
+    assert np.array_equal(data.contact_f, first.contact_f, equal_nan=True)
 
 
 ROWS = [pytest.param(pair, bilateral, law, id=f"{'/'.join(pair)}-{name}")
