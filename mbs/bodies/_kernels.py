@@ -532,6 +532,14 @@ def additive_advance(q, u, step, out):
 
 
 @njit(cache=True)
+def scaled_into(u, step, out):
+    """out = step · u (n,): ``np.multiply(u, step, out=out)`` without the 0-d array numpy
+    makes of a Python float."""
+    for i in range(u.shape[0]):
+        out[i] = u[i] * step
+
+
+@njit(cache=True)
 def point_masses_increment(q_at, u_at, q, du, out):
     """out = q + Δu on the point masses' coordinates (q[q_at[p]..] and Δu[u_at[p]..], 3
     each); ``out`` may be ``q``."""

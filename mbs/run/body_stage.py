@@ -371,7 +371,7 @@ class BodyStage:
         if self._one_free:
             K.free_quat_advance(q, u, step, du, out)
             return
-        np.multiply(u, step, out=du)
+        K.scaled_into(u, step, du)
         self.increment(q, du, out)
         self.normalize(out)
 

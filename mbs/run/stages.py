@@ -46,6 +46,7 @@ from contact.compliance import compliant_problem, compliant_update
 from contact.laws import Bilateral
 from contact.solver import ContactSet
 
+from mbs.bodies import _kernels as BK
 from mbs.run import _stage_kernels as K
 from mbs.run import residual_contact
 from mbs.run.linalg_kernels import block_cho_solve_matrix, block_cho_solve_vector, block_iteration_factor
@@ -123,7 +124,7 @@ def constraints(model, data, dt):
     if model.blocks is not None:
         K.free_velocity(factor, model.blocks, model.idle_rows, data.h, dt, data.u, data.u_free)
     else:
-        np.multiply(data.h, dt, out=data.u_free)
+        BK.scaled_into(data.h, dt, data.u_free)
         solve(model, data, factor, data.u_free)
         np.add(data.u, data.u_free, out=data.u_free)
     m = data.m
@@ -202,8 +203,8 @@ def position(model, data, dt):
     if th == 0.5:
         model.body_stage.advance(data.q_m, data.u, th * dt, data.du, data.q)
     else:
-        np.multiply(data.u, th * dt, out=data.du)
-        np.multiply(data.u_prev, (1.0 - 2.0 * th) * dt, out=data.work_u)
+        BK.scaled_into(data.u, th * dt, data.du)
+        BK.scaled_into(data.u_prev, (1.0 - 2.0 * th) * dt, data.work_u)
         data.du += data.work_u
         model.body_stage.increment(data.q_m, data.du, data.q)
         model.body_stage.normalize(data.q)

@@ -1,19 +1,23 @@
 """The Moreau step as stages over Model/Data (mbs.run.model, mbs.run.stages): no numpy array is
-allocated in a steady step, the in-place kernels agree with their numpy references,
+allocated in a steady step, for every registered pair kind, the in-place kernels agree with their numpy references,
 and a planned run leaves the System as it was."""
 
 import numpy as np
 import pytest
 
 from centre_scenes import PAIRS, centre_scene
+from contact import BILATERAL_KINEMATICS, PAIR_KINEMATICS
 from contact import _kernels as kern
 from contact.kinematics import ACTIVE_AT, G_N_AT
 from contact.solver import ProxSolver, _diagonal
 from mbs.run import _stage_kernels as SK
 from mbs.run import stages
 from mbs.run.model import Data, compile_model
+from validation.bench.pair_cost import pair_scene
 
 from numpy_allocations import NumpyAllocations
+
+REGISTERED = [(pair, False) for pair in PAIR_KINEMATICS.names()] + [(p, True) for p in BILATERAL_KINEMATICS.names()]
 
 
 def _default_scene(side="point", contour="2s"):
@@ -295,4 +299,26 @@ def test_a_steady_step_of_a_point_kept_on_a_curve_allocates_no_numpy_array():
         for _ in range(200):
             stages.step(model, data, 1e-5)
     assert data.stats["closed_contacts"] == 220
+    assert count.sizes == [], (len(count.sizes), sorted(set(count.sizes)))
+
+
+@pytest.mark.parametrize("pair, bilateral", REGISTERED, ids=lambda v: "/".join(v) if isinstance(v, tuple) else str(v))
+def test_a_steady_step_of_every_registered_pair_kind_allocates_no_numpy_array(pair, bilateral):
+    """Every pair kind of PAIR_KINEMATICS and BILATERAL_KINEMATICS (validation.bench.pair_cost:
+    the side pressed into the surface of a flexible beam, a free rigid body or the ground;
+    kept on a curve for a bilateral one), with a second contact of the same kind open and
+    flying away: 200 steps after warm-up steps, the first contact closed in each, not one
+    array allocated."""
+    system, contact, q, u = pair_scene(pair, bilateral, far=1)
+    model = compile_model(system, None, theta=0.5, solver=ProxSolver("gauss-seidel", tol=1e-10, max_iter=2000))
+    assert all(f is not None for f in model.fused)
+    data = Data(model)
+    data.q[:], data.u[:] = q, u
+    for _ in range(20):
+        stages.step(model, data, 1e-5)
+    before = data.stats["closed_contacts"]
+    with NumpyAllocations() as count:
+        for _ in range(200):
+            stages.step(model, data, 1e-5)
+    assert data.stats["closed_contacts"] - before == 200 and not data.closed[1]
     assert count.sizes == [], (len(count.sizes), sorted(set(count.sizes)))
