@@ -26,6 +26,19 @@ Node to surface with non-matching meshes does not pass the contact patch test (a
 uniform pressure is not transmitted exactly); node to node (matching meshes, a
 plane) does.
 
+Contact: mortar
+---------------
+The gap of slave node k is the weighted mean of the gap field over the slave face,
+g̃_k = ∫ N_k g dA / ∫ N_k dA, with N_k the slave face's shape functions and g(x) the
+gap above at every point x of the face (x, its slave displacement Σ N_j u_j, paired
+with its projection on the master): the standard Lagrange multipliers of a mortar
+(segment-to-segment) method, λ_k [N] the nodal contact forces. The integral is a
+quadrature: each slave triangle is cut into m² sub-triangles (``subdivisions`` m),
+one point at each centroid, each paired with the master triangle under it — so the
+integrand's kinks at the master's edges are resolved as m grows, and the contact patch
+test is passed in the limit (resultant error 1.6e-6, 1.1e-7, 6.4e-9 at m = 4, 8, 16 on
+the non-matching stack of the tests, where node to surface misses it by 0.2–9 %).
+
 Solution
 --------
 With u_p the prescribed DOFs and u_f the free ones (K_ff positive definite: every part
@@ -77,14 +90,21 @@ class Plane:
     offset: float
 
 
+METHODS = ("node-to-surface", "mortar")
+
+
 @dataclass(frozen=True)
 class Pairing:
     """Nodes ``slave_nodes`` of part ``slave`` against ``master``: a :class:`Plane` or
-    (part index, node group of the master's face nodes)."""
+    (part index, node group of the master's face nodes); ``method`` one of
+    :data:`METHODS` (module docstring); ``subdivisions`` the mortar quadrature's
+    sub-triangles per slave triangle edge."""
 
     slave: int
     slave_nodes: np.ndarray
     master: object
+    method: str = "node-to-surface"
+    subdivisions: int = 8
 
 
 @dataclass
@@ -121,8 +141,10 @@ def solve(parts, pairings) -> StaticContactResult:
             dofs = (at + 3 * np.asarray(nodes, dtype=np.int64)[:, None] + np.asarray(components)[None, :]).ravel()
             fixed[dofs], u[dofs] = True, value
     free = ~fixed
-    rows, c0, nodes, unpaired = _gaps(parts, pairings, offsets, n)
-    G = sp.csr_matrix(rows) if len(rows) else sp.csr_matrix((0, n))
+    rows, c0, nodes, unpaired = _gaps(parts, pairings, offsets)
+    G = sp.csr_matrix(([v for row in rows for v in row.values()], ([i for i, row in enumerate(rows) for _ in row],
+                                                                  [dof for row in rows for dof in row])),
+                      shape=(len(rows), n))
     if G.shape[0] == 0:
         raise ModelError("static contact: no slave node projects onto its master")
     K_ff = K[free][:, free].tocsc()
@@ -154,34 +176,76 @@ def _stiffness(part) -> sp.csr_matrix:
     return stiffness_matrix(part.mesh, part.young, part.poisson)
 
 
-def _gaps(parts, pairings, offsets, n):
-    """The gap rows (dense per row, n DOFs), c₀ and the paired slave nodes of every
+def _gaps(parts, pairings, offsets):
+    """The gap rows ({DOF: coefficient}, n DOFs), c₀ and the paired slave nodes of every
     pairing, in order; the number of unpaired slave nodes per pairing."""
     rows, c0, nodes, unpaired = [], [], [], []
     for pairing in pairings:
-        slave = parts[pairing.slave]
+        if pairing.method not in METHODS:
+            raise ModelError(f"static contact: method must be one of {', '.join(METHODS)}, not {pairing.method!r}")
         s_nodes = np.asarray(pairing.slave_nodes, dtype=np.int64)
-        x_s = slave.mesh.points[s_nodes]
+        mesh = parts[pairing.slave].mesh
         at_s = offsets[pairing.slave]
+        if pairing.method == "mortar":
+            points, shapes, areas = _mortar_points(mesh, s_nodes, pairing.subdivisions)
+        else:
+            points, shapes, areas = mesh.points[s_nodes], [{node: 1.0} for node in s_nodes], np.ones(len(s_nodes))
         if isinstance(pairing.master, Plane):
             normal = _unit(pairing.master.normal)
-            found = [(k, normal, normal @ x - pairing.master.offset, (), ()) for k, x in enumerate(x_s)]
+            found = [(k, normal, normal @ x - pairing.master.offset, (), ()) for k, x in enumerate(points)]
+            at_m = 0
         else:
             m_index, m_nodes = pairing.master
-            found = _projections(parts[m_index].mesh, m_nodes, x_s)
+            found = _projections(parts[m_index].mesh, m_nodes, points)
             at_m = offsets[m_index]
-        kept = []
-        for k, normal, g0, m_dofs_nodes, weights in found:
-            row = np.zeros(n)
-            row[at_s + 3 * s_nodes[k]:at_s + 3 * s_nodes[k] + 3] = normal
-            for node, w in zip(m_dofs_nodes, weights):
-                row[at_m + 3 * node:at_m + 3 * node + 3] -= w * normal
-            rows.append(row)
-            c0.append(g0)
-            kept.append(s_nodes[k])
+        row_of, g_of, norm_of = {}, {}, {}        # per slave node: Σ a N (gap row {DOF: value}, reference gap, 1)
+        for k, normal, g0, m_face, m_shape in found:
+            point_row = {}                        # n · (u_slave(x) − u_master(x')) at the point
+            for at, face, shape in ((at_s, shapes[k].keys(), shapes[k].values()), (at_m, m_face, -np.asarray(m_shape))):
+                for node, w in zip(face, shape):
+                    for c in range(3):
+                        dof = at + 3 * node + c
+                        point_row[dof] = point_row.get(dof, 0.0) + w * normal[c]
+            for node, w in shapes[k].items():
+                aw = areas[k] * w
+                row = row_of.setdefault(node, {})
+                for dof, value in point_row.items():
+                    row[dof] = row.get(dof, 0.0) + aw * value
+                g_of[node] = g_of.get(node, 0.0) + aw * g0
+                norm_of[node] = norm_of.get(node, 0.0) + aw
+        kept = [node for node in s_nodes if node in row_of and norm_of[node] != 0.0]
+        for node in kept:                          # the gap: at the node, or its weighted mean ∫N g / ∫N [m]
+            rows.append({dof: value / norm_of[node] for dof, value in row_of[node].items()})
+            c0.append(g_of[node] / norm_of[node])
         nodes.append(np.array(kept, dtype=np.int64))
         unpaired.append(len(s_nodes) - len(kept))
     return rows, np.array(c0), nodes, unpaired
+
+
+def _mortar_points(mesh, s_nodes, m):
+    """Quadrature points of the slave face (its surface triangles within ``s_nodes``), each
+    the centroid of one of the m² sub-triangles of a triangle: (points (P, 3), per point
+    {slave node: its shape function there}, per point the sub-triangle's area [m²])."""
+    faces = mesh.surface_triangles()
+    faces = faces[np.isin(faces, s_nodes).all(axis=1)]
+    if len(faces) == 0:
+        raise ModelError(f"{mesh.source}: no surface face lies within the slave's node group")
+    bary = []
+    for i in range(m):
+        for j in range(m - i):
+            bary.append(((i + 1 / 3) / m, (j + 1 / 3) / m))             # upright sub-triangles
+            if i + j < m - 1:
+                bary.append(((i + 2 / 3) / m, (j + 2 / 3) / m))         # inverted ones
+    points, shapes, areas = [], [], []
+    for face in faces:
+        a, b, c = mesh.points[face[:3]]
+        area = 0.5 * np.linalg.norm(np.cross(b - a, c - a)) / m ** 2
+        for l1, l2 in bary:
+            shape = _triangle_shape(len(face), 1.0 - l1 - l2, l1, l2)
+            points.append(shape @ mesh.points[face])
+            shapes.append(dict(zip(face, shape)))
+            areas.append(area)
+    return np.array(points), shapes, np.array(areas)
 
 
 def _unit(v) -> np.ndarray:
@@ -194,25 +258,29 @@ def _unit(v) -> np.ndarray:
 
 def _projections(mesh, group, points, tol=1e-9):
     """Per point that projects onto a surface triangle of ``mesh`` whose nodes all lie in
-    ``group``: (its index, the triangle's outward unit normal, the reference gap, the
-    triangle's nodes, their shape functions at the projection)."""
+    ``group`` (the first such triangle): (its index, the triangle's outward unit normal,
+    the reference gap, the triangle's nodes, their shape functions at the projection)."""
     faces = mesh.surface_triangles()
     faces = faces[np.isin(faces, np.asarray(group)).all(axis=1)]
     if len(faces) == 0:
         raise ModelError(f"{mesh.source}: no surface face lies within the master's node group")
+    points = np.asarray(points, dtype=float)
+    face_of = np.full(len(points), -1)
+    coords = np.zeros((len(points), 2))
+    for f, face in enumerate(faces):
+        a, b, c = mesh.points[face[:3]]
+        basis = np.column_stack([b - a, c - a])                              # (3, 2)
+        l12 = np.linalg.solve(basis.T @ basis, basis.T @ (points - a).T).T   # area coordinates l1, l2
+        inside = (face_of < 0) & (l12.min(axis=1) >= -tol) & (l12.sum(axis=1) <= 1.0 + tol)
+        face_of[inside], coords[inside] = f, l12[inside]
     found = []
-    for k, x in enumerate(points):
-        for face in faces:
-            a, b, c = mesh.points[face[:3]]
-            normal = np.cross(b - a, c - a)
-            normal /= np.linalg.norm(normal)
-            y = x - (x - a) @ normal * normal                     # the projection
-            l1, l2 = np.linalg.lstsq(np.column_stack([b - a, c - a]), y - a, rcond=None)[0]
-            l0 = 1.0 - l1 - l2
-            if min(l0, l1, l2) < -tol:
-                continue
-            found.append((k, normal, (x - a) @ normal, face, _triangle_shape(len(face), l0, l1, l2)))
-            break
+    for k in np.flatnonzero(face_of >= 0):
+        face = faces[face_of[k]]
+        a, b, c = mesh.points[face[:3]]
+        normal = np.cross(b - a, c - a)
+        normal /= np.linalg.norm(normal)
+        l1, l2 = coords[k]
+        found.append((k, normal, (points[k] - a) @ normal, face, _triangle_shape(len(face), 1.0 - l1 - l2, l1, l2)))
     return found
 
 
