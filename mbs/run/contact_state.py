@@ -15,8 +15,9 @@ and kernel tuples made again on the moved arrays) and each fused detection's ``r
 checkpoint of Data holds the whole contact state, and a step taken back (adaptive Moreau)
 puts it back by copying Data's vectors. A new Data starts from the values the slots held
 when they were first laid out (:meth:`~ContactState.pools`), so the runs of one Model, one
-Data each, start alike, and so do the runs of a System compiled again. An array that views another slot (a point's centre, its point's
-position) is no slot of its own; its owner's ``bind_views`` derives it again.
+Data each, start alike, and so do the runs of a System compiled again. An array that
+views another slot (a point's centre, its point's position) is no slot of its own; its
+owner's ``bind_views`` derives it again.
 
 :meth:`~ContactState.bind` checks that no array of the objects and fused detections is
 left on the old memory (a view a ``bind_views`` forgot would go on reading a copy that
