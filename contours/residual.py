@@ -22,6 +22,12 @@ exact (to rounding) against the full FE static solution for loads the contour ca
 Φ K_n⁻¹ Φᵀ + G_res = G (:func:`preprocess.residual.residual_flexibility`). The linear
 correction is taken on the undeformed contour (B, Ğ at q_f = 0), as G_res itself is.
 
+A point or sphere contour on a node frame of a flexible body (``body.node(j)``,
+:func:`node_of`) is the case of one "control point", the node itself, B = I: its
+:class:`NodeCompliance` c(a, b) is the 3 × 3 block of G_res between two nodes, exact
+against the full FE for forces at the nodes; with the neutral contours of the same body
+it shares G_P (cross-compliances included).
+
 :func:`residual_compliance` builds it for a contour of a flexible body (one sparse
 factorization of the body's stiffness per body: a clamped body's projection Tᵀ G T comes
 from the factor's Schur complement on the loaded DOFs, eq. R4 of :mod:`preprocess.residual`;
@@ -47,6 +53,13 @@ from . import _residual_kernels as RK
 from .derived import OffsetContour
 from .neutral import _kernels as NK
 from .neutral.factory import NeutralContour
+
+
+def node_of(contour) -> int | None:
+    """The FE node a point or sphere contour sits on (its frame a node frame of a
+    flexible body, ``body.node(j)``), else None."""
+    frame = getattr(contour, "frame_ref", None)
+    return None if frame is None else frame.node_index
 
 
 class ResidualCompliance:
@@ -102,6 +115,11 @@ class ResidualCompliance:
         """The body rotation A (3, 3) of the contour's last update."""
         return self.neutral.A
 
+    @property
+    def neutral_kernel(self) -> bool:
+        """c(a, b) between two such contours takes the compiled neutral route."""
+        return self._offset is None
+
     def weights(self, eta, xi, blocks, index) -> int:
         """The blocks B_i (k, 3, 3) of eq. C1 and their control points' indices (k,) in
         G_P at (η, ξ) into ``blocks``, ``index``; returns k. A derived contour's in one
@@ -144,7 +162,7 @@ class ResidualCompliance:
         out = np.zeros((3, 3)) if out is None else out
         (blocks_a, _), (index_a, _) = self._work
         (_, blocks_b), (_, index_b) = other._work
-        if self._offset is None and other._offset is None:
+        if self.neutral_kernel and other.neutral_kernel:
             ga, gb = self._kernel_geometry, other._kernel_geometry
             RK.neutral_between(self.G_P, ga[0], ga[1], ga[2], ga[3], self.offset, float(eta_a), float(xi_a),
                                gb[0], gb[1], gb[2], gb[3], other.offset, float(eta_b), float(xi_b),
@@ -157,6 +175,70 @@ class ResidualCompliance:
 
     def at(self, eta, xi=0.0, out=None) -> np.ndarray:
         """c(a, a) (3, 3) [m/N] in body axes at (η, ξ) (eq. C2)."""
+        return self.between(eta, xi, eta, xi, out=out)
+
+
+class NodeCompliance:
+    """The residual compliance at a point or sphere contour on a node of a flexible body
+    (:func:`node_of`): eq. C2 with one "control point", the node itself (B = I), so
+    c(a, b) is the 3 × 3 block of G_P between two such nodes, or eq. C2 with B(a) = I
+    against a neutral contour's point. Same interface as :class:`ResidualCompliance`
+    (the surface coordinates are not used).
+
+    Parameters
+    ----------
+    contour : PointContour or SphereContour on ``body.node(j)``
+    G_P : (3 n, 3 n) [m/N]
+        As for :class:`ResidualCompliance`.
+    offset : int
+        The node's place among G_P's points.
+    """
+
+    neutral_kernel = False
+
+    def __init__(self, contour, G_P, offset=0):
+        self.contour, self.n_P, self.offset = contour, 1, int(offset)
+        self.G_P = np.ascontiguousarray(G_P, dtype=float)
+        if self.G_P.shape[0] < 3 * (self.offset + 1):
+            raise ModelError(f"{contour.name}: residual flexibility of shape {self.G_P.shape} does not hold its "
+                             f"node at {self.offset}")
+        self._work = np.zeros((2, 1, 3, 3)), np.zeros((2, 1), dtype=np.int64)
+        for k in range(2):
+            self.weights(0.0, 0.0, self._work[0][k], self._work[1][k])
+        self._rotation = np.zeros((3, 3))
+
+    @property
+    def rotation(self) -> np.ndarray:
+        """The body rotation A (3, 3) of the contour's last update: its frame's axes
+        without the frame's constant orientation relative to the body."""
+        return np.matmul(self.contour.axes, self.contour.frame_ref.A_rel.T, out=self._rotation)
+
+    def weights(self, eta, xi, blocks, index) -> int:
+        """B = I at the node (eq. C1 with one point) into ``blocks``, ``index``; returns 1."""
+        blocks[0] = np.eye(3)
+        index[0] = self.offset
+        return 1
+
+    def between(self, eta_a, xi_a, eta_b, xi_b, other=None, out=None) -> np.ndarray:
+        """c(a, b) (3, 3) [m/N] in body axes: the displacement at this node per unit force
+        at (η_b, ξ_b) of ``other`` (a node or a neutral contour of the same body sharing G_P)."""
+        other = self if other is None else other
+        if other.G_P is not self.G_P:
+            raise ModelError(f"{self.contour.name} and {other.contour.name}: no cross-compliance (not built together "
+                             "by residual_compliances)")
+        out = np.zeros((3, 3)) if out is None else out
+        if isinstance(other, NodeCompliance):
+            a, b = 3 * self.offset, 3 * other.offset
+            out[...] = self.G_P[a:a + 3, b:b + 3]
+            return out
+        (blocks_a, _), (index_a, _) = self._work
+        (_, blocks_b), (_, index_b) = other._work
+        kb = other.weights(eta_b, xi_b, blocks_b, index_b)
+        RK.compliance_between(self.G_P, blocks_a, index_a, 1, blocks_b, index_b, kb, out)
+        return out
+
+    def at(self, eta=0.0, xi=0.0, out=None) -> np.ndarray:
+        """c(a, a) (3, 3) [m/N] at the node."""
         return self.between(eta, xi, eta, xi, out=out)
 
 
@@ -174,7 +256,11 @@ def neutral_of(contour) -> NeutralContour:
 def transfer_matrix(contour) -> sp.csr_matrix:
     """T (3N, 3 n_P): column 3 i + d is the nodal load of a unit force along body axis d on
     control point i of ``contour`` (Fᵀ scattered on the contour's nodes, module
-    docstring)."""
+    docstring); a node contour's (:func:`node_of`) three columns load its node."""
+    node = node_of(contour)
+    if node is not None:
+        n_dof = 3 * contour.body.data.n_nodes
+        return sp.csr_matrix((np.ones(3), (3 * node + np.arange(3), np.arange(3))), shape=(n_dof, 3))
     neutral = neutral_of(contour)
     nodes = np.asarray(neutral.nodes).reshape(-1)
     k = nodes.size
@@ -219,14 +305,15 @@ def residual_compliances(contours, flexibility=None, cache_dir=None) -> list:
     ``cache_dir``: a directory where Tᵀ G T (the costly part, independent of the modes
     kept) is read or written, keyed by the body's matrices and the contours' fitting
     matrices (:func:`_key`)."""
-    neutrals = [neutral_of(c) for c in contours]
-    body = neutrals[0].body
-    if any(n.body is not body for n in neutrals):
+    nodes = [node_of(c) for c in contours]
+    neutrals = [None if j is not None else neutral_of(c) for c, j in zip(contours, nodes)]
+    body = contours[0].body
+    if any(c.body is not body for c in contours):
         raise ModelError("residual_compliances: the contours are on different bodies")
-    sizes = [int(np.prod(n.space.ctrl_shape)) for n in neutrals]
+    sizes = [1 if n is None else int(np.prod(n.space.ctrl_shape)) for n in neutrals]
     TGT = path = None
     if cache_dir is not None:
-        path = Path(cache_dir) / f"residual-{_key(body.data, neutrals)}.npy"
+        path = Path(cache_dir) / f"residual-{_key(body.data, neutrals, nodes)}.npy"
         if path.is_file():
             TGT = np.load(path, allow_pickle=False)
             if TGT.shape != (3 * sum(sizes),) * 2:
@@ -237,11 +324,13 @@ def residual_compliances(contours, flexibility=None, cache_dir=None) -> list:
         if path is not None:
             _save(path, TGT)
     n_f = body.K_ff.shape[0]
-    phi_t = np.vstack([n.mode_shapes.ctrl.reshape(-1, n_f) if n_f else np.zeros((3 * k, 0))
-                       for n, k in zip(neutrals, sizes)]).T                          # Φᵀ T (n_f, 3 n_P)
+    phi_t = np.vstack([np.zeros((3 * k, 0)) if not n_f else
+                       c.frame_ref.phi if n is None else n.mode_shapes.ctrl.reshape(-1, n_f)
+                       for c, n, k in zip(contours, neutrals, sizes)]).T              # Φᵀ T (n_f, 3 n_P)
     G_P = residual_flexibility(TGT, phi_t, body.K_ff)
     offsets = np.cumsum([0] + sizes)
-    return [ResidualCompliance(c, G_P, int(o)) for c, o in zip(contours, offsets)]
+    return [(ResidualCompliance if n is not None else NodeCompliance)(c, G_P, int(o))
+            for c, n, o in zip(contours, neutrals, offsets)]
 
 
 def residual_compliance(contour, flexibility=None, cache_dir=None) -> ResidualCompliance:
@@ -249,12 +338,12 @@ def residual_compliance(contour, flexibility=None, cache_dir=None) -> ResidualCo
     return residual_compliances([contour], flexibility, cache_dir)[0]
 
 
-def _key(data, neutrals) -> str:
+def _key(data, neutrals, nodes) -> str:
     """Hash of what Tᵀ G T depends on: K, the masses (and the consistent mass matrix if
     the body has one), the node positions, the supports,
-    and per contour its nodes, knots and the fitting matrix F, fingerprinted by the
+    and per neutral contour its nodes, knots and the fitting matrix F, fingerprinted by the
     control points of a fixed pseudo-random nodal field (F r: equal for two F only if
-    they are equal, with probability one)."""
+    they are equal, with probability one); per node contour its node."""
     h = hashlib.sha256()
     K = sp.csr_matrix(data.stiffness)
     for a in (K.indptr, K.indices, K.data, data.masses, data.u0, clamped_nodes_of(data)):
@@ -263,10 +352,13 @@ def _key(data, neutrals) -> str:
         M = sp.csr_matrix(data.mass_matrix)
         for a in (M.indptr, M.indices, M.data):
             h.update(np.ascontiguousarray(a).tobytes())
-    for n in neutrals:
-        nodes = np.asarray(n.nodes)
-        field = np.random.default_rng(12345).standard_normal(nodes.shape + (2,))
-        for a in (nodes, *n.space.geometry, n.space.interpolate(field)):
+    for n, node in zip(neutrals, nodes):
+        if n is None:
+            h.update(np.array([-1, node], dtype=np.int64).tobytes())
+            continue
+        grid = np.asarray(n.nodes)
+        field = np.random.default_rng(12345).standard_normal(grid.shape + (2,))
+        for a in (grid, *n.space.geometry, n.space.interpolate(field)):
             h.update(np.ascontiguousarray(a).tobytes())
     return h.hexdigest()[:20]
 

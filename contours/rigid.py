@@ -16,6 +16,11 @@ nothing: r = q + ū0, ṙ = u, with the constant orientation A_rel, ω = 0, J_T 
 J_R = 0 set once (the same values the frame's methods give; compared in
 ``tests/unit/contact/test_compiled_contact.py``). ``evaluate`` runs the kernels of
 :mod:`contours._rigid_kernels` on the state.
+
+A point or a sphere on the frame of a node of a flexible body (``body.node(j)``) may
+carry the static compliance of the modes its body leaves out at that node
+(``residual_flexibility``, :class:`contours.residual.NodeCompliance`): a contact on it
+then sees the node's own deflection, as a corrected neutral contour's contacts see theirs.
 """
 
 from __future__ import annotations
@@ -36,10 +41,14 @@ class _FrameContour(Contour):
 
     state_slots = ("state",)    # what update() wrote (the run state, mbs.run.contact_state)
 
-    def __init__(self, frame, name):
+    def __init__(self, frame, name, residual_flexibility=False):
         body = None if frame.is_ground else frame.body
         super().__init__(body, name)
         self.frame_ref = frame
+        if residual_flexibility and (getattr(frame, "node_index", None) is None or not hasattr(body, "K_ff")):
+            raise ModelError(f"{name}: residual flexibility needs the frame of a node of a flexible body "
+                             "(body.node(j)), where the dropped modes' static compliance is that of the node")
+        self.residual_flexibility = bool(residual_flexibility)
         self.state = np.zeros(J_AT + 6 * self.nu)
         self.bind_views()
         self._A[:] = np.eye(3)
@@ -58,6 +67,11 @@ class _FrameContour(Contour):
         self._w = s[W_AT:J_AT]
         self._J_T = s[J_AT:J_AT + 3 * nu].reshape(3, nu)
         self._J_R = s[J_AT + 3 * nu:].reshape(3, nu)
+
+    @property
+    def axes(self) -> np.ndarray:
+        """Orientation of the frame (3, 3) at the last update (a view)."""
+        return self._A
 
     def update(self, q, u=None, t=0.0) -> None:
         """The frame's position, orientation and Jacobians at (q, t) and, with u, its
@@ -86,8 +100,8 @@ class PointContour(_FrameContour):
     domain = ()
     closed = ()
 
-    def __init__(self, frame, name="point"):
-        super().__init__(frame, name)
+    def __init__(self, frame, name="point", residual_flexibility=False):
+        super().__init__(frame, name, residual_flexibility)
 
     def evaluate(self, point, eta=0.0, xi=0.0, velocity=False, jacobians=False):
         point.eta, point.xi = eta, xi
@@ -106,13 +120,13 @@ class SphereContour(_FrameContour):
 
     dim = 2
 
-    def __init__(self, frame, radius, name="sphere"):
+    def __init__(self, frame, radius, name="sphere", residual_flexibility=False):
         if not radius > 0:
             raise ModelError(f"{name}: radius must be positive, got {radius}")
         self.radius = float(radius)
         self.domain = ((0.0, 2.0 * np.pi), (-0.5 * np.pi, 0.5 * np.pi))
         self.closed = (True, False)
-        super().__init__(frame, name)
+        super().__init__(frame, name, residual_flexibility)
 
     def evaluate(self, point, eta, xi=0.0, velocity=False, jacobians=False):
         """The point at longitude η and latitude ξ [rad] in the frame's axes
@@ -125,11 +139,6 @@ class SphereContour(_FrameContour):
     def centre(self) -> np.ndarray:
         """Inertial centre [m] at the last update (a view)."""
         return self._r
-
-    @property
-    def axes(self) -> np.ndarray:
-        """Orientation of the sphere's frame (3, 3) at the last update (a view)."""
-        return self._A
 
     def bounding_box(self, out=None):
         out = np.empty((2, 3)) if out is None else out

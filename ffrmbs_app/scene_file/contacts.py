@@ -101,6 +101,15 @@ class ContactReader:
         t.fail("margin", f"'margin' must be a length [m] >= 0, \"auto\" or \"off\", got {describe(value)}")
 
     # --- the contours --------------------------------------------------------------------------------
+    @staticmethod
+    def _node_residual(c: Table, frame) -> bool:
+        """A point's or sphere's ``residual_flexibility``: only at a node of a flexible body."""
+        residual = c.get("residual_flexibility")
+        if residual and frame.node is None:
+            c.fail("residual_flexibility", "residual flexibility needs the point at a 'node' (or 'at') of a flexible "
+                                           "body: the dropped modes' compliance is that of a node")
+        return residual
+
     def _contour(self, t: Table, key, kinds):
         """(kind, body name or "ground", make(env) -> Contour) of the contour table ``key``.
         Either side may be on the ground: a point on the ground against a surface on a
@@ -113,17 +122,19 @@ class ContactReader:
         if kind == "point":
             frame = frame_of(self.bodies, c)
             owner = frame.body
+            residual = self._node_residual(c, frame)
 
             def make(env):
-                return cls(frame.resolve(env))
+                return cls(frame.resolve(env), residual_flexibility=residual)
 
         elif kind == "sphere":
             frame = frame_of(self.bodies, c)
             owner = frame.body
             radius = c.get("radius")
+            residual = self._node_residual(c, frame)
 
             def make(env):
-                return cls(frame.resolve(env), radius)
+                return cls(frame.resolve(env), radius, residual_flexibility=residual)
 
         elif kind == "plane":
             frame = frame_of(self.bodies, c, GROUND)

@@ -171,7 +171,10 @@ A ``force`` or ``torque`` is a constant ``[x, y, z]``, or a table
 Gravity is ``[scene] gravity``.
 
 ``[[contact]]`` (:class:`contact.Contact`). ``name`` ("contact <i>", unique).
-``contour1`` *req.*: ``{ kind = "point" | "sphere", <frame>, radius }``.
+``contour1`` *req.*: ``{ kind = "point" | "sphere", <frame>, radius, residual_flexibility = false }``;
+at a ``node`` of a flexible body, ``residual_flexibility = true`` gives the node the static
+compliance of the modes its body leaves out (:class:`contours.residual.NodeCompliance`): a
+part pressed on another through points at its nodes deflects there as the full model does.
 Either contour may be on the ground, not both: points on the ground
 (``body = "ground"``) against a surface on a body model a part landing on a rigid
 support, the part's own surface (and its residual flexibility) taking the contact.
@@ -488,8 +491,11 @@ _CURVE = {"kind": _KIND, "body": FRAME["body"], "start": _vector(REQUIRED, "m"),
           "smoothing": Key("number", SMOOTHING, low=0.0, doc="the fit's weight of the curvature energy"),
           "residual_flexibility": Key("boolean", False, doc="contacts see the dropped modes' static compliance")}
 CONTOUR = {
-    "point": {"kind": _KIND, **FRAME},
-    "sphere": {"kind": _KIND, **FRAME, "radius": _length(low=0.0, strict=True)},
+    "point": {"kind": _KIND, **FRAME,
+              "residual_flexibility": Key("boolean", False, doc="at a 'node' of a flexible body: contacts see the "
+                                                                 "dropped modes' static compliance of the node")},
+    "sphere": {"kind": _KIND, **FRAME, "radius": _length(low=0.0, strict=True),
+               "residual_flexibility": Key("boolean", False, doc="as for a point")},
     "plane": {"kind": _KIND, **FRAME, "normal": _vector((0.0, 0.0, 1.0)),
               "size": _length(1.0, strict=True)},
     "2s": {"kind": _KIND, "body": FRAME["body"],

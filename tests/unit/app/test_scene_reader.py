@@ -563,3 +563,38 @@ def test_outputs_say_what_they_are(body_dir, sink_path):
     assert scene.labels == {"tip": f"beam node {nearest} (nearest to (0.25, 0.05, 0.05) m) position", "tip_v": "beam node 7 velocity",
                             "tip_u": "clamped node 7 displacement y", "spin": "block angular velocity",
                             "modal": "beam modal coordinates q_f", "bob": "bob point (0, 0, 0.1) m position"}
+
+
+NODE_POINT = fixture_text("scenes/beam_block_bob.toml") + """
+[[contact]]
+name = "tip on floor"
+contour1 = { kind = "point", body = "beam", node = 5, residual_flexibility = true }
+contour2 = { kind = "plane", point = [0.0, -1.0, 0.0], normal = [0.0, 1.0, 0.0] }
+law = "impact"
+
+[[contact]]
+name = "ball at a node"
+contour1 = { kind = "sphere", body = "beam", at = [0.25, 0.05, 0.05], radius = 0.01, residual_flexibility = true }
+contour2 = { kind = "plane", point = [0.0, 1.0, 0.0], normal = [0.0, -1.0, 0.0] }
+law = "impact"
+"""
+
+
+def test_a_point_or_sphere_at_a_node_takes_residual_flexibility(body_dir):
+    from contours.residual import NodeCompliance
+    from mbs.run.residual_contact import ResidualContacts
+
+    path = body_dir.parent / "node-points.toml"
+    path.write_text(NODE_POINT)
+    contacts = read_scene(path).system.contacts[-2:]
+    tip, ball = (c.kinematics.contour1 for c in contacts)
+    assert tip.residual_flexibility and tip.frame_ref.node_index == 5
+    assert ball.residual_flexibility and ball.frame_ref.node_index is not None
+    compliances = ResidualContacts(contacts, [True, True]).compliances
+    assert all(isinstance(compliances[id(c)], NodeCompliance) for c in (tip, ball))
+    assert_fault_at(body_dir.parent / "node-points-fault.toml", NODE_POINT,
+                    'body = "beam", node = 5, residual_flexibility = true',
+                    'body = "beam", point = [0.25, 0.05, 0.0], residual_flexibility = true',
+                    "contact 'tip on floor': contour1 (point): residual flexibility needs the point at a 'node'",
+                    'contour1 = { kind = "point", body = "beam", point = [0.25, 0.05, 0.0], '
+                    'residual_flexibility = true }')

@@ -144,6 +144,48 @@ def test_cross_compliance_between_contours_and_points(clamped_data):
         residual_compliance(made["2s"]).between(0.08, 0.007, 0.03, 0.0, other=residual_compliance(made["1s"]))
 
 
+@pytest.mark.parametrize("support", ["clamped", "free"])
+@pytest.mark.parametrize("n", [5, 20])
+def test_a_point_on_a_node_sees_the_full_fe_deflection_of_its_node(support, n, clamped_data, free_data):
+    """Points and a sphere on node frames (contours.residual.NodeCompliance), built together
+    with the top face's 2s contour: the modes' static deflection of node a under a force
+    at node b plus c(a, b) is the full model's G[a, b]; between a node and the 2s contour's
+    point (η, ξ), Tₐᵀ G T_b; c(a, b) = c(b, a)ᵀ."""
+    from contours import PointContour, SphereContour
+
+    data = clamped_data if support == "clamped" else free_data
+    beam = FlexibleBodyFFR(data, modes=n, frame=PrescribedFrameMotion.fixed() if support == "clamped" else "free")
+    top_nodes = data.node_groups["y1"]
+    a, b = int(top_nodes[-1]), int(top_nodes[len(top_nodes) // 2])
+    points = [PointContour(beam.node(a), residual_flexibility=True),
+              SphereContour(beam.node(b), 0.002, residual_flexibility=True)]
+    face = Contour2sNeutralFFR(beam, "y1")
+    pa, pb, top = residual_compliances(points + [face])
+    G = full_flexibility(data)
+    G_res = G - beam.phi @ np.linalg.solve(beam.K_ff, beam.phi.T)
+    for ca, j in ((pa, a), (pb, b)):
+        for cb, k in ((pa, a), (pb, b)):
+            c = ca.between(0.0, 0.0, 0.0, 0.0, other=cb)
+            modal = beam.phi_nodes[j] @ np.linalg.solve(beam.K_ff, beam.phi_nodes[k].T)
+            full = G[3 * j:3 * j + 3, 3 * k:3 * k + 3]
+            assert np.abs(modal + c - full).max() < RTOL * np.abs(G[3 * a:3 * a + 3, 3 * a:3 * a + 3]).max()
+    T = np.hstack([transfer_matrix(c).toarray() for c in points + [face]])       # G_P's columns, in order
+    Tb = point_pattern(top, T, 0.05, 0.011)
+    c_ab = pa.between(0.0, 0.0, 0.05, 0.011, other=top)
+    assert np.allclose(c_ab, G_res[3 * a:3 * a + 3] @ Tb, rtol=0, atol=RTOL * np.abs(c_ab).max())
+    assert np.allclose(c_ab, top.between(0.05, 0.011, 0.0, 0.0, other=pa).T, rtol=1e-12, atol=0)
+    assert np.abs(pa.at()).max() > 1e-2 * np.abs(G[3 * a:3 * a + 3, 3 * a:3 * a + 3]).max()   # it matters
+
+
+def test_a_point_off_a_node_cannot_carry_residual_flexibility(clamped_data):
+    from contours import PointContour
+    from mbs import Frame
+
+    beam = FlexibleBodyFFR(clamped_data, modes=5, frame=PrescribedFrameMotion.fixed())
+    with pytest.raises(ModelError, match="needs the frame of a node of a flexible body"):
+        PointContour(Frame(beam, (0.05, 0.02, 0.01)), residual_flexibility=True)
+
+
 @pytest.mark.filterwarnings("ignore:neutral 2s")
 @pytest.mark.parametrize("kind", ["2s", "fitted", "1s", "band"])
 def test_load_pattern_is_the_contours_displacement(kind, clamped_data):
