@@ -21,9 +21,11 @@ deflection opens the gap.
 
 from __future__ import annotations
 
+import numpy as np
+
 from contact.kinematics import PointOnCurveConstraint
-from contours._residual_kernels import add_contact_block
-from contours.residual import residual_compliances
+from contours._residual_kernels import add_contact_block, add_node_blocks
+from contours.residual import NodeCompliance, residual_compliances
 from ffrmbs.errors import ModelError
 
 from mbs.run import _stage_kernels as SK
@@ -53,6 +55,13 @@ class ResidualContacts:
     skip : tuple of int
         Per contact the first tangent of its rows: 0 for [n, t1, t2] (a contact), 1 for
         [n, t2] (a point kept on a curve, :class:`contact.CurveConstraint`).
+    node_G : (3 k, 3 k) array or None
+        When every corrected contour sits at a node (:class:`~contours.residual.NodeCompliance`,
+        a face of point contacts): the bodies' node compliances, block diagonal, which one
+        kernel reads for all pairs of closed sides (:func:`contours._residual_kernels.add_node_blocks`);
+        else None.
+    node_place : dict
+        Per such contour (by id) its node's place in ``node_G`` and its body's index.
     """
 
     def __init__(self, contacts, set_valued, cache_dir=None):
@@ -84,9 +93,27 @@ class ResidualContacts:
         self.sides = tuple(sides)
         self.compliant = tuple(bool(s) for s in sides)
         self.skip = tuple(int(isinstance(c.kinematics, PointOnCurveConstraint)) for c in contacts)
+        self.node_G, self.node_place = None, {}
+        if self.compliances and all(isinstance(rc, NodeCompliance) for rc in self.compliances.values()):
+            self.node_G, self.node_place = _node_table(self.compliances)
 
     def __bool__(self):
         return any(self.compliant)
+
+
+def _node_table(compliances) -> tuple:
+    """(node_G, node_place) of :class:`ResidualContacts` from node compliances."""
+    bodies, base, n = {}, {}, 0
+    for rc in compliances.values():
+        if id(rc.G_P) not in bodies:
+            bodies[id(rc.G_P)], base[id(rc.G_P)] = len(bodies), n
+            n += rc.G_P.shape[0] // 3
+    G = np.zeros((3 * n, 3 * n))
+    for rc in compliances.values():
+        a = 3 * base[id(rc.G_P)]
+        G[a:a + rc.G_P.shape[0], a:a + rc.G_P.shape[0]] = rc.G_P
+    place = {key: (base[id(rc.G_P)] + rc.offset, bodies[id(rc.G_P)]) for key, rc in compliances.items()}
+    return G, place
 
 
 def assemble(model, data, dt) -> int:
@@ -125,6 +152,10 @@ def assemble(model, data, dt) -> int:
     C = data.compliance(r)
     C.fill(0.0)
     c, work = data.comp_c, data.comp_work
+    if rc.node_G is not None:
+        _node_blocks(rc, data, entries, n_e, C)
+        data.comp_r = r
+        return r
     for a in range(n_e):
         ra, da, sa, ca, eta_a, xi_a, ka, ta = entries[a]
         for b in range(n_e):
@@ -134,6 +165,20 @@ def assemble(model, data, dt) -> int:
                 add_contact_block(C, ra, da, rb, db, sa * sb, ka.n, ka.T, ta, kb.n, kb.T, tb, ca.rotation, c, work)
     data.comp_r = r
     return r
+
+
+def _node_blocks(rc, data, entries, n_e, C) -> None:
+    """The pair loop of :func:`assemble` in one kernel, every side at a node
+    (:func:`contours._residual_kernels.add_node_blocks`)."""
+    ints, signs, normals, tangents, rotations = data.comp_nodes
+    for e in range(n_e):
+        row, dim, sign, comp, eta, xi, k, skip = entries[e]
+        ints[e] = (row, dim, *rc.node_place[id(comp.contour)], skip)
+        signs[e] = sign
+        normals[e] = k.n
+        tangents[e] = k.T
+        rotations[e] = comp.rotation
+    add_node_blocks(C, rc.node_G, n_e, ints, signs, normals, tangents, rotations, data.comp_c, data.comp_work)
 
 
 def store(model, data) -> None:

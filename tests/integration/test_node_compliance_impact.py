@@ -34,8 +34,8 @@ def rod_data():
 
 
 def landing(data, residual):
-    """(energy at the end / at the start, the contact intervals [(on, off)] [s]) of the rod
-    landing 1 µm above the plane."""
+    """(energy at the end / at the start, the contact intervals [(on, off)] [s], the
+    Result) of the rod landing 1 µm above the plane."""
     system = System()
     rod = FlexibleBodyFFR(data, modes=MODES, name="rod")
     rod.q_init[2], rod.u_init[2] = 1e-6, -V
@@ -50,14 +50,27 @@ def landing(data, residual):
     t, pressed = res.trace["t"], res.trace["pressed"] > 0
     edges = np.flatnonzero(np.diff(pressed.astype(int)))
     intervals = [(t[a + 1], t[b]) for a, b in zip(edges[::2], edges[1::2])]
-    return energy[-1] / (0.5 * rod.mass * V ** 2), intervals
+    return energy[-1] / (0.5 * rod.mass * V ** 2), intervals, res
 
 
 def test_a_face_of_compliant_points_keeps_one_interval_of_2l_over_c_and_the_energy(rod_data):
-    kept, intervals = landing(rod_data, residual=True)
+    kept, intervals, _ = landing(rod_data, residual=True)
     assert len(intervals) == 1, intervals
     (on, off), = intervals
     assert off - on == pytest.approx(WAVE, rel=0.1)
     assert kept == pytest.approx(1.0, abs=5e-3)
-    rigid, _ = landing(rod_data, residual=False)
+    rigid = landing(rod_data, residual=False)[0]
     assert rigid < 0.9
+
+
+def test_the_node_blocks_kernel_is_the_pair_loop(rod_data, monkeypatch):
+    """The face's landing with its compliance assembled by the one kernel over all pairs
+    of sides at nodes (ResidualContacts.node_G) equals, bit for bit, the landing with the
+    pair loop over ``between`` and ``add_contact_block`` (node_G switched off)."""
+    from mbs.run import residual_contact
+
+    kernel = landing(rod_data, residual=True)[2]
+    monkeypatch.setattr(residual_contact, "_node_table", lambda compliances: (None, {}))
+    loop = landing(rod_data, residual=True)[2]
+    assert kernel.trace["pressed"].any()
+    assert np.array_equal(kernel.q, loop.q) and np.array_equal(kernel.u, loop.u)
