@@ -18,7 +18,9 @@ from ffrmbs.caches import configure_numba
 
 configure_numba()      # numba's cache directory, before any kernel is defined (ffrmbs.caches)
 
-from .contact import Contact, ContactElement, CurveConstraint, connect
+from .connect import connect
+from .contact import Contact, ContactElement, CurveConstraint
+from .face import FaceContact
 from .kinematics import (ContactKinematics, ContactKinematicsPointContour1s, ContactKinematicsPointContour2s,
                          ContactKinematicsPointPlane, ContactKinematicsPointSphere, ContactKinematicsSphereContour1s,
                          ContactKinematicsSphereEdge,
@@ -34,7 +36,7 @@ __all__ = ["BILATERAL_KINEMATICS", "Bilateral", "Contact", "Contact1sSearch", "C
            "ContactKinematicsPointContour1s", "ContactKinematicsPointContour2s", "ContactKinematicsPointPlane",
            "ContactKinematicsPointSphere",
            "ContactKinematicsSphereContour1s", "ContactKinematicsSphereContour2s", "ContactKinematicsSphereEdge", "ContactKinematicsSpherePlane",
-           "ContactKinematicsSphereSphere", "ContactSolution", "CurveConstraint", "LAWS",
+           "ContactKinematicsSphereSphere", "ContactSolution", "CurveConstraint", "FaceContact", "LAWS",
            "LinearRegularizedUnilateralConstraint", "PAIR_KINEMATICS", "PointOnCurveConstraint", "ProxSolver",
            "RegularizedCoulombFriction", "SOLVERS", "SpatialCoulombFriction", "UnilateralCoulombContact",
            "UnilateralNewtonImpact", "connect", "make_law"]

@@ -33,11 +33,8 @@ import numpy as np
 
 from ffrmbs.errors import ModelError
 
-from contours.registry import CONTOURS
-
 from ._detection_kernels import boxes_overlap
 from .kinematics import ContactKinematics, PointOnCurveConstraint
-from .registry import BILATERAL_KINEMATICS, PAIR_KINEMATICS, make_law
 from .laws import Bilateral, RegularizedCoulombFriction, UnilateralCoulombContact, UnilateralNewtonImpact
 
 SET_VALUED = (UnilateralNewtonImpact, UnilateralCoulombContact)
@@ -156,17 +153,3 @@ class CurveConstraint(ContactElement):
         """W (nu, 2) = [w_n, w_t2] of the point on the curve into the columns col, col + 1
         of ``out`` (nu, ·)."""
         self.kinematics.W(out[:, col:col + 2])
-
-
-def connect(contour1, contour2, law, friction=None, name="contact", margin="auto"):
-    """The contact between ``contour1`` (point side) and ``contour2`` (surface side) with
-    the kinematics registered for their kinds: a :class:`Contact` with
-    :data:`contact.PAIR_KINEMATICS`, or for a :class:`~contact.laws.Bilateral` law a
-    :class:`CurveConstraint` with :data:`contact.BILATERAL_KINEMATICS` (contour kinds:
-    :data:`contours.CONTOURS`). ``law`` is a law or a name of :data:`contact.LAWS` (its
-    default parameters); ``friction``, ``margin`` [m] as for :class:`Contact`."""
-    law = make_law(law) if isinstance(law, str) else law
-    kinds = (CONTOURS.name_of(contour1), CONTOURS.name_of(contour2))
-    if isinstance(law, Bilateral):
-        return CurveConstraint(BILATERAL_KINEMATICS[kinds](contour1, contour2), name=name)
-    return Contact(PAIR_KINEMATICS[kinds](contour1, contour2), law, friction=friction, name=name, margin=margin)

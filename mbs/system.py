@@ -30,6 +30,7 @@ import logging
 import numpy as np
 
 from contact.contact import ContactElement
+from contact.face import FaceContact
 from ffrmbs.errors import ModelError
 
 from mbs.bodies.body import Body, Frame, ground_frame, place_bodies
@@ -55,7 +56,8 @@ class System:
 
     # --- building -----------------------------------------------------------------------
     def add(self, item):
-        """Add a body, a force element or a constraint; returns it (for chaining)."""
+        """Add a body, a force element, a constraint or a contact (a face contact: each of
+        its point contacts); returns it (for chaining)."""
         if isinstance(item, Body):
             if any(item is b for b in self.bodies):
                 raise ModelError(f"body {item.name!r} is already in this system")
@@ -65,6 +67,9 @@ class System:
             self.nu += item.nu
             self.bodies.append(item)
             self.com_frames.append(item.com_frame())
+        elif isinstance(item, FaceContact):
+            for point in item.contacts():
+                self.add(point)
         elif isinstance(item, (ForceElement, Constraint, ContactElement)):
             for body in item.bodies():
                 if body is not None and body not in self.bodies:
@@ -79,7 +84,7 @@ class System:
                 self.forces.append(item)
         else:
             raise ModelError(f"cannot add {item!r} to a System: expected a body, a force "
-                             "element, a constraint or a contact")
+                             "element, a constraint, a contact or a face contact")
         return item
 
     def frame(self, position=(0.0, 0.0, 0.0), orientation=None, name=None) -> Frame:

@@ -16,7 +16,8 @@ from contours.node_grid import node_path
 from ffrmbs.errors import ModelError
 
 from .frames import Env, body_of, frame_of, nodes_of
-from .schema import CONTACT, CONTOUR, CONTOUR1_KINDS, CONTOUR2_KINDS, GROUND, Key, friction_keys, law_keys
+from .schema import (CONTACT, CONTOUR, CONTOUR1_KINDS, CONTOUR2_KINDS, FACE_KINDS, GROUND, Key, friction_keys,
+                     law_keys)
 from .tables import Table, describe, is_int, is_number, run
 
 
@@ -50,7 +51,9 @@ class ContactReader:
             if body1 == GROUND and body2 == GROUND:
                 t.fail("contour2", "both contours are on the ground: the contact would act on nothing")
             pairs = BILATERAL_KINEMATICS if bilateral else PAIR_KINEMATICS
-            if (kind1, kind2) not in pairs:
+            if kind1 in FACE_KINDS and bilateral:
+                t.fail("law", f"a face (contour1 kind {kind1!r}) takes a unilateral law, not {law!r}")
+            if ("point" if kind1 in FACE_KINDS else kind1, kind2) not in pairs:
                 known = [f"{a}/{b}" for a, b in pairs if a in CONTOUR1_KINDS and b in CONTOUR2_KINDS]
                 t.fail("law", f"law {law!r} has no kinematics for contour1 kind {kind1!r} and contour2 kind "
                               f"{kind2!r} (contour1/contour2 kinds it takes: {', '.join(known)})")

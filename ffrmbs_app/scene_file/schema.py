@@ -175,6 +175,10 @@ Gravity is ``[scene] gravity``.
 at a ``node`` of a flexible body, ``residual_flexibility = true`` gives the node the static
 compliance of the modes its body leaves out (:class:`contours.residual.NodeCompliance`): a
 part pressed on another through points at its nodes deflects there as the full model does.
+Or a face: ``contour1`` a "2s" or "1s" contour of a flexible body (the keys of
+``contour2`` below) makes a face contact (:class:`contact.FaceContact`), a point contact at
+each of its nodes against ``contour2`` with the contact's law, named "<name>/<node>", each
+with its node's residual flexibility when the face has ``residual_flexibility = true``.
 Either contour may be on the ground, not both: points on the ground
 (``body = "ground"``) against a surface on a body model a part landing on a rigid
 support, the part's own surface (and its residual flexibility) taking the contact.
@@ -514,7 +518,8 @@ CONTOUR = {
     "cylinder": {**_CURVE, "radius": _length(low=0.0, strict=True)},
     "edge": _CURVE,
 }
-CONTOUR1_KINDS = ("point", "sphere")
+FACE_KINDS = ("2s", "1s")      # contour1 kinds that make a face contact (contact.face.FaceContact)
+CONTOUR1_KINDS = ("point", "sphere") + FACE_KINDS
 CONTOUR2_KINDS = ("2s", "1s", "band", "cylinder", "edge", "plane", "sphere")
 LAW_DEFAULTS = {"coulomb": {"e": 0.0}}                   # scene defaults where the law class has none
 
