@@ -204,6 +204,30 @@ def test_inelastic_impacts_through_the_spring_gain_at_most_the_sliding_exchange(
     assert 1e-5 < sliding[1] < 1e-3 and abs(sliding[0] / sliding[1] - 1.0) < 0.1, sliding
 
 
+def test_a_face_of_masses_on_a_corrected_plate_loses_energy_and_gains_none():
+    """25 point masses (1.4 g each, 7 mm apart) land side by side at 0.5 m/s on a clamped
+    aluminium plate's top face (tet4, 10 modes plus the correction), e = 0, Gauss–Seidel:
+    the masses rebound and the energy after the contact lies within 1 % below the start
+    (the impact's and the releases' O(Δt) changes). Closed contacts that carry no force
+    while their points are deflected by the others' forces keep their deflection rate;
+    zeroing it, as a released lone contact's, gained 41 % (contact.compliance)."""
+    data = build_body(box(0.2, 0.1, 0.01, None, order=1, divisions=(20, 10, 2)), Material(2700.0, 7e10, 0.33),
+                      n_modes=10, clamp="x0")
+    system = System()
+    plate = system.add(FlexibleBodyFFR(data, modes=10, frame=PrescribedFrameMotion.fixed(), name="plate"))
+    top = Contour2sNeutralFFR(plate, "z1", residual_flexibility=True)
+    grid = np.linspace(0.0, 0.028, 5)
+    for k, (x, y) in enumerate((x, y) for x in grid for y in grid):
+        mass = system.add(PointMass(0.036 / 25, position=(0.121 + x, 0.021 + y, 0.0101), velocity=(0.0, 0.0, -0.5)))
+        system.add(Contact(ContactKinematicsPointContour2s(PointContour(mass.point), top), UnilateralNewtonImpact(0.0),
+                           name=f"mass {k}"))
+    res = system.simulate(3e-4, 1e-6, integrator="moreau", t_out=np.linspace(0.0, 3e-4, 31), energies=True,
+                          trace=True)
+    energy = res.energy["kinetic"] + res.energy["potential"]
+    assert res.trace["pressed"].max() > 10 and res.trace["pressed"][-1] == 0
+    assert 0.99 < energy[-1] / energy[0] <= 1.0
+
+
 @pytest.mark.parametrize("theta", [0.5, 0.7, 1.0])
 def test_kernels_match_their_references(theta):
     rng = np.random.default_rng(7)
