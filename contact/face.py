@@ -51,7 +51,7 @@ class FaceContact:
     law, friction, margin
         As for :class:`contact.Contact`, for every point.
     name : str
-        The face's name; its points are named "<name>/<node>".
+        The face's name; its points are named "<name> node <j>".
 
     Attributes
     ----------
@@ -75,9 +75,9 @@ class FaceContact:
         self.nodes = np.unique(np.asarray(face.nodes).ravel())
         residual = face.residual_flexibility
         self.points = tuple(
-            Contact(PAIR_KINEMATICS[("point", kind)](PointContour(body.node(int(j)), f"{name}/{j}",
+            Contact(PAIR_KINEMATICS[("point", kind)](PointContour(body.node(int(j)), f"{name} node {j}",
                                                                   residual_flexibility=residual), surface),
-                    law, friction=friction, name=f"{name}/{j}", margin=margin)
+                    law, friction=friction, name=f"{name} node {j}", margin=margin)
             for j in self.nodes)
         self.areas = tributary_areas(body.data, self.nodes) if face.space.dim == 2 else None
 

@@ -177,7 +177,7 @@ compliance of the modes its body leaves out (:class:`contours.residual.NodeCompl
 part pressed on another through points at its nodes deflects there as the full model does.
 Or a face: ``contour1`` a "2s" or "1s" contour of a flexible body (the keys of
 ``contour2`` below) makes a face contact (:class:`contact.FaceContact`), a point contact at
-each of its nodes against ``contour2`` with the contact's law, named "<name>/<node>", each
+each of its nodes against ``contour2`` with the contact's law, named "<name> node <j>", each
 with its node's residual flexibility when the face has ``residual_flexibility = true``.
 Either contour may be on the ground, not both: points on the ground
 (``body = "ground"``) against a surface on a body model a part landing on a rigid

@@ -50,8 +50,8 @@ def landing(data, residual, face=False):
                                   UnilateralNewtonImpact(0.0), name="end"))
     else:
         for j in rod.node_group("z0"):
-            point = PointContour(rod.node(int(j)), f"end/{j}", residual_flexibility=residual)
-            system.add(Contact(ContactKinematicsPointPlane(point, plane), UnilateralNewtonImpact(0.0), name=f"end/{j}"))
+            point = PointContour(rod.node(int(j)), f"end node {j}", residual_flexibility=residual)
+            system.add(Contact(ContactKinematicsPointPlane(point, plane), UnilateralNewtonImpact(0.0), name=f"end node {j}"))
     res = system.simulate(T_END, DT, integrator="moreau", t_out=np.linspace(0.0, T_END, 121), energies=True,
                           trace=True, contacts=bool(face),
                           outputs={"p_z": lambda t, q, u: system.linear_momentum(t, q, u)[2]})
