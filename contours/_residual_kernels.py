@@ -148,23 +148,20 @@ def add_contact_block(C, ra, da, rb, db, sign, n_a, T_a, sa, n_b, T_b, sb, A, c,
 
 
 @numba.njit(cache=True)
-def add_node_blocks(C, G, n_e, ints, signs, normals, tangents, rotations, c, work):
-    """Every pair (a, b) of the ``n_e`` compliant sides at nodes on one body:
+def add_table_blocks(C, G, n_e, ints, blocks, index, signs, normals, tangents, rotations, c, work):
+    """Every pair (a, b) of the ``n_e`` compliant sides on one body:
     C[r_a:+d_a, r_b:+d_b] += s_a s_b R_aᵀ A_a c(a, b) A_aᵀ R_b (:func:`add_contact_block`)
-    with c(a, b) the 3 × 3 block of ``G`` (the bodies' node compliances, block diagonal)
-    at their nodes. Per side ``ints`` (row r, rows d, node place in G, body, tangent
-    skip), ``signs``, the contact's n (3,), T (3, 2) and the body rotation A (3, 3); ``c``
-    (3, 3) and ``work`` (2, 3, 3) scratch. The same sums in the same order as the pair
-    loop of :func:`mbs.run.residual_contact.assemble` over ``between`` and
-    :func:`add_contact_block`."""
+    with c(a, b) of eq. C2 from the sides' weight blocks and their points' places in ``G``
+    (the bodies' residual flexibilities, block diagonal; :func:`compliance_between`). Per
+    side ``ints`` (row r, rows d, body, tangent skip, number of blocks k), its ``blocks``
+    (k, 3, 3) and ``index`` (k,), ``signs``, the contact's n (3,), T (3, 2) and the body
+    rotation A (3, 3); ``c`` (3, 3) and ``work`` (2, 3, 3) scratch. The pairs in the order
+    of the loop of :func:`mbs.run.residual_contact.assemble`."""
     for a in range(n_e):
-        ra, da, at_a, body_a, skip_a = ints[a, 0], ints[a, 1], ints[a, 2], ints[a, 3], ints[a, 4]
+        ra, da, body_a, skip_a, ka = ints[a, 0], ints[a, 1], ints[a, 2], ints[a, 3], ints[a, 4]
         for b in range(n_e):
-            if ints[b, 3] != body_a:
+            if ints[b, 2] != body_a:
                 continue
-            at_b = ints[b, 2]
-            for i in range(3):
-                for j in range(3):
-                    c[i, j] = G[3 * at_a + i, 3 * at_b + j]
+            compliance_between(G, blocks[a], index[a], ka, blocks[b], index[b], ints[b, 4], c)
             add_contact_block(C, ra, da, ints[b, 0], ints[b, 1], signs[a] * signs[b], normals[a], tangents[a], skip_a,
-                              normals[b], tangents[b], ints[b, 4], rotations[a], c, work)
+                              normals[b], tangents[b], ints[b, 3], rotations[a], c, work)

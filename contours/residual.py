@@ -78,6 +78,8 @@ class ResidualCompliance:
     Attributes
     ----------
     contour, G_P, n_P, offset
+    n_weights : int
+        The blocks B_i of eq. C1 at a point (:meth:`weights`).
     """
 
     def __init__(self, contour, G_P, offset=0):
@@ -92,7 +94,7 @@ class ResidualCompliance:
                              f"{self.n_P} control points from {self.offset} on")
         self.G_P = G_P
         self._dirs = (space.eta,) if space.dim == 1 else (space.eta, space.xi)
-        n_w = int(np.prod([d.p + 1 for d in self._dirs]))
+        n_w = self.n_weights = int(np.prod([d.p + 1 for d in self._dirs]))     # blocks of eq. C1 at a point
         self._B = [np.zeros((3, d.p + 1)) for d in self._dirs]
         self._work = np.zeros((2, n_w, 3, 3)), np.zeros((2, n_w), dtype=np.int64)
         derived = isinstance(contour, OffsetContour)
@@ -195,6 +197,7 @@ class NodeCompliance:
     """
 
     neutral_kernel = False
+    n_weights = 1           # blocks of eq. C1 at the point: the node's
 
     def __init__(self, contour, G_P, offset=0):
         self.contour, self.n_P, self.offset = contour, 1, int(offset)

@@ -70,7 +70,12 @@ APART, LOCATED, FALLBACK, NO_POINT = 0, 1, 2, 3   # outcomes of a fused detectio
 # surface's own kernel data (knots, ints, floats, control points, state, span cache) are
 # arguments.
 QP, UP, QF, UF, NF, NU1, NU2, VELOCITY, BOX, MAX_ITER, LAW, XI_CLOSED, FREE, EDGE, FRAME_Q, FRAME_U, KIN_AT = range(17)
-ITAB_SIZE = KIN_AT + 8
+NODE_Q, NODE_U, NODE_NF, NODE_FREE, NODE_AT = range(KIN_AT + 8, KIN_AT + 13)
+# ^ side 1 at a node of a flexible body whose frame the kernel writes (_node_frame): the
+#   body's first rows of q and u (−1: not so), its n_f, free quaternion frame (1) or at
+#   rest (0), and where in ftab its R₀ (3), A₀ (9, row-major; at rest) and the node's mode
+#   rows Φ (3, n_f) lie; the node's ū0 is side 1's offset (ftab[OFFSET_AT:])
+ITAB_SIZE = NODE_AT + 1
 Q2, U2 = QF, UF     # the analytic pairs (plane, sphere–sphere): side 2's point-mass rows (−1: not a point mass)
 # ftab: margin [m], tol2 [m²] (NaN until the search knows its length scale), the largest
 # Newton steps in η and ξ, the normal's sign (2s), edge2 [m²] (contact.search: how far
@@ -104,6 +109,7 @@ def _begin(q, u, itab, ftab, reach, state, frame1, point1, centre, axes1, start,
     radius = ftab[RADIUS]
     qf, uf = itab[QF], itab[UF]
     _mass_frame(q, u, itab[QP], itab[UP], ftab[OFFSET_AT:OFFSET_AT + 3], frame1)
+    _node_frame(q, u, itab, ftab, frame1)
     _free_frame(q, u, itab[FRAME_Q], itab[FRAME_U], state)
     for k in range(n_f):
         state[Q_AT + k] = q[qf + k]
@@ -134,6 +140,64 @@ def _mass_frame(q, u, q_at, u_at, offset, frame):
     for c in range(3):
         frame[rigid.R_AT + c] = q[q_at + c] + offset[c]
         frame[rigid.V_AT + c] = u[u_at + c]
+
+
+@njit(cache=True)
+def _node_frame(q, u, itab, ftab, frame):
+    """Side 1's frame contour at a node of a flexible body on a free quaternion frame or
+    a frame at rest, into ``frame`` (its state) at the global (q, u), as the contour's
+    update gives it (:meth:`mbs.bodies.floating_frame.FloatingFrameBody.point_kinematics`,
+    ``point_velocity``): with ū = ū0 + Φ q_f, r = R + A ū, A, ṙ = v + A (ω̄ × ū + Φ q̇_f),
+    ω = A ω̄, J_T = [1, −A ũ, A Φ] and J_R = [0, A, 0] on a free frame (T = 1), J_T = A Φ
+    and J_R = 0 at rest (R₀, A₀ constant). Nothing when itab[NODE_Q] < 0."""
+    qb = itab[NODE_Q]
+    if qb < 0:
+        return
+    ub, n_f, free, at = itab[NODE_U], itab[NODE_NF], itab[NODE_FREE] != 0, itab[NODE_AT]
+    nu = itab[NU1]
+    A = frame[rigid.A_AT:rigid.A_AT + 9].reshape(3, 3)
+    phi = ftab[at + 12:at + 12 + 3 * n_f].reshape(3, n_f)
+    qf, uf = (qb + 7, ub + 6) if free else (qb, ub)
+    if free:
+        quat_matrix_into(q, qb + 3, A)
+    else:
+        for k in range(9):
+            A[k // 3, k % 3] = ftab[at + 3 + k]
+    ub0, ub1, ub2 = ftab[OFFSET_AT], ftab[OFFSET_AT + 1], ftab[OFFSET_AT + 2]   # ū = ū0 + Φ q_f
+    r0 = r1 = r2 = 0.0                                                          # Φ q̇_f (+ ω̄ × ū)
+    for k in range(n_f):
+        ub0 += phi[0, k] * q[qf + k]
+        ub1 += phi[1, k] * q[qf + k]
+        ub2 += phi[2, k] * q[qf + k]
+        r0 += phi[0, k] * u[uf + k]
+        r1 += phi[1, k] * u[uf + k]
+        r2 += phi[2, k] * u[uf + k]
+    if free:
+        w0, w1, w2 = u[ub + 3], u[ub + 4], u[ub + 5]
+        r0 += w1 * ub2 - w2 * ub1
+        r1 += w2 * ub0 - w0 * ub2
+        r2 += w0 * ub1 - w1 * ub0
+    J_T = frame[rigid.J_AT:rigid.J_AT + 3 * nu].reshape(3, nu)
+    J_R = frame[rigid.J_AT + 3 * nu:rigid.J_AT + 6 * nu].reshape(3, nu)
+    f0 = 6 if free else 0
+    for c in range(3):
+        R = q[qb + c] if free else ftab[at + c]
+        v = u[ub + c] if free else 0.0
+        frame[rigid.R_AT + c] = R + A[c, 0] * ub0 + A[c, 1] * ub1 + A[c, 2] * ub2
+        frame[rigid.V_AT + c] = v + A[c, 0] * r0 + A[c, 1] * r1 + A[c, 2] * r2
+        frame[rigid.W_AT + c] = (A[c, 0] * u[ub + 3] + A[c, 1] * u[ub + 4] + A[c, 2] * u[ub + 5]) if free else 0.0
+        for j in range(nu):
+            J_R[c, j] = 0.0
+        if free:
+            b0 = -(A[c, 1] * ub2 - A[c, 2] * ub1)
+            b1 = -(A[c, 2] * ub0 - A[c, 0] * ub2)
+            b2 = -(A[c, 0] * ub1 - A[c, 1] * ub0)
+            for j in range(3):
+                J_T[c, j] = 1.0 if c == j else 0.0
+                J_R[c, 3 + j] = A[c, j]
+            J_T[c, 3], J_T[c, 4], J_T[c, 5] = b0, b1, b2
+        for k in range(n_f):
+            J_T[c, f0 + k] = A[c, 0] * phi[0, k] + A[c, 1] * phi[1, k] + A[c, 2] * phi[2, k]
 
 
 @njit(cache=True)
@@ -379,6 +443,7 @@ def centre_on_plane(q, u, itab, ftab, frame1, plane, point1, point2, kin, centre
     The plane is unbounded: no broad phase. Returns as :func:`centre_on_neutral_2s`."""
     velocity = itab[VELOCITY] != 0
     _mass_frame(q, u, itab[QP], itab[UP], ftab[OFFSET_AT:OFFSET_AT + 3], frame1)
+    _node_frame(q, u, itab, ftab, frame1)
     _mass_frame(q, u, itab[Q2], itab[U2], ftab[OFFSET2_AT:OFFSET2_AT + 3], plane)
     _centre(frame1, ftab[RADIUS], velocity, point1, centre, axes1)
     eta, xi = plane_coordinates(plane, centre)
@@ -398,6 +463,7 @@ def sphere_on_sphere(q, u, itab, ftab, frame1, frame2, point1, point2, kin, cent
     velocity = itab[VELOCITY] != 0
     radius1, radius2 = ftab[RADIUS], ftab[RADIUS2]
     _mass_frame(q, u, itab[QP], itab[UP], ftab[OFFSET_AT:OFFSET_AT + 3], frame1)
+    _node_frame(q, u, itab, ftab, frame1)
     _mass_frame(q, u, itab[Q2], itab[U2], ftab[OFFSET2_AT:OFFSET2_AT + 3], frame2)
     if itab[BOX] != 0:
         box1, box2 = work[0:6].reshape(2, 3), work[6:12].reshape(2, 3)

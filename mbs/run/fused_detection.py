@@ -111,6 +111,27 @@ def _frame_side(contour, itab, ftab, q_at, u_at, offset_at):
     return contour, body.q_slice, body.u_slice
 
 
+def _node_side(side, itab, ftab):
+    """Side 1 at a node of a flexible body on a free quaternion frame or a frame at rest
+    (``side`` as :func:`_frame_side` returned it: (contour, q slice, u slice)): the kernel
+    writes its frame (:func:`._fused_detection_kernels._node_frame`) from the rows, n_f,
+    frame kind and the constants (R₀, A₀ at rest, the node's mode rows) set here, appended
+    to ``ftab``. Returns (ftab, side): side None when the kernel writes it, else as given."""
+    itab[K.NODE_Q] = itab[K.NODE_U] = -1
+    if side is None:
+        return ftab, side
+    contour = side[0]
+    frame, body = contour.frame_ref, contour.body
+    if (frame.node_index is None or not isinstance(body, FloatingFrameBody) or not body.n_modes
+            or not (body.free_quaternion or body.frame_at_rest) or not np.array_equal(frame.A_rel, np.eye(3))):
+        return ftab, side
+    R0, A0 = body.frame_state(body.q_init)[:2]
+    itab[K.NODE_Q], itab[K.NODE_U] = body.q_slice.start, body.u_slice.start
+    itab[K.NODE_NF], itab[K.NODE_FREE], itab[K.NODE_AT] = body.n_modes, body.free_quaternion, ftab.size
+    ftab[K.OFFSET_AT:K.OFFSET_AT + 3] = frame.u0
+    return np.concatenate((ftab, R0, np.ravel(A0), frame.phi.ravel())), None
+
+
 def _python_updates(updates, q, u, t):
     """``contour.update`` of each (contour, q slice, u slice) at the global (q, u, t); a
     contour on the ground (slices None) at t."""
@@ -171,7 +192,7 @@ class _FusedCentre(_Refreshed):
         n_f = neutral.n_modes
         itab = np.zeros(K.ITAB_SIZE, dtype=np.int64)
         ftab = np.concatenate((np.zeros(K.BOX_AT), *neutral.rest_box, neutral.mode_box_growth.ravel()))
-        side1 = _frame_side(point, itab, ftab, K.QP, K.UP, K.OFFSET_AT)
+        ftab, side1 = _node_side(_frame_side(point, itab, ftab, K.QP, K.UP, K.OFFSET_AT), itab, ftab)
         itab[K.QF] = body2.q_slice.start + body2.q_f_slice.start
         itab[K.UF] = body2.u_slice.start + body2.u_f_slice.start
         itab[K.NF], itab[K.NU1], itab[K.NU2] = n_f, point.nu, surface.nu
@@ -442,8 +463,10 @@ class _FusedAnalytic(_Refreshed):
         self.closing_tol = contact.closing_tol
         itab = np.zeros(K.ITAB_SIZE, dtype=np.int64)
         ftab = np.zeros(K.BOX_AT)
-        sides = (_frame_side(k.contour1, itab, ftab, K.QP, K.UP, K.OFFSET_AT),
-                 _frame_side(k.contour2, itab, ftab, K.Q2, K.U2, K.OFFSET2_AT))
+        side1 = _frame_side(k.contour1, itab, ftab, K.QP, K.UP, K.OFFSET_AT)
+        side2 = _frame_side(k.contour2, itab, ftab, K.Q2, K.U2, K.OFFSET2_AT)
+        ftab, side1 = _node_side(side1, itab, ftab)
+        sides = (side1, side2)
         self._before = [side for side in sides if side is not None]     # updated in Python first
         itab[K.NU1], itab[K.NU2] = k.contour1.nu, k.contour2.nu
         itab[K.VELOCITY], itab[K.BOX] = not contact.set_valued, contact.margin is not None

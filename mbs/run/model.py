@@ -49,7 +49,7 @@ from mbs.run.residual_contact import ResidualContacts
 
 N_FACTORS = 8          # Cholesky factors of a constant M̂ kept for different step sizes (+1)
 CACHES = ("contact_sets", "problem_views", "lapack_views", "solver_views", "compliance_views", "factor_dt",
-          "factor_last", "comp_entries", "comp_nodes")
+          "factor_last", "comp_entries", "comp_table")
 # ^ Data rebuilt on demand (the last step's factor of a constant M̂ is looked up again in
 #   ``factors``; the compliant contacts' entries are made each step): not in a checkpoint
 CARRIED = ("t", "q", "u", "closed", "lam_prev", "warm", "lam_joints", "warm_joints", "comp_force", "comp_delta",
@@ -343,8 +343,10 @@ class Data:
         self.comp_c, self.comp_work = np.zeros((3, 3)), np.zeros((2, 3, 3))     # c(a, b), its frame work
         self.comp_r = 0
         self.comp_entries = [None] * (2 * n)
-        self.comp_nodes = (np.zeros((2 * n, 5), dtype=np.int64), np.zeros(2 * n), np.zeros((2 * n, 3)),
-                           np.zeros((2 * n, 3, 2)), np.zeros((2 * n, 3, 3)))    # the sides at nodes, per entry
+        k = model.residual.max_weights if model.residual is not None else 0
+        self.comp_table = (np.zeros((2 * n, 5), dtype=np.int64), np.zeros((2 * n, k, 3, 3)),
+                           np.zeros((2 * n, k), dtype=np.int64), np.zeros(2 * n), np.zeros((2 * n, 3)),
+                           np.zeros((2 * n, 3, 2)), np.zeros((2 * n, 3, 3)))   # per side: the kernel's tables
         n_s = 0 if model.spheres is None else len(model.spheres.spheres)
         self.sphere_centres = np.zeros((n_s, 3))    # bounding spheres of the prunable contacts [m]
         self.sphere_radii = np.zeros(n_s)

@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 from contact.kinematics import PointOnCurveConstraint
-from contours._residual_kernels import add_contact_block, add_node_blocks
+from contours._residual_kernels import add_contact_block, add_table_blocks
 from contours.residual import NodeCompliance, residual_compliances
 from ffrmbs.errors import ModelError
 
@@ -55,13 +55,16 @@ class ResidualContacts:
     skip : tuple of int
         Per contact the first tangent of its rows: 0 for [n, t1, t2] (a contact), 1 for
         [n, t2] (a point kept on a curve, :class:`contact.CurveConstraint`).
-    node_G : (3 k, 3 k) array or None
-        When every corrected contour sits at a node (:class:`~contours.residual.NodeCompliance`,
-        a face of point contacts): the bodies' node compliances, block diagonal, which one
-        kernel reads for all pairs of closed sides (:func:`contours._residual_kernels.add_node_blocks`);
-        else None.
-    node_place : dict
-        Per such contour (by id) its node's place in ``node_G`` and its body's index.
+    table_G : (3 k, 3 k) array or None
+        When a corrected contour sits at a node (:class:`~contours.residual.NodeCompliance`,
+        a face of point contacts): the bodies' residual flexibilities, block diagonal, which
+        one kernel reads for all pairs of closed sides
+        (:func:`contours._residual_kernels.add_table_blocks`); else None (the pair loop).
+    table_place : dict
+        Per corrected contour (by id) the first place of its body's points in ``table_G``
+        and the body's index.
+    max_weights : int
+        The most weight blocks a side has (eq. C1).
     """
 
     def __init__(self, contacts, set_valued, cache_dir=None):
@@ -93,16 +96,17 @@ class ResidualContacts:
         self.sides = tuple(sides)
         self.compliant = tuple(bool(s) for s in sides)
         self.skip = tuple(int(isinstance(c.kinematics, PointOnCurveConstraint)) for c in contacts)
-        self.node_G, self.node_place = None, {}
-        if self.compliances and all(isinstance(rc, NodeCompliance) for rc in self.compliances.values()):
-            self.node_G, self.node_place = _node_table(self.compliances)
+        self.table_G, self.table_place, self.max_weights = None, {}, 0
+        if any(isinstance(rc, NodeCompliance) for rc in self.compliances.values()):
+            self.table_G, self.table_place = _compliance_table(self.compliances)
+            self.max_weights = max(rc.n_weights for rc in self.compliances.values())
 
     def __bool__(self):
         return any(self.compliant)
 
 
-def _node_table(compliances) -> tuple:
-    """(node_G, node_place) of :class:`ResidualContacts` from node compliances."""
+def _compliance_table(compliances) -> tuple:
+    """(table_G, table_place) of :class:`ResidualContacts`."""
     bodies, base, n = {}, {}, 0
     for rc in compliances.values():
         if id(rc.G_P) not in bodies:
@@ -112,7 +116,7 @@ def _node_table(compliances) -> tuple:
     for rc in compliances.values():
         a = 3 * base[id(rc.G_P)]
         G[a:a + rc.G_P.shape[0], a:a + rc.G_P.shape[0]] = rc.G_P
-    place = {key: (base[id(rc.G_P)] + rc.offset, bodies[id(rc.G_P)]) for key, rc in compliances.items()}
+    place = {key: (base[id(rc.G_P)], bodies[id(rc.G_P)]) for key, rc in compliances.items()}
     return G, place
 
 
@@ -152,8 +156,8 @@ def assemble(model, data, dt) -> int:
     C = data.compliance(r)
     C.fill(0.0)
     c, work = data.comp_c, data.comp_work
-    if rc.node_G is not None:
-        _node_blocks(rc, data, entries, n_e, C)
+    if rc.table_G is not None:
+        _table_blocks(rc, data, entries, n_e, C)
         data.comp_r = r
         return r
     for a in range(n_e):
@@ -167,18 +171,23 @@ def assemble(model, data, dt) -> int:
     return r
 
 
-def _node_blocks(rc, data, entries, n_e, C) -> None:
-    """The pair loop of :func:`assemble` in one kernel, every side at a node
-    (:func:`contours._residual_kernels.add_node_blocks`)."""
-    ints, signs, normals, tangents, rotations = data.comp_nodes
+def _table_blocks(rc, data, entries, n_e, C) -> None:
+    """The pair loop of :func:`assemble` in one kernel, when a side sits at a node
+    (:func:`contours._residual_kernels.add_table_blocks`): each side's weight blocks
+    (eq. C1) found once, not once per pair."""
+    ints, blocks, index, signs, normals, tangents, rotations = data.comp_table
     for e in range(n_e):
         row, dim, sign, comp, eta, xi, k, skip = entries[e]
-        ints[e] = (row, dim, *rc.node_place[id(comp.contour)], skip)
+        base, body = rc.table_place[id(comp.contour)]
+        n_w = comp.weights(eta, xi, blocks[e], index[e])
+        index[e, :n_w] += base
+        ints[e] = (row, dim, body, skip, n_w)
         signs[e] = sign
         normals[e] = k.n
         tangents[e] = k.T
         rotations[e] = comp.rotation
-    add_node_blocks(C, rc.node_G, n_e, ints, signs, normals, tangents, rotations, data.comp_c, data.comp_work)
+    add_table_blocks(C, rc.table_G, n_e, ints, blocks, index, signs, normals, tangents, rotations, data.comp_c,
+                     data.comp_work)
 
 
 def store(model, data) -> None:

@@ -73,17 +73,51 @@ def test_a_face_of_compliant_points_keeps_one_interval_of_2l_over_c_and_the_ener
     assert rigid < 0.9
 
 
-def test_the_node_blocks_kernel_is_the_pair_loop(rod_data, monkeypatch):
-    """The face's landing with its compliance assembled by the one kernel over all pairs
-    of sides at nodes (ResidualContacts.node_G) equals, bit for bit, the landing with the
-    pair loop over ``between`` and ``add_contact_block`` (node_G switched off)."""
+def test_the_compliance_kernel_is_the_pair_loop(rod_data, monkeypatch):
+    """The face's landing with its compliance assembled by the one kernel over all pairs of
+    sides (ResidualContacts.table_G) equals, bit for bit, the landing with the pair loop
+    over ``between`` and ``add_contact_block`` (the table switched off)."""
     from mbs.run import residual_contact
 
     kernel = landing(rod_data, residual=True)[2]
-    monkeypatch.setattr(residual_contact, "_node_table", lambda compliances: (None, {}))
+    monkeypatch.setattr(residual_contact, "_compliance_table", lambda compliances: (None, {}))
     loop = landing(rod_data, residual=True)[2]
     assert kernel.trace["pressed"].any()
     assert np.array_equal(kernel.q, loop.q) and np.array_equal(kernel.u, loop.u)
+
+
+def test_the_compliance_kernel_on_a_corrected_surface_is_the_pair_loop(rod_data, monkeypatch):
+    """The rod's corrected face landing on a corrected 2s face of a clamped plate (sides
+    at nodes and on a neutral contour, in series): the kernel, whose c(a, b) between
+    neutral points sums eq. C2 in another order than the loop's compiled neutral route,
+    gives the loop's run to rounding."""
+    from contours.residual import NodeCompliance
+    from mbs import PrescribedFrameMotion
+    from mbs.run import residual_contact
+
+    plate_data = build_body(box(0.06, 0.06, 0.01, None, order=1, divisions=(6, 6, 2)), Material(RHO, E, 0.3),
+                            n_modes=10, clamp="x0")
+
+    def run():
+        system = System()
+        plate = system.add(FlexibleBodyFFR(plate_data, modes=10, frame=PrescribedFrameMotion.fixed(), name="plate"))
+        rod = FlexibleBodyFFR(rod_data, modes=MODES, name="rod")
+        rod.q_init[:3], rod.u_init[2] = (0.02, 0.02, 0.01 + 1e-6), -V
+        system.add(rod)
+        face = system.add(connect(Contour2sNeutralFFR(rod, "z0", residual_flexibility=True),
+                                  Contour2sNeutralFFR(plate, "z1", residual_flexibility=True),
+                                  UnilateralNewtonImpact(0.0), name="end"))
+        res = system.simulate(3e-5, DT, integrator="moreau", t_out=np.linspace(0.0, 3e-5, 61), trace=True)
+        return res, face
+
+    kernel, face = run()
+    assert isinstance(face.points[0].kinematics.contour1, PointContour)
+    assert any(isinstance(rc, NodeCompliance) for rc in residual_contact.ResidualContacts(
+        face.points, [True] * len(face.points)).compliances.values())
+    monkeypatch.setattr(residual_contact, "_compliance_table", lambda compliances: (None, {}))
+    loop, _ = run()
+    assert kernel.trace["pressed"].max() > 10
+    np.testing.assert_allclose(kernel.u, loop.u, rtol=1e-9, atol=1e-12)
 
 
 def test_a_face_contact_is_its_points_and_records_its_resultant(rod_data):

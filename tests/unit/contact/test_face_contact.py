@@ -17,8 +17,10 @@
   impulses carry the push's impulse) and above it (it slides: ΔP_x = F T − μ Σ Λ_N, every
   carrying contact on the cone's edge). A few of the face's contacts carry its load and
   slide by velocities 1e-4 of the free ones; the sweeps crawl there and the solvers'
-  Newton phases finish. The 81-contact face at rest with Newton still fails a step
-  (``xfail``, strict).
+  Newton phases finish. The 81-contact face at rest with Newton needs up to 956
+  iterations a step (the limit is 2 000); while the face nodes' frames were updated in
+  Python one step of it needed more than 2 000, so the count is sensitive to rounding
+  there (issue 30, item 7).
 * The subspace step of the prox solvers against scipy's NNLS on a random face-like problem.
 """
 
@@ -37,7 +39,6 @@ from mbs import FlexibleBodyFFR, System, ground_frame
 from mbs.run import stages
 from mbs.links.loads import Force
 from mbs.run.model import Data, compile_model
-from mbs.run.step_failure import StepFailure
 from preprocess import Material, build_body
 from preprocess.geometry import box
 
@@ -165,11 +166,7 @@ def coulomb_run(data, method, push_factor, steps):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("n_contacts, method", [
-    (25, "gauss-seidel"), (25, "newton"), (81, "gauss-seidel"),
-    pytest.param(81, "newton", marks=pytest.mark.xfail(
-        strict=True, raises=StepFailure,
-        reason="issue 30, item 7 (open): a step of the 81-contact Coulomb face needs more than 2 000 "
-               "iterations with Newton (residual 1.4e-07 m/s, 15 closed contacts)"))])
+    (25, "gauss-seidel"), (25, "newton"), (81, "gauss-seidel"), (81, "newton")])
 def test_a_coulomb_face_rests_under_gravity_for_200_steps(n_contacts, method, request):
     """Oracles: Σ Λ_N = m g T + ΔP_z, Σ Λ_T = ΔP_xy (the plane's tangents are the same at
     every point), the mean normal impulse is the weight, |Λ_T| <= μ Λ_N."""

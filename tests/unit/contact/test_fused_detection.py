@@ -24,6 +24,7 @@ from mbs.bodies.rotations import quat_from_rotvec, quat_to_matrix
 from ffrmbs.errors import ModelError
 from mbs.run.fused_detection import (CentreOnNeutral1s, CentreOnNeutral2s, CentreOnOffset, CentreOnPlane,
                                      PointKeptOnCurve, SphereOnSphere, fused_detection)
+from mbs.run import _fused_detection_kernels as K
 from mbs.run.model import compile_model
 from validation.bench.common import moving_state
 
@@ -483,3 +484,45 @@ def test_the_analytic_fused_detections_are_the_python_path(case, law):
     if ANALYTIC[case][1][0] == "sphere":
         expected.add((False, False))                 # coincident centres: no normal
     assert expected <= outcomes
+
+
+# --- a point at a node of a flexible body: its frame written by the kernel ---------------------------------
+
+@pytest.mark.parametrize("frame", ["free", "fixed"])
+@pytest.mark.parametrize("surface", ["plane", "2s"])
+def test_a_point_at_a_node_has_its_frame_written_by_the_kernel_as_its_update_writes_it(thesis_beam_data, frame,
+                                                                                           surface):
+    """A point at a node of a flexible body — on a free quaternion frame turned, moving and
+    deformed at random, or on a frame at rest — against the ground plane or the top face of
+    another beam: the fused detection writes the point contour's state (r, A, ṙ, ω, J_T, J_R)
+    itself, no update in Python before it, and it equals the contour's own update (to 1e-12);
+    the kinematics too."""
+    def scene():
+        system = System()
+        motion = "free" if frame == "free" else PrescribedFrameMotion.fixed(R=(0.1, 0.0, 0.3), A=TILT)
+        rod = system.add(FlexibleBodyFFR(thesis_beam_data, modes=6, frame=motion, name="rod"))
+        if surface == "plane":
+            other = PlaneContour(ground_frame((0.0, 0.0, 0.0), TILT))
+        else:
+            beam = system.add(FlexibleBodyFFR(thesis_beam_data, modes=6, frame=PrescribedFrameMotion.fixed(),
+                                              name="beam"))
+            other = Contour2sNeutralFFR(beam, "y1")
+        point = PointContour(rod.node(int(rod.node_group("x1")[3])))
+        return system, rod, system.add(connect(point, other, UnilateralNewtonImpact(0.0)))
+
+    system, rod, contact = scene()
+    _, _, reference = scene()
+    fused = fused_detection(contact)
+    assert fused._before == [] and fused._itab[K.NODE_Q] == rod.q_slice.start
+    rng = np.random.default_rng(5)
+    for _ in range(20):
+        q, u = system.initial_state()
+        qr, ur = q[rod.q_slice], u[rod.u_slice]
+        ur[:] = rng.normal(size=rod.nu)
+        qr[rod.q_f_slice] = 1e-3 * rng.normal(size=rod.n_modes)
+        if frame == "free":
+            qr[:3], qr[3:7] = 0.1 * rng.normal(size=3), quat_from_rotvec(rng.normal(size=3))
+        fused.locate(q, u, 0.0)
+        reference.kinematics.contour1.update(qr, ur, 0.0)
+        np.testing.assert_allclose(contact.kinematics.contour1.state, reference.kinematics.contour1.state,
+                                   rtol=1e-12, atol=1e-15)
