@@ -34,12 +34,14 @@ Kinds with a fused detection:
   (``ContactKinematicsPointSphere``, ``ContactKinematicsSphereSphere``) — analytic,
   no search, so they never fall back.
 
-The kernel writes the state of a point mass's frame itself, and of a neutral contour's
-free quaternion frame (R, A, v, ω̄ = u_r from the global q, u; a curve's reference normal
-with them); a ground frame's is constant, so is a frame at rest's. What moves by a Python
-function is updated in Python just before the kernel, which does the rest: a frame
-contour on another body (a rigid body, a node of an FFR body: its frame's position,
-orientation, velocities and Jacobians), a neutral contour on a prescribed frame (a
+The kernel writes the state of a point mass's frame itself, of side 1's frame at a node
+of a flexible body on a free quaternion frame or a frame at rest (its position,
+orientation, velocities and Jacobians: :func:`._fused_detection_kernels._node_frame`), and
+of a neutral contour's free quaternion frame (R, A, v, ω̄ = u_r from the global q, u; a
+curve's reference normal with them); a ground frame's is constant, so is a frame at
+rest's. What moves by a Python function is updated in Python just before the kernel,
+which does the rest: a frame contour on another body (a rigid body, a node of a body on
+a prescribed moving or Cardan frame), a neutral contour on a prescribed frame (a
 function of t) or a free Cardan frame (its R, A, v, ω̄ and the map T of ω̄ = T u_r,
 which the Jacobians take).
 
