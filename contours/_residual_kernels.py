@@ -153,10 +153,14 @@ def add_table_blocks(C, G, n_e, ints, blocks, index, signs, normals, tangents, r
     C[r_a:+d_a, r_b:+d_b] += s_a s_b R_aᵀ A_a c(a, b) A_aᵀ R_b (:func:`add_contact_block`)
     with c(a, b) of eq. C2 from the sides' weight blocks and their points' places in ``G``
     (the bodies' residual flexibilities, block diagonal; :func:`compliance_between`). Per
-    side ``ints`` (row r, rows d, body, tangent skip, number of blocks k), its ``blocks``
-    (k, 3, 3) and ``index`` (k,), ``signs``, the contact's n (3,), T (3, 2) and the body
+    side ``ints`` (row r, rows d, body, tangent skip, number of blocks k, first place of
+    its body's points in G), its ``blocks`` (k, 3, 3) and ``index`` (k,; places in its
+    body's G_P, moved to G here), ``signs``, the contact's n (3,), T (3, 2) and the body
     rotation A (3, 3); ``c`` (3, 3) and ``work`` (2, 3, 3) scratch. The pairs in the order
-    of the loop of :func:`mbs.run.residual_contact.assemble`."""
+    of the loop of :func:`mbs.run.residual_contact.assemble`, the same sums."""
+    for a in range(n_e):
+        for i in range(ints[a, 4]):
+            index[a, i] += ints[a, 5]
     for a in range(n_e):
         ra, da, body_a, skip_a, ka = ints[a, 0], ints[a, 1], ints[a, 2], ints[a, 3], ints[a, 4]
         for b in range(n_e):

@@ -152,6 +152,15 @@ class ResidualCompliance:
                 k += 1
         return k
 
+    def kernel_weights(self, eta, xi, blocks, index) -> int:
+        """:meth:`weights` by the compiled route (:func:`._residual_kernels.neutral_weights`,
+        the blocks :meth:`between` takes for two neutral contours), allocation-free."""
+        if self._offset is not None:
+            return self.weights(eta, xi, blocks, index)
+        g = self._kernel_geometry
+        return RK.neutral_weights(1 if g[1].shape[0] == 3 else 2, g[0], g[1], g[2], g[3], float(eta), float(xi),
+                                  self._Bc[0], self._Bc[1], self.offset, blocks, index)
+
     def between(self, eta_a, xi_a, eta_b, xi_b, other=None, out=None) -> np.ndarray:
         """c(a, b) (3, 3) [m/N] in body axes (eq. C2): the displacement at (η_a, ξ_a) of this
         contour per unit force at (η_b, ξ_b) of ``other`` (this contour when None; another
@@ -218,9 +227,13 @@ class NodeCompliance:
 
     def weights(self, eta, xi, blocks, index) -> int:
         """B = I at the node (eq. C1 with one point) into ``blocks``, ``index``; returns 1."""
-        blocks[0] = np.eye(3)
+        block = blocks[0]
+        block.fill(0.0)
+        block[0, 0] = block[1, 1] = block[2, 2] = 1.0
         index[0] = self.offset
         return 1
+
+    kernel_weights = weights
 
     def between(self, eta_a, xi_a, eta_b, xi_b, other=None, out=None) -> np.ndarray:
         """c(a, b) (3, 3) [m/N] in body axes: the displacement at this node per unit force

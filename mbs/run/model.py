@@ -344,7 +344,7 @@ class Data:
         self.comp_r = 0
         self.comp_entries = [None] * (2 * n)
         k = model.residual.max_weights if model.residual is not None else 0
-        self.comp_table = (np.zeros((2 * n, 5), dtype=np.int64), np.zeros((2 * n, k, 3, 3)),
+        self.comp_table = (np.zeros((2 * n, 6), dtype=np.int64), np.zeros((2 * n, k, 3, 3)),
                            np.zeros((2 * n, k), dtype=np.int64), np.zeros(2 * n), np.zeros((2 * n, 3)),
                            np.zeros((2 * n, 3, 2)), np.zeros((2 * n, 3, 3)))   # per side: the kernel's tables
         n_s = 0 if model.spheres is None else len(model.spheres.spheres)

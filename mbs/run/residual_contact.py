@@ -174,14 +174,14 @@ def assemble(model, data, dt) -> int:
 def _table_blocks(rc, data, entries, n_e, C) -> None:
     """The pair loop of :func:`assemble` in one kernel, when a side sits at a node
     (:func:`contours._residual_kernels.add_table_blocks`): each side's weight blocks
-    (eq. C1) found once, not once per pair."""
+    (eq. C1) found once, not once per pair; the same sums as the loop's."""
     ints, blocks, index, signs, normals, tangents, rotations = data.comp_table
     for e in range(n_e):
         row, dim, sign, comp, eta, xi, k, skip = entries[e]
-        base, body = rc.table_place[id(comp.contour)]
-        n_w = comp.weights(eta, xi, blocks[e], index[e])
-        index[e, :n_w] += base
-        ints[e] = (row, dim, body, skip, n_w)
+        side = ints[e]
+        side[0], side[1], side[3] = row, dim, skip
+        side[5], side[2] = rc.table_place[id(comp.contour)]
+        side[4] = comp.kernel_weights(eta, xi, blocks[e], index[e])
         signs[e] = sign
         normals[e] = k.n
         tangents[e] = k.T
