@@ -69,7 +69,7 @@ class FaceContact:
                              f"not a {type(face).__name__}")
         kind = CONTOURS.name_of(surface)
         if ("point", kind) not in PAIR_KINEMATICS:
-            raise ModelError(f"face {name!r}: a point cannot touch a {kind!r} contour")
+            raise ModelError(f"face {name!r}: its points cannot touch a contour of kind {kind!r}")
         body = face.body
         self.name, self.face, self.surface = name, face, surface
         self.nodes = np.unique(np.asarray(face.nodes).ravel())
