@@ -2,11 +2,12 @@
 the ground, node to surface.
 
 The face is a neutral contour of a flexible body (a 2s face, or a 1s curve: an edge on a
-face); the other side any contour a point can touch (2s, 1s, band, cylinder, plane,
-sphere). :class:`FaceContact` puts a point contact (:class:`contact.Contact`, the pair
-kind registered for a point and that contour) at each node of the face, on the node's
-frame ``body.node(j)``, all with the same law — node to surface, one pass, the face's
-nodes the points. With ``residual_flexibility`` on the face each point carries its
+face) or of a rigid body (the grid or the points it runs through); the other side any
+contour a point can touch (2s, 1s, band, cylinder, plane, sphere). :class:`FaceContact`
+puts a point contact (:class:`contact.Contact`, the pair kind registered for a point and
+that contour) at each node of the face, on the node's frame ``body.node(j)`` (a rigid
+face: at each grid point, ``body.frame_at``), all with the same law — node to surface,
+one pass, the face's nodes the points. With ``residual_flexibility`` on the face each point carries its
 node's share of the static compliance of the modes the body leaves out, cross terms
 between all the face's points included (:class:`contours.residual.NodeCompliance`), in
 series with the other side's when that is corrected too: a face landing on a plate keeps
@@ -19,8 +20,8 @@ uniform pressure's resultant in the test of :mod:`validation.peers.static_contac
 the coarser face as the points); the mortar pairing of that peer passes it.
 
 Each node's tributary area A_j [m²] — a third of each surface triangle at it, a tet10
-triangle cut into its four corner triangles — turns the point's normal force into a
-pressure p_j = F_N,j / A_j; :meth:`FaceContact.resultant` sums a run's recorded point
+triangle cut into its four corner triangles; on a rigid grid a quarter of each grid cell
+at it — turns the point's normal force into a pressure p_j = F_N,j / A_j; :meth:`FaceContact.resultant` sums a run's recorded point
 forces into the face's force and moment.
 """
 
@@ -45,7 +46,8 @@ class FaceContact:
     Parameters
     ----------
     face : NeutralContour
-        A 1s or 2s neutral contour of a flexible body (its ``nodes`` are the points).
+        A 1s or 2s neutral contour of a flexible body (its ``nodes`` are the points) or of a
+        rigid body (its ``points``).
     surface : Contour
         The other side.
     law, friction, margin
@@ -57,29 +59,38 @@ class FaceContact:
     ----------
     points : tuple of Contact
         One per node, in the order of ``nodes``.
-    nodes : (k,) int array
-        The face's nodes (each once).
+    nodes : (k,) int array or None
+        The face's nodes (each once); None on a rigid body.
     areas : (k,) array [m²] or None
-        Tributary areas (a 2s face whose body file holds its surface triangles), else None.
+        Tributary areas (a 2s face whose body file holds its surface triangles, or a rigid
+        grid), else None.
     """
 
     def __init__(self, face, surface, law, friction=None, name="face", margin="auto"):
-        if not isinstance(face, NeutralContour) or not hasattr(face.body, "K_ff"):
-            raise ModelError(f"face {name!r}: the face must be a neutral 1s or 2s contour of a flexible body, "
-                             f"not a {type(face).__name__}")
+        flexible = hasattr(face.body, "K_ff")
+        if not isinstance(face, NeutralContour) or not (flexible or hasattr(face, "points")):
+            raise ModelError(f"face {name!r}: the face must be a neutral 1s or 2s contour of a flexible or a rigid "
+                             f"body, not a {type(face).__name__}")
         kind = CONTOURS.name_of(surface)
         if ("point", kind) not in PAIR_KINEMATICS:
             raise ModelError(f"face {name!r}: its points cannot touch a contour of kind {kind!r}")
         body = face.body
         self.name, self.face, self.surface = name, face, surface
-        self.nodes = np.unique(np.asarray(face.nodes).ravel())
+        if flexible:
+            self.nodes = np.unique(np.asarray(face.nodes).ravel())
+            frames = {f"{name} node {j}": body.node(int(j)) for j in self.nodes}
+            self.areas = tributary_areas(body.data, self.nodes) if face.space.dim == 2 else None
+        else:
+            self.nodes = None
+            points = face.points.reshape(-1, 3)
+            frames = {f"{name} point {j}": body.frame_at(p) for j, p in enumerate(points)}
+            self.areas = grid_areas(face.points) if face.space.dim == 2 else None
         residual = face.residual_flexibility
         self.points = tuple(
-            Contact(PAIR_KINEMATICS[("point", kind)](PointContour(body.node(int(j)), f"{name} node {j}",
-                                                                  residual_flexibility=residual), surface),
-                    law, friction=friction, name=f"{name} node {j}", margin=margin)
-            for j in self.nodes)
-        self.areas = tributary_areas(body.data, self.nodes) if face.space.dim == 2 else None
+            Contact(PAIR_KINEMATICS[("point", kind)](PointContour(frame, point_name, residual_flexibility=residual),
+                                                     surface),
+                    law, friction=friction, name=point_name, margin=margin)
+            for point_name, frame in frames.items())
 
     def contacts(self) -> tuple:
         """The point contacts a System adds for this face."""
@@ -111,6 +122,19 @@ class FaceContact:
         records = result.contacts
         return np.stack([np.nan_to_num(np.einsum("ij,ij->i", records[c.name]["force"], records[c.name]["normal"]))
                          for c in self.points], axis=1) / self.areas
+
+
+def grid_areas(grid) -> np.ndarray:
+    """A quarter of the area of each cell of the point grid (k_η, k_ξ, 3) [m] at each of
+    its corners (the cell's two triangles' areas), summed per point: (k_η k_ξ,) [m²] in the
+    grid's row-major order."""
+    grid = np.asarray(grid, dtype=float)
+    a, b, c, d = grid[:-1, :-1], grid[1:, :-1], grid[1:, 1:], grid[:-1, 1:]
+    cell = 0.5 * (np.linalg.norm(np.cross(b - a, c - a), axis=-1) + np.linalg.norm(np.cross(c - a, d - a), axis=-1))
+    areas = np.zeros(grid.shape[:2])
+    for di, dj in ((0, 0), (1, 0), (1, 1), (0, 1)):
+        areas[di:di + cell.shape[0], dj:dj + cell.shape[1]] += 0.25 * cell
+    return areas.ravel()
 
 
 def tributary_areas(data, nodes) -> np.ndarray | None:

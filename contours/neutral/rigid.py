@@ -48,7 +48,7 @@ class Contour1sNeutralRigid(_RigidProducts, Contour1sNeutralFactory):
 
     def __init__(self, body, points, normal, degree=3, closed=False, method="chord", name="rigid 1s",
                  compiled=True):
-        P = _points(points, 2, name)
+        P = self.points = _points(points, 2, name)           # the body-frame points it runs through
         interp = Interpolation1D.from_points(P, degree, closed, method)
         super().__init__(body, CurveSpace(interp), P, None, normal, name, compiled)
 
@@ -60,6 +60,6 @@ class Contour2sNeutralRigid(_RigidProducts, Contour2sNeutralFactory):
 
     def __init__(self, body, grid, degree=3, closed=False, method="chord", outward=1, name="rigid 2s",
                  compiled=True):
-        G = _points(grid, 3, name)
+        G = self.points = _points(grid, 3, name)             # the body-frame grid it runs through
         interp = SurfaceInterpolation.from_grid(G, as_pair(degree, "degree"), as_pair(closed, "closed"), method)
         super().__init__(body, SurfaceSpace(interp), G, None, outward, name, compiled)
