@@ -25,7 +25,7 @@ import numpy as np
 
 from contact.kinematics import PointOnCurveConstraint
 from contours._residual_kernels import add_contact_block, add_table_blocks
-from contours.residual import NodeCompliance, residual_compliances
+from contours.residual import residual_compliances
 from ffrmbs.errors import ModelError
 
 from mbs.run import _stage_kernels as SK
@@ -56,10 +56,9 @@ class ResidualContacts:
         Per contact the first tangent of its rows: 0 for [n, t1, t2] (a contact), 1 for
         [n, t2] (a point kept on a curve, :class:`contact.CurveConstraint`).
     table_G : (3 k, 3 k) array or None
-        When a corrected contour sits at a node (:class:`~contours.residual.NodeCompliance`,
-        a face of point contacts): the bodies' residual flexibilities, block diagonal, which
-        one kernel reads for all pairs of closed sides
-        (:func:`contours._residual_kernels.add_table_blocks`); else None (the pair loop).
+        The bodies' residual flexibilities G_P, block diagonal (one body's G_P itself),
+        which one kernel reads for all pairs of closed sides
+        (:func:`contours._residual_kernels.add_table_blocks`); None without compliances.
     table_place : dict
         Per corrected contour (by id) the first place of its body's points in ``table_G``
         and the body's index.
@@ -96,27 +95,28 @@ class ResidualContacts:
         self.sides = tuple(sides)
         self.compliant = tuple(bool(s) for s in sides)
         self.skip = tuple(int(isinstance(c.kinematics, PointOnCurveConstraint)) for c in contacts)
-        self.table_G, self.table_place, self.max_weights = None, {}, 0
-        if any(isinstance(rc, NodeCompliance) for rc in self.compliances.values()):
-            self.table_G, self.table_place = _compliance_table(self.compliances)
-            self.max_weights = max(rc.n_weights for rc in self.compliances.values())
+        self.table_G, self.table_place = _compliance_table(self.compliances)
+        self.max_weights = max((rc.n_weights for rc in self.compliances.values()), default=0)
 
     def __bool__(self):
         return any(self.compliant)
 
 
 def _compliance_table(compliances) -> tuple:
-    """(table_G, table_place) of :class:`ResidualContacts`."""
-    bodies, base, n = {}, {}, 0
+    """(table_G, table_place) of :class:`ResidualContacts`: one body's G_P itself, several
+    bodies' laid block-diagonally (None without compliances)."""
+    groups, base, n = {}, {}, 0
     for rc in compliances.values():
-        if id(rc.G_P) not in bodies:
-            bodies[id(rc.G_P)], base[id(rc.G_P)] = len(bodies), n
+        if id(rc.G_P) not in groups:
+            groups[id(rc.G_P)], base[id(rc.G_P)] = rc.G_P, n
             n += rc.G_P.shape[0] // 3
+    place = {key: (base[id(rc.G_P)], list(groups).index(id(rc.G_P))) for key, rc in compliances.items()}
+    if len(groups) <= 1:
+        return next(iter(groups.values()), None), place
     G = np.zeros((3 * n, 3 * n))
-    for rc in compliances.values():
-        a = 3 * base[id(rc.G_P)]
-        G[a:a + rc.G_P.shape[0], a:a + rc.G_P.shape[0]] = rc.G_P
-    place = {key: (base[id(rc.G_P)], bodies[id(rc.G_P)]) for key, rc in compliances.items()}
+    for key, G_P in groups.items():
+        a = 3 * base[key]
+        G[a:a + G_P.shape[0], a:a + G_P.shape[0]] = G_P
     return G, place
 
 
@@ -125,7 +125,7 @@ def assemble(model, data, dt) -> int:
     state (module docstring) into Data's workspaces; the state of a contact that was open
     last step is zeroed first and its rows marked fresh (:func:`contact.compliance.compliant_problem`
     gives them the deflection of the other contacts' forces). Returns r, the number of compliant rows. Allocates no
-    numpy array when the contours are neutral ones (:mod:`contours._residual_kernels`)."""
+    numpy array (:mod:`contours._residual_kernels`)."""
     rc = model.residual
     r = 0
     row = model.n_c
@@ -155,11 +155,14 @@ def assemble(model, data, dt) -> int:
         row += dim
     C = data.compliance(r)
     C.fill(0.0)
-    c, work = data.comp_c, data.comp_work
-    if rc.table_G is not None:
-        _table_blocks(rc, data, entries, n_e, C)
-        data.comp_r = r
-        return r
+    _table_blocks(rc, data, entries, n_e, C)
+    data.comp_r = r
+    return r
+
+
+def table_blocks_reference(entries, n_e, C, c, work) -> None:
+    """The reference of :func:`_table_blocks` (tests): the pair loop over the
+    compliances' ``between`` and :func:`contours._residual_kernels.add_contact_block`."""
     for a in range(n_e):
         ra, da, sa, ca, eta_a, xi_a, ka, ta = entries[a]
         for b in range(n_e):
@@ -167,14 +170,12 @@ def assemble(model, data, dt) -> int:
             if cb.G_P is ca.G_P:
                 ca.between(eta_a, xi_a, eta_b, xi_b, cb, c)
                 add_contact_block(C, ra, da, rb, db, sa * sb, ka.n, ka.T, ta, kb.n, kb.T, tb, ca.rotation, c, work)
-    data.comp_r = r
-    return r
 
 
 def _table_blocks(rc, data, entries, n_e, C) -> None:
-    """The pair loop of :func:`assemble` in one kernel, when a side sits at a node
-    (:func:`contours._residual_kernels.add_table_blocks`): each side's weight blocks
-    (eq. C1) found once, not once per pair; the same sums as the loop's."""
+    """C (r, r) of the closed compliant sides in one kernel over all pairs of sides on one
+    body (:func:`contours._residual_kernels.add_table_blocks`): each side's weight blocks
+    (eq. C1) found once, not once per pair; the sums of :func:`table_blocks_reference`."""
     ints, blocks, index, signs, normals, tangents, rotations = data.comp_table
     for e in range(n_e):
         row, dim, sign, comp, eta, xi, k, skip = entries[e]

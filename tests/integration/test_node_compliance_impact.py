@@ -76,14 +76,21 @@ def test_a_face_of_compliant_points_keeps_one_interval_of_2l_over_c_and_the_ener
 def test_the_compliance_kernel_is_the_pair_loop(rod_data, monkeypatch):
     """The face's landing with its compliance assembled by the one kernel over all pairs of
     sides (ResidualContacts.table_G) equals, bit for bit, the landing with the pair loop
-    over ``between`` and ``add_contact_block`` (the table switched off)."""
-    from mbs.run import residual_contact
-
+    over ``between`` and ``add_contact_block`` (residual_contact.table_blocks_reference)."""
     kernel = landing(rod_data, residual=True)[2]
-    monkeypatch.setattr(residual_contact, "_compliance_table", lambda compliances: (None, {}))
+    _with_the_pair_loop(monkeypatch)
     loop = landing(rod_data, residual=True)[2]
     assert kernel.trace["pressed"].any()
     assert np.array_equal(kernel.q, loop.q) and np.array_equal(kernel.u, loop.u)
+
+
+def _with_the_pair_loop(monkeypatch):
+    """The compliance assembled by the reference pair loop instead of the kernel."""
+    from mbs.run import residual_contact
+
+    def loop(rc, data, entries, n_e, C):
+        residual_contact.table_blocks_reference(entries, n_e, C, data.comp_c, data.comp_work)
+    monkeypatch.setattr(residual_contact, "_table_blocks", loop)
 
 
 def test_the_compliance_kernel_on_a_corrected_surface_is_the_pair_loop(rod_data, monkeypatch):
@@ -113,7 +120,7 @@ def test_the_compliance_kernel_on_a_corrected_surface_is_the_pair_loop(rod_data,
     assert isinstance(face.points[0].kinematics.contour1, PointContour)
     assert any(isinstance(rc, NodeCompliance) for rc in residual_contact.ResidualContacts(
         face.points, [True] * len(face.points)).compliances.values())
-    monkeypatch.setattr(residual_contact, "_compliance_table", lambda compliances: (None, {}))
+    _with_the_pair_loop(monkeypatch)
     loop, _ = run()
     assert kernel.trace["pressed"].max() > 10
     assert np.array_equal(kernel.q, loop.q) and np.array_equal(kernel.u, loop.u)

@@ -204,6 +204,37 @@ def test_inelastic_impacts_through_the_spring_gain_at_most_the_sliding_exchange(
     assert 1e-5 < sliding[1] < 1e-3 and abs(sliding[0] / sliding[1] - 1.0) < 0.1, sliding
 
 
+def _masses_on_a_plate(n_side=5, t_end=3e-4):
+    """25 (n_side²) point masses landing side by side on a corrected clamped plate (below)."""
+    data = build_body(box(0.2, 0.1, 0.01, None, order=1, divisions=(20, 10, 2)), Material(2700.0, 7e10, 0.33),
+                      n_modes=10, clamp="x0")
+    system = System()
+    plate = system.add(FlexibleBodyFFR(data, modes=10, frame=PrescribedFrameMotion.fixed(), name="plate"))
+    top = Contour2sNeutralFFR(plate, "z1", residual_flexibility=True)
+    grid = np.linspace(0.0, 0.028, n_side)
+    for k, (x, y) in enumerate((x, y) for x in grid for y in grid):
+        mass = system.add(PointMass(0.036 / n_side ** 2, position=(0.121 + x, 0.021 + y, 0.0101),
+                                    velocity=(0.0, 0.0, -0.5)))
+        system.add(Contact(ContactKinematicsPointContour2s(PointContour(mass.point), top), UnilateralNewtonImpact(0.0),
+                           name=f"mass {k}"))
+    return system.simulate(t_end, 1e-6, integrator="moreau", t_out=np.linspace(0.0, t_end, 31), energies=True,
+                           trace=True)
+
+
+def test_the_compliance_kernel_is_the_pair_loop_on_a_corrected_face(monkeypatch):
+    """Nine masses on the corrected plate: the compliance of the closed contacts assembled
+    by the one kernel (residual_contact._table_blocks) gives the run of the reference pair
+    loop over ``between`` bit for bit (the same weight blocks, the same sums)."""
+    from mbs.run import residual_contact
+
+    kernel = _masses_on_a_plate(3, 2.5e-4)
+    monkeypatch.setattr(residual_contact, "_table_blocks", lambda rc, data, entries, n_e, C:
+                        residual_contact.table_blocks_reference(entries, n_e, C, data.comp_c, data.comp_work))
+    loop = _masses_on_a_plate(3, 2.5e-4)
+    assert kernel.trace["pressed"].max() > 3
+    assert np.array_equal(kernel.q, loop.q) and np.array_equal(kernel.u, loop.u)
+
+
 def test_a_face_of_masses_on_a_corrected_plate_loses_energy_and_gains_none():
     """25 point masses (1.4 g each, 7 mm apart) land side by side at 0.5 m/s on a clamped
     aluminium plate's top face (tet4, 10 modes plus the correction), e = 0, Gauss–Seidel:
@@ -211,18 +242,7 @@ def test_a_face_of_masses_on_a_corrected_plate_loses_energy_and_gains_none():
     (the impact's and the releases' O(Δt) changes). Closed contacts that carry no force
     while their points are deflected by the others' forces keep their deflection rate;
     zeroing it, as a released lone contact's, gained 41 % (contact.compliance)."""
-    data = build_body(box(0.2, 0.1, 0.01, None, order=1, divisions=(20, 10, 2)), Material(2700.0, 7e10, 0.33),
-                      n_modes=10, clamp="x0")
-    system = System()
-    plate = system.add(FlexibleBodyFFR(data, modes=10, frame=PrescribedFrameMotion.fixed(), name="plate"))
-    top = Contour2sNeutralFFR(plate, "z1", residual_flexibility=True)
-    grid = np.linspace(0.0, 0.028, 5)
-    for k, (x, y) in enumerate((x, y) for x in grid for y in grid):
-        mass = system.add(PointMass(0.036 / 25, position=(0.121 + x, 0.021 + y, 0.0101), velocity=(0.0, 0.0, -0.5)))
-        system.add(Contact(ContactKinematicsPointContour2s(PointContour(mass.point), top), UnilateralNewtonImpact(0.0),
-                           name=f"mass {k}"))
-    res = system.simulate(3e-4, 1e-6, integrator="moreau", t_out=np.linspace(0.0, 3e-4, 31), energies=True,
-                          trace=True)
+    res = _masses_on_a_plate()
     energy = res.energy["kinetic"] + res.energy["potential"]
     assert res.trace["pressed"].max() > 10 and res.trace["pressed"][-1] == 0
     assert 0.99 < energy[-1] / energy[0] <= 1.0
