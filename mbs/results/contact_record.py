@@ -71,6 +71,7 @@ class ContactRecorder:
         """Sample ``i`` of every contact (but the force) into ``records`` at the state
         (t [s], q, u) of the whole system."""
         model = self.model
+        kept = False            # the run's contact state saved before the first fresh locate
         for j, c in enumerate(model.contacts):
             rec, k = records[c.name], c.kinematics
             closed = bool(data.closed[j])
@@ -82,14 +83,17 @@ class ContactRecorder:
                 gap, point, normal = found
                 rec["gap"][i], rec["point"][i], rec["normal"][i] = gap + delta, point, normal
                 continue
-            located = self.locate(data, c, t, q, u) if afresh else k.active
+            if afresh and not kept:
+                self.keep(data)
+                kept = True
+            located = self.locate(c, t, q, u) if afresh else k.active
             rec["gap"][i] = k.g_N + delta if located else np.nan
             rec["point"][i] = k.point2.r if located else np.nan
             rec["normal"][i] = k.n if located else np.nan
-            if afresh:
-                if located and self.probes[j] is not None:
-                    self.probes[j].seed()           # its warm start while the run has none
-                self.put_back(data)
+            if afresh and located and self.probes[j] is not None:
+                self.probes[j].seed()               # its warm start while the run has none
+        if kept:
+            self.put_back(data)
 
     def deflection(self, data, j) -> float:
         """δ [m] of contact ``j``'s normal row at the end of the last step (0 without
@@ -99,17 +103,21 @@ class ContactRecorder:
             return 0.0
         return float(data.comp_delta[model.lam_at[j]])
 
-    def locate(self, data, contact, t, q, u) -> bool:
-        """Locate ``contact`` at (t, q, u) without the broad phase, its contours updated
-        there; the run's contact state (``data.contact_f``, ``contact_i``) kept for
-        :meth:`put_back` (in buffers made on the first sample). True if a contact point
-        exists (the kinematics then hold g_N, the point and the normal)."""
-        k = contact.kinematics
+    def keep(self, data) -> None:
+        """The run's contact state (``data.contact_f``, ``contact_i``) kept for
+        :meth:`put_back` (in buffers made on the first sample), before contacts are
+        located afresh: once per sample, all of them located at the same (t, q, u)."""
         if self._kept is None:
             self._kept = (data.contact_f.copy(), data.contact_i.copy())
         else:
             np.copyto(self._kept[0], data.contact_f)
             np.copyto(self._kept[1], data.contact_i)
+
+    def locate(self, contact, t, q, u) -> bool:
+        """Locate ``contact`` at (t, q, u) without the broad phase, its contours updated
+        there (after :meth:`keep`). True if a contact point exists (the kinematics then
+        hold g_N, the point and the normal)."""
+        k = contact.kinematics
         for contour in (k.contour1, k.contour2):
             qs, us = self.slices[id(contour)]
             if qs is None:
