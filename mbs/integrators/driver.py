@@ -137,7 +137,6 @@ class Integrator:
 
     def __init__(self, system):
         self.system = system
-        self.plan = None        # the scene plan of a planned run (mbs.run.plan), set by run()
         self.state = None       # the RunState of the current run
         self.model = None       # the compiled Model of the current run
         self.data = None        # its Data
@@ -179,7 +178,7 @@ class Integrator:
             model = compile_model(self.system, plan, **self.model_options())
         else:
             self.check_model(model)
-        self.model, self.plan = model, model.plan
+        self.model = model
         self.data = Data(model)
 
     def check_model(self, model) -> None:

@@ -198,10 +198,7 @@ def far_pairs_row(pair, steps, rounds) -> dict:
 
     def batch(run):
         model, data = run
-        start = time.perf_counter()
-        for _ in range(steps):
-            stages.step(model, data, 1e-5)
-        return 1e6 * (time.perf_counter() - start) / steps
+        return _batch_mean(lambda: stages.step(model, data, 1e-5), steps)
 
     for run in runs.values():       # warm-up: compiles, factors M̂, builds the contact set
         batch(run)
